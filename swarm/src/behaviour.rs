@@ -1,0 +1,406 @@
+//! The behaviour API and the agent-side runtime that sits between a behaviour and the radio.
+//!
+//! A behaviour is a pure state machine: `step(sense, inbox, outbox) -> command`. It can only
+//! `broadcast` or `send(to)`; range, loss, delay, ordering and counting happen below it in
+//! [`AgentRuntime`], which both executors use unchanged.
+
+use crate::frames::{Action, RadioHeader, Sense, BROADCAST, MAX_SENT};
+use crate::link::LinkSet;
+use crate::radio::{decide, Verdict};
+use crate::scenario::Scenario;
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use serde::de::DeserializeOwned;
+use serde::Serialize;
+use std::collections::VecDeque;
+
+/// A robot's behaviour.
+pub trait Behaviour {
+    /// What the robot says on the radio (encoded with bincode into shared memory).
+    type Msg: Serialize + DeserializeOwned;
+    /// One tick: read the Sense frame and the inbox (messages sent at k - 1 - delay that the
+    /// radio delivered, ordered by sender and sequence), queue messages, return a command.
+    fn step(
+        &mut self,
+        sense: &Sense,
+        inbox: &[Received<Self::Msg>],
+        out: &mut Outbox<Self::Msg>,
+    ) -> Command;
+}
+
+/// A delivered radio message.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Received<M> {
+    pub from: u32,
+    pub tick: u64,
+    pub seq: u32,
+    pub sender_pos: [f64; 2],
+    pub unicast: bool,
+    pub msg: M,
+}
+
+/// What a behaviour commands for this tick.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Command {
+    pub vel: [f64; 2],
+    pub events: u32,
+}
+
+/// Messages queued by a behaviour in one tick.
+pub struct Outbox<M> {
+    msgs: Vec<(u32, M)>,
+    limit: usize,
+    refused: u32,
+}
+
+impl<M> Outbox<M> {
+    fn new(limit: usize) -> Self {
+        Outbox {
+            msgs: Vec::new(),
+            limit: limit.min(MAX_SENT),
+            refused: 0,
+        }
+    }
+    /// Queues a message for every robot in range. Returns false if the per-tick limit is hit.
+    pub fn broadcast(&mut self, msg: M) -> bool {
+        self.push(BROADCAST, msg)
+    }
+    /// Queues a message for one robot (still subject to range and loss).
+    pub fn send(&mut self, to: u32, msg: M) -> bool {
+        self.push(to, msg)
+    }
+    fn push(&mut self, to: u32, msg: M) -> bool {
+        if self.msgs.len() >= self.limit {
+            self.refused += 1;
+            return false;
+        }
+        self.msgs.push((to, msg));
+        true
+    }
+}
+
+/// The transport's send side: loan `header.len` bytes, let `fill` write the payload in place,
+/// send it with `header`.
+pub trait RadioTx {
+    fn transmit(&mut self, header: &RadioHeader, fill: &mut dyn FnMut(&mut [u8]));
+}
+
+/// A seeded random stream for (run seed, robot, purpose). Every random draw of a behaviour
+/// comes from such a stream.
+pub fn robot_rng(seed: u64, robot: u32, stream: u64) -> ChaCha8Rng {
+    let mut r = ChaCha8Rng::seed_from_u64(seed ^ 0x9e37_79b9_7f4a_7c15u64.wrapping_mul(robot as u64 + 1));
+    r.set_stream(stream);
+    r
+}
+
+enum Outcome<M> {
+    Delivered(Received<M>),
+    Lost,
+    Malformed,
+}
+
+struct Pending<M> {
+    due: u64,
+    from: u32,
+    seq: u32,
+    outcome: Outcome<M>,
+}
+
+/// Counters the runtime keeps beyond those reported per tick in the Action frame.
+#[derive(Debug, Default, Clone, Copy)]
+pub struct RuntimeStats {
+    pub refused_sends: u64,
+    pub oversize_sends: u64,
+    pub stale_messages: u64,
+}
+
+/// Everything between one behaviour and the transport, for one robot.
+pub struct AgentRuntime<B: Behaviour> {
+    pub robot: u32,
+    behaviour: B,
+    seed: u64,
+    radio: crate::scenario::RadioParams,
+    links: LinkSet,
+    seq: u32,
+    /// Own position at recent ticks (for the range test of messages sent at those ticks).
+    positions: VecDeque<(u64, [f64; 2])>,
+    pending: Vec<Pending<B::Msg>>,
+    inbox: Vec<Received<B::Msg>>,
+    pub stats: RuntimeStats,
+}
+
+fn bincode_config() -> bincode::config::Configuration {
+    bincode::config::standard()
+}
+
+impl<B: Behaviour> AgentRuntime<B> {
+    pub fn new(sc: &Scenario, robot: u32, behaviour: B) -> Self {
+        AgentRuntime {
+            robot,
+            behaviour,
+            seed: sc.run.seed,
+            radio: sc.radio.clone(),
+            links: LinkSet::new(sc.radio.max_links as usize, sc.radio.link_linger_ticks as u64),
+            seq: 0,
+            positions: VecDeque::new(),
+            pending: Vec::new(),
+            inbox: Vec::new(),
+            stats: RuntimeStats::default(),
+        }
+    }
+
+    pub fn behaviour(&self) -> &B {
+        &self.behaviour
+    }
+
+    pub fn links(&self) -> &LinkSet {
+        &self.links
+    }
+
+    /// Starts tick k: remembers the robot's own position from Sense_k.
+    pub fn begin(&mut self, sense: &Sense) {
+        if self.positions.back().map(|p| p.0) != Some(sense.tick) {
+            self.positions.push_back((sense.tick, sense.pos));
+        }
+        while self.positions.len() > 2 {
+            self.positions.pop_front();
+        }
+    }
+
+    fn own_pos_at(&self, tick: u64) -> Option<[f64; 2]> {
+        self.positions.iter().find(|p| p.0 == tick).map(|p| p.1)
+    }
+
+    /// Takes one raw message off a link (straight from shared memory): decides range and loss
+    /// now, decodes only if delivered, and holds it until its due tick.
+    pub fn ingest(&mut self, h: &RadioHeader, payload: &[u8]) {
+        if h.sender == self.robot || (h.dest != BROADCAST && h.dest != self.robot) {
+            return;
+        }
+        let Some(own) = self.own_pos_at(h.tick) else {
+            self.stats.stale_messages += 1;
+            return;
+        };
+        let verdict = decide(
+            &self.radio,
+            self.seed,
+            h.tick,
+            h.sender,
+            h.sender_pos,
+            self.robot,
+            own,
+            h.seq,
+        );
+        let outcome = match verdict {
+            // The world counts range drops from ground truth; the receiver ignores them.
+            Verdict::OutOfRange => return,
+            Verdict::Lost => Outcome::Lost,
+            Verdict::Deliver => {
+                let len = h.len as usize;
+                let decoded = if len <= payload.len() {
+                    bincode::serde::decode_from_slice::<B::Msg, _>(&payload[..len], bincode_config())
+                        .ok()
+                        .filter(|(_, used)| *used == len)
+                } else {
+                    None
+                };
+                match decoded {
+                    Some((msg, _)) => Outcome::Delivered(Received {
+                        from: h.sender,
+                        tick: h.tick,
+                        seq: h.seq,
+                        sender_pos: h.sender_pos,
+                        unicast: h.dest != BROADCAST,
+                        msg,
+                    }),
+                    None => Outcome::Malformed,
+                }
+            }
+        };
+        self.pending.push(Pending {
+            due: h.tick + 1 + self.radio.delay_ticks as u64,
+            from: h.sender,
+            seq: h.seq,
+            outcome,
+        });
+    }
+
+    /// Finishes tick k: delivers what is due, steps the behaviour, transmits its messages and
+    /// returns the Action frame.
+    pub fn step(&mut self, sense: &Sense, tx: &mut dyn RadioTx) -> Action {
+        let k = sense.tick;
+        let mut action = Action::idle(k, self.robot);
+        // Due messages in a fixed order: (sender, seq). Scheduling cannot change the inbox.
+        let mut due: Vec<Pending<B::Msg>> = Vec::new();
+        let mut i = 0;
+        while i < self.pending.len() {
+            if self.pending[i].due <= k {
+                due.push(self.pending.swap_remove(i));
+            } else {
+                i += 1;
+            }
+        }
+        due.sort_by_key(|p| (p.from, p.seq));
+        self.inbox.clear();
+        for p in due {
+            match p.outcome {
+                Outcome::Delivered(r) => {
+                    action.radio_delivered += 1;
+                    self.inbox.push(r);
+                }
+                Outcome::Lost => action.radio_dropped_loss += 1,
+                Outcome::Malformed => action.radio_malformed += 1,
+            }
+        }
+        let mut out = Outbox::new(self.radio.max_messages_per_tick as usize);
+        let cmd = self.behaviour.step(sense, &self.inbox, &mut out);
+        self.stats.refused_sends += out.refused as u64;
+        action.vel = cmd.vel;
+        action.events = cmd.events;
+        for (dest, msg) in out.msgs.iter() {
+            let mut size = bincode::enc::write::SizeWriter::default();
+            if bincode::serde::encode_into_writer(msg, &mut size, bincode_config()).is_err()
+                || size.bytes_written > self.radio.max_message_bytes as usize
+            {
+                self.stats.oversize_sends += 1;
+                continue;
+            }
+            self.seq = self.seq.wrapping_add(1);
+            let header = RadioHeader {
+                sender: self.robot,
+                dest: *dest,
+                tick: k,
+                seq: self.seq,
+                len: size.bytes_written as u32,
+                sender_pos: sense.pos,
+            };
+            tx.transmit(&header, &mut |buf: &mut [u8]| {
+                bincode::serde::encode_into_slice(msg, buf, bincode_config())
+                    .expect("sized above");
+            });
+            action.sent_to[action.n_sent as usize] = *dest;
+            action.n_sent += 1;
+        }
+        action
+    }
+
+    /// Applies Sense_k's neighbour list to the links: (added, removed).
+    pub fn update_links(&mut self, sense: &Sense) -> (&[u32], &[u32]) {
+        self.links.update(sense.tick, sense.neighbours(), self.robot)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::frames::Sense;
+
+    /// Broadcasts its tick; remembers what it heard.
+    struct Echo {
+        heard: Vec<(u32, u64)>,
+    }
+    impl Behaviour for Echo {
+        type Msg = u64;
+        fn step(&mut self, s: &Sense, inbox: &[Received<u64>], out: &mut Outbox<u64>) -> Command {
+            self.heard.extend(inbox.iter().map(|r| (r.from, r.msg)));
+            out.broadcast(s.tick);
+            Command::default()
+        }
+    }
+
+    struct Collect(Vec<(RadioHeader, Vec<u8>)>);
+    impl RadioTx for Collect {
+        fn transmit(&mut self, h: &RadioHeader, fill: &mut dyn FnMut(&mut [u8])) {
+            let mut v = vec![0u8; h.len as usize];
+            fill(&mut v);
+            self.0.push((*h, v));
+        }
+    }
+
+    fn sense(robot: u32, tick: u64, pos: [f64; 2]) -> Box<Sense> {
+        let mut s = Sense::zeroed();
+        s.robot = robot;
+        s.tick = tick;
+        s.pos = pos;
+        s
+    }
+
+    #[test]
+    fn messages_arrive_next_tick_in_sender_order_and_out_of_range_is_ignored() {
+        let sc = Scenario::default();
+        let mut rx = AgentRuntime::new(&sc, 0, Echo { heard: vec![] });
+        let mut tx = Collect(vec![]);
+        let mut senders: Vec<_> = (1..4).map(|i| AgentRuntime::new(&sc, i, Echo { heard: vec![] })).collect();
+        // Tick 0: robots 1..3 send; robot 3 is out of range.
+        let s0 = sense(0, 0, [0.0, 0.0]);
+        rx.begin(&s0);
+        for (j, a) in senders.iter_mut().enumerate() {
+            let x = if j == 2 { 500.0 } else { 10.0 * (j + 1) as f64 };
+            let s = sense(a.robot, 0, [x, 0.0]);
+            a.begin(&s);
+            a.step(&s, &mut tx);
+        }
+        // Feed in reverse order: the inbox must still be sorted by sender.
+        for (h, p) in tx.0.iter().rev() {
+            rx.ingest(h, p);
+        }
+        let act0 = rx.step(&s0, &mut Collect(vec![]));
+        assert_eq!(act0.radio_delivered, 0, "nothing is due at the send tick");
+        let s1 = sense(0, 1, [0.0, 0.0]);
+        rx.begin(&s1);
+        let act1 = rx.step(&s1, &mut Collect(vec![]));
+        assert_eq!(act1.radio_delivered, 2);
+        assert_eq!(rx.behaviour().heard, vec![(1, 0), (2, 0)]);
+    }
+
+    #[test]
+    fn garbage_payload_is_counted_as_malformed_not_delivered() {
+        let sc = Scenario::default();
+        let mut rx = AgentRuntime::new(&sc, 0, Echo { heard: vec![] });
+        let s0 = sense(0, 0, [0.0, 0.0]);
+        rx.begin(&s0);
+        let h = RadioHeader { sender: 1, len: 9, ..Default::default() };
+        rx.ingest(&h, &[0xff; 9]);
+        let h2 = RadioHeader { sender: 2, len: 200, ..Default::default() };
+        rx.ingest(&h2, &[1; 4]); // claims more bytes than it carries
+        rx.step(&s0, &mut Collect(vec![]));
+        let s1 = sense(0, 1, [0.0, 0.0]);
+        rx.begin(&s1);
+        let a = rx.step(&s1, &mut Collect(vec![]));
+        assert_eq!((a.radio_delivered, a.radio_malformed), (0, 2));
+    }
+
+    #[test]
+    fn delay_holds_messages_for_extra_ticks() {
+        let mut sc = Scenario::default();
+        sc.radio.delay_ticks = 2;
+        let mut rx = AgentRuntime::new(&sc, 0, Echo { heard: vec![] });
+        let mut tx = Collect(vec![]);
+        let mut a = AgentRuntime::new(&sc, 1, Echo { heard: vec![] });
+        let s = sense(1, 0, [5.0, 0.0]);
+        a.begin(&s);
+        a.step(&s, &mut tx);
+        let mut delivered_at = None;
+        for k in 0..5 {
+            let s = sense(0, k, [0.0, 0.0]);
+            rx.begin(&s);
+            if k == 0 {
+                for (h, p) in &tx.0 {
+                    rx.ingest(h, p);
+                }
+            }
+            if rx.step(&s, &mut Collect(vec![])).radio_delivered > 0 {
+                delivered_at.get_or_insert(k);
+            }
+        }
+        assert_eq!(delivered_at, Some(3));
+    }
+
+    #[test]
+    fn outbox_enforces_the_per_tick_limit() {
+        let mut o: Outbox<u8> = Outbox::new(2);
+        assert!(o.broadcast(1) && o.send(3, 2));
+        assert!(!o.broadcast(3));
+        assert_eq!(o.refused, 1);
+    }
+}

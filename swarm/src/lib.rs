@@ -1,0 +1,21 @@
+//! Shared library of the swarm runtime.
+//!
+//! Everything both executors (multi-process and in-process) share lives here, so that the two
+//! give byte-identical recordings: the frames, the scenario types and their validation, the
+//! radio model (range, loss, delay, link management), the behaviour API with its agent-side
+//! runtime, the recording format, and the iceoryx2 / futex plumbing of the multi-process path.
+
+pub mod barrier;
+pub mod behaviour;
+pub mod cleanup;
+pub mod frames;
+pub mod geometry;
+pub mod link;
+pub mod radio;
+pub mod recording;
+pub mod scenario;
+pub mod transport;
+
+pub use behaviour::{AgentRuntime, Behaviour, Command, Outbox, Received};
+pub use frames::{Action, RadioHeader, Sense};
+pub use scenario::Scenario;

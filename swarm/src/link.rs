@@ -1,0 +1,135 @@
+//! Which robots an agent's transport is linked to (subscribed to the radio service of).
+//!
+//! The world's Sense frame lists the robots within comm_radius + link_margin (nearest first,
+//! at most radio.max_links). The agent links to those, keeps a link for `linger` ticks after a
+//! robot drops off the list (links cost ~0.5 ms to make on this VM, so churn is avoided), and
+//! never holds more than max_links. Both executors run this same code, so the set of messages a
+//! receiver can see is the same in both.
+//!
+//! Why no in-range message is missed: a link made while handling Sense_k exists before any
+//! robot sends at tick k+1. If d_{k+1}(r, s) <= R then d_k <= R + 2 v_max <= R + margin, so s was
+//! listed at k. A link dropped while handling Sense_k belongs to a robot beyond R + margin at
+//! k, whose tick-k messages are out of range anyway.
+
+#[derive(Debug, Clone)]
+pub struct LinkSet {
+    max_links: usize,
+    linger: u64,
+    /// (robot, last tick it was listed), sorted by robot id.
+    links: Vec<(u32, u64)>,
+    added: Vec<u32>,
+    removed: Vec<u32>,
+}
+
+impl LinkSet {
+    pub fn new(max_links: usize, linger_ticks: u64) -> LinkSet {
+        LinkSet {
+            max_links,
+            linger: linger_ticks,
+            links: Vec::new(),
+            added: Vec::new(),
+            removed: Vec::new(),
+        }
+    }
+
+    /// Applies Sense_k's neighbour list. Returns (added, removed), both sorted by robot id.
+    pub fn update(&mut self, tick: u64, listed: &[u32], own: u32) -> (&[u32], &[u32]) {
+        self.added.clear();
+        self.removed.clear();
+        for &r in listed {
+            if r == own {
+                continue;
+            }
+            match self.links.binary_search_by_key(&r, |l| l.0) {
+                Ok(i) => self.links[i].1 = tick,
+                Err(i) => {
+                    self.links.insert(i, (r, tick));
+                    self.added.push(r);
+                }
+            }
+        }
+        let linger = self.linger;
+        let removed = &mut self.removed;
+        self.links.retain(|&(r, last)| {
+            let keep = tick.saturating_sub(last) <= linger;
+            if !keep {
+                removed.push(r);
+            }
+            keep
+        });
+        while self.links.len() > self.max_links {
+            // Evict the link listed longest ago (ties: highest id). Listed ones have last == tick
+            // and the world lists at most max_links, so only lingering links go.
+            let (i, _) = self
+                .links
+                .iter()
+                .enumerate()
+                .min_by_key(|(_, &(r, last))| (last, std::cmp::Reverse(r)))
+                .expect("non-empty");
+            let (r, _) = self.links.remove(i);
+            self.removed.push(r);
+        }
+        self.added.sort_unstable();
+        self.removed.sort_unstable();
+        // A robot can be added and evicted in one update only if the list exceeds max_links.
+        let removed = &self.removed;
+        self.added.retain(|r| removed.binary_search(r).is_err());
+        (&self.added, &self.removed)
+    }
+
+    pub fn contains(&self, robot: u32) -> bool {
+        self.links.binary_search_by_key(&robot, |l| l.0).is_ok()
+    }
+
+    pub fn robots(&self) -> impl Iterator<Item = u32> + '_ {
+        self.links.iter().map(|l| l.0)
+    }
+
+    pub fn len(&self) -> usize {
+        self.links.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.links.is_empty()
+    }
+
+    /// Forgets a robot (its process died): the transport drops the link at once.
+    pub fn forget(&mut self, robot: u32) -> bool {
+        match self.links.binary_search_by_key(&robot, |l| l.0) {
+            Ok(i) => {
+                self.links.remove(i);
+                true
+            }
+            Err(_) => false,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn links_follow_the_list_and_linger() {
+        let mut l = LinkSet::new(8, 2);
+        let (a, r) = l.update(0, &[3, 1, 0], 0);
+        assert_eq!((a.to_vec(), r.to_vec()), (vec![1, 3], vec![]));
+        let (a, r) = l.update(1, &[1], 0);
+        assert!(a.is_empty() && r.is_empty());
+        assert!(l.contains(3)); // lingering
+        l.update(2, &[1], 0);
+        let (_, r) = l.update(3, &[1], 0);
+        assert_eq!(r.to_vec(), vec![3]);
+        assert!(!l.contains(3));
+    }
+
+    #[test]
+    fn never_more_than_max_links_lingering_evicted_first() {
+        let mut l = LinkSet::new(3, 100);
+        l.update(0, &[1, 2, 3], 0);
+        let (a, r) = l.update(1, &[4, 5, 1], 0);
+        assert_eq!(a.to_vec(), vec![4, 5]);
+        assert_eq!(r.to_vec(), vec![2, 3]);
+        assert_eq!(l.robots().collect::<Vec<_>>(), vec![1, 4, 5]);
+    }
+}

@@ -1,0 +1,178 @@
+//! The radio model of the transport layer: range, loss and the counters.
+//!
+//! A message sent by robot s at tick k reaches robot r only if |p_s(k) - p_r(k)| <= R_comm and
+//! a loss draw passes. The draw is a hash of (seed, tick, sender, receiver, seq): the same in
+//! both executors and independent of OS scheduling.
+
+use crate::scenario::{LossModel, RadioParams};
+use serde::{Deserialize, Serialize};
+
+/// What happened to one (message, receiver) pair.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Verdict {
+    Deliver,
+    OutOfRange,
+    Lost,
+}
+
+/// SplitMix64 finaliser: a well-mixed 64-bit hash step.
+fn mix(mut z: u64) -> u64 {
+    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+    z ^ (z >> 31)
+}
+
+/// Uniform draw in [0, 1) from (seed, tick, sender, receiver, seq).
+pub fn loss_draw(seed: u64, tick: u64, sender: u32, receiver: u32, seq: u32) -> f64 {
+    let mut h = mix(seed ^ 0x5241_4449_4f00_0000); // "RADIO"
+    h = mix(h ^ tick);
+    h = mix(h ^ ((sender as u64) << 32 | receiver as u64));
+    h = mix(h ^ seq as u64);
+    (h >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
+}
+
+/// Loss probability at distance d.
+pub fn loss_probability(p: &RadioParams, d: f64) -> f64 {
+    match p.loss_model {
+        LossModel::Bernoulli => p.loss,
+        LossModel::Distance => {
+            let x = (d / p.comm_radius).clamp(0.0, 1.0);
+            (p.loss + (p.loss_at_range - p.loss) * x.powf(p.loss_exponent)).clamp(0.0, 1.0)
+        }
+    }
+}
+
+/// Euclidean distance, computed the same way everywhere (so range decisions agree bit for bit).
+pub fn distance(a: [f64; 2], b: [f64; 2]) -> f64 {
+    let dx = a[0] - b[0];
+    let dy = a[1] - b[1];
+    (dx * dx + dy * dy).sqrt()
+}
+
+/// The decision for one (message, receiver) pair.
+#[allow(clippy::too_many_arguments)]
+pub fn decide(
+    p: &RadioParams,
+    seed: u64,
+    tick: u64,
+    sender: u32,
+    sender_pos: [f64; 2],
+    receiver: u32,
+    receiver_pos: [f64; 2],
+    seq: u32,
+) -> Verdict {
+    let d = distance(sender_pos, receiver_pos);
+    if d > p.comm_radius {
+        return Verdict::OutOfRange;
+    }
+    let pl = loss_probability(p, d);
+    if pl > 0.0 && loss_draw(seed, tick, sender, receiver, seq) < pl {
+        Verdict::Lost
+    } else {
+        Verdict::Deliver
+    }
+}
+
+/// Run-wide message counters, per (message, intended receiver) pair.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize, bincode::Encode, bincode::Decode)]
+pub struct RadioCounters {
+    /// Pairs offered: a broadcast counts once per other live robot, a unicast once.
+    pub offered: u64,
+    pub delivered: u64,
+    /// Receiver beyond comm_radius at the send tick (or dead, or unknown).
+    pub dropped_range: u64,
+    /// In range, dropped by the loss model.
+    pub dropped_loss: u64,
+    /// In range, but the receiver could not decode the payload.
+    pub malformed: u64,
+    /// In range, but never reached the receiver's transport: no link (radio.max_links reached)
+    /// or the receiver died before the message was due.
+    pub dropped_unlinked: u64,
+    /// Sent in the last ticks of the run and not yet due when it ended.
+    pub in_flight: u64,
+}
+
+impl RadioCounters {
+    pub fn add(&mut self, o: &RadioCounters) {
+        self.offered += o.offered;
+        self.delivered += o.delivered;
+        self.dropped_range += o.dropped_range;
+        self.dropped_loss += o.dropped_loss;
+        self.malformed += o.malformed;
+        self.dropped_unlinked += o.dropped_unlinked;
+        self.in_flight += o.in_flight;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scenario::Scenario;
+
+    #[test]
+    fn loss_draw_is_a_pure_function_of_its_inputs() {
+        assert_eq!(loss_draw(1, 2, 3, 4, 5), loss_draw(1, 2, 3, 4, 5));
+        assert_ne!(loss_draw(1, 2, 3, 4, 5), loss_draw(1, 2, 3, 4, 6));
+        assert_ne!(loss_draw(1, 2, 3, 4, 5), loss_draw(1, 2, 4, 3, 5));
+        assert_ne!(loss_draw(1, 2, 3, 4, 5), loss_draw(2, 2, 3, 4, 5));
+    }
+
+    #[test]
+    fn loss_draw_is_uniform() {
+        let n = 200_000;
+        let mut bins = [0u32; 10];
+        let mut below = 0;
+        for i in 0..n {
+            let u = loss_draw(7, i / 1000, (i % 50) as u32, 3, (i % 7) as u32);
+            assert!((0.0..1.0).contains(&u));
+            bins[(u * 10.0) as usize] += 1;
+            if u < 0.3 {
+                below += 1;
+            }
+        }
+        for b in bins {
+            assert!((b as f64 - 20_000.0).abs() < 800.0, "bins {bins:?}");
+        }
+        assert!((below as f64 / n as f64 - 0.3).abs() < 0.005);
+    }
+
+    #[test]
+    fn bernoulli_loss_rate_matches_p() {
+        let mut p = Scenario::default().radio;
+        p.loss = 0.25;
+        let mut lost = 0;
+        let n = 100_000;
+        for i in 0..n {
+            if decide(&p, 9, i, 1, [0.0, 0.0], 2, [10.0, 0.0], 0) == Verdict::Lost {
+                lost += 1;
+            }
+        }
+        assert!((lost as f64 / n as f64 - 0.25).abs() < 0.01, "{lost}");
+    }
+
+    #[test]
+    fn range_is_checked_before_loss() {
+        let p = Scenario::default().radio;
+        assert_eq!(decide(&p, 0, 0, 1, [0.0, 0.0], 2, [300.0, 0.0], 0), Verdict::Deliver);
+        assert_eq!(decide(&p, 0, 0, 1, [0.0, 0.0], 2, [300.001, 0.0], 0), Verdict::OutOfRange);
+    }
+
+    #[test]
+    fn distance_model_grows_with_distance() {
+        let mut p = Scenario::default().radio;
+        p.loss_model = LossModel::Distance;
+        p.loss = 0.1;
+        p.loss_at_range = 0.9;
+        p.loss_exponent = 1.0;
+        assert!((loss_probability(&p, 0.0) - 0.1).abs() < 1e-12);
+        assert!((loss_probability(&p, 150.0) - 0.5).abs() < 1e-12);
+        assert!((loss_probability(&p, 300.0) - 0.9).abs() < 1e-12);
+        let count = |x: f64| {
+            (0..20_000)
+                .filter(|&i| decide(&p, 3, i, 1, [0.0, 0.0], 2, [x, 0.0], 0) == Verdict::Lost)
+                .count()
+        };
+        let (near, far) = (count(10.0), count(290.0));
+        assert!(near < 3_000 && far > 16_000, "near {near} far {far}");
+    }
+}

@@ -1,0 +1,326 @@
+//! Scenario files: types, parsing with errors that name the file and key, and validation.
+
+use serde::{Deserialize, Serialize};
+use std::fmt;
+use std::path::Path;
+
+/// The default scenario, embedded so that `orchestrator up` needs no file.
+pub const DEFAULT_SCENARIO: &str = include_str!("../../configs/default.toml");
+
+#[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Scenario {
+    pub run: RunParams,
+    pub arena: Arena,
+    pub robot: RobotParams,
+    pub radio: RadioParams,
+    pub runtime: RuntimeParams,
+    pub roam: RoamParams,
+}
+
+#[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct RunParams {
+    pub behaviour: String,
+    pub robots: u32,
+    pub seed: u64,
+    pub max_ticks: u64,
+}
+
+#[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Arena {
+    pub width: f64,
+    pub height: f64,
+    pub start_region: [f64; 4],
+    pub boundary_spacing: f64,
+    pub walls_sensed: bool,
+    #[serde(default)]
+    pub obstacles: Vec<Obstacle>,
+}
+
+#[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Obstacle {
+    pub name: String,
+    pub points: Vec<[f64; 2]>,
+}
+
+#[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct RobotParams {
+    pub v_max: f64,
+    pub sensing_radius: f64,
+}
+
+#[derive(Serialize, Deserialize, Clone, Copy, Debug, PartialEq, Eq)]
+#[serde(rename_all = "kebab-case")]
+pub enum LossModel {
+    Bernoulli,
+    Distance,
+}
+
+#[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct RadioParams {
+    pub comm_radius: f64,
+    pub loss_model: LossModel,
+    pub loss: f64,
+    pub loss_at_range: f64,
+    pub loss_exponent: f64,
+    pub delay_ticks: u32,
+    pub link_margin: f64,
+    pub link_linger_ticks: u32,
+    pub max_links: u32,
+    pub max_message_bytes: u32,
+    pub max_messages_per_tick: u32,
+}
+
+#[derive(Serialize, Deserialize, Clone, Copy, Debug, PartialEq, Eq)]
+#[serde(rename_all = "kebab-case")]
+pub enum BarrierKind {
+    Futex,
+    Iox2Event,
+}
+
+#[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct RuntimeParams {
+    pub barrier: BarrierKind,
+    pub ack_deadline_ms: u64,
+    pub poll_ms: u64,
+    pub startup_timeout_s: u64,
+}
+
+#[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct RoamParams {
+    pub l_r: f64,
+    pub c: f64,
+    pub l1: f64,
+    pub obstacle_range: f64,
+    pub obstacle_weight: f64,
+}
+
+/// Behaviours an agent can run.
+pub const BEHAVIOURS: &[&str] = &["roam"];
+/// Hard limits that come from the fixed-size frames.
+pub const MAX_ROBOTS: u32 = 4096;
+
+/// A bad scenario: which file (or flag), which key, what is allowed.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ConfigError {
+    pub source: String,
+    pub key: String,
+    pub message: String,
+}
+
+impl fmt::Display for ConfigError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        if self.key.is_empty() {
+            write!(f, "{}: {}", self.source, self.message)
+        } else {
+            write!(f, "{}: `{}` {}", self.source, self.key, self.message)
+        }
+    }
+}
+
+impl std::error::Error for ConfigError {}
+
+impl Default for Scenario {
+    fn default() -> Self {
+        Scenario::parse(DEFAULT_SCENARIO, "embedded default scenario")
+            .expect("the embedded default scenario parses")
+    }
+}
+
+impl Scenario {
+    /// Parses a scenario. Keys missing from `text` take the embedded default's values, so a
+    /// file needs to hold only what it changes; unknown keys are errors.
+    pub fn parse(text: &str, source: &str) -> Result<Scenario, ConfigError> {
+        let err = |message: String| ConfigError {
+            source: source.to_string(),
+            key: String::new(),
+            message,
+        };
+        let mut base: toml::Table = DEFAULT_SCENARIO
+            .parse()
+            .map_err(|e| err(format!("embedded default: {e}")))?;
+        let user: toml::Table = text.parse().map_err(|e| err(format!("{e}")))?;
+        merge(&mut base, user);
+        let sc: Scenario = toml::Value::Table(base)
+            .try_into()
+            .map_err(|e: toml::de::Error| err(e.message().to_string()))?;
+        Ok(sc)
+    }
+
+    pub fn load(path: &Path) -> Result<Scenario, ConfigError> {
+        let source = path.display().to_string();
+        let text = std::fs::read_to_string(path).map_err(|e| ConfigError {
+            source: source.clone(),
+            key: String::new(),
+            message: format!("cannot read scenario file: {e}"),
+        })?;
+        Scenario::parse(&text, &source)
+    }
+
+    pub fn to_toml(&self) -> String {
+        toml::to_string_pretty(self).expect("scenario serialises")
+    }
+
+    /// Checks every value against its allowed range. `key_source` maps a key to where its value
+    /// came from (a flag such as `--robots`, or the file name).
+    pub fn validate(&self, key_source: &dyn Fn(&str) -> String) -> Result<(), ConfigError> {
+        let e = |key: &str, message: String| ConfigError {
+            source: key_source(key),
+            key: key.to_string(),
+            message,
+        };
+        let range_u = |key: &str, v: u64, lo: u64, hi: u64| {
+            if v < lo || v > hi {
+                Err(e(key, format!("= {v} is out of range: allowed {lo}..={hi}")))
+            } else {
+                Ok(())
+            }
+        };
+        let range_f = |key: &str, v: f64, lo: f64, hi: f64, lo_open: bool| {
+            let below = if lo_open { v <= lo } else { v < lo };
+            if !v.is_finite() || below || v > hi {
+                let l = if lo_open { "(" } else { "[" };
+                Err(e(key, format!("= {v} is out of range: allowed {l}{lo}, {hi}]")))
+            } else {
+                Ok(())
+            }
+        };
+        if !BEHAVIOURS.contains(&self.run.behaviour.as_str()) {
+            return Err(e(
+                "run.behaviour",
+                format!("= {:?} is unknown: allowed {:?}", self.run.behaviour, BEHAVIOURS),
+            ));
+        }
+        range_u("run.robots", self.run.robots as u64, 1, MAX_ROBOTS as u64)?;
+        range_u("run.max_ticks", self.run.max_ticks, 1, 100_000_000)?;
+        range_f("arena.width", self.arena.width, 0.0, 1e7, true)?;
+        range_f("arena.height", self.arena.height, 0.0, 1e7, true)?;
+        let [x0, y0, x1, y1] = self.arena.start_region;
+        if !(0.0 <= x0 && x0 < x1 && x1 <= self.arena.width && 0.0 <= y0 && y0 < y1)
+            || y1 > self.arena.height
+        {
+            return Err(e(
+                "arena.start_region",
+                format!(
+                    "= {:?} must be [x0, y0, x1, y1] with 0 <= x0 < x1 <= width and 0 <= y0 < y1 <= height",
+                    self.arena.start_region
+                ),
+            ));
+        }
+        range_f("arena.boundary_spacing", self.arena.boundary_spacing, 0.0, 100.0, true)?;
+        for (i, o) in self.arena.obstacles.iter().enumerate() {
+            if o.points.len() < 3 || o.points.iter().any(|p| !p[0].is_finite() || !p[1].is_finite()) {
+                return Err(e(
+                    &format!("arena.obstacles[{i}].points"),
+                    format!("(obstacle {:?}) must hold at least 3 finite [x, y] points", o.name),
+                ));
+            }
+        }
+        range_f("robot.v_max", self.robot.v_max, 0.0, 1e6, true)?;
+        range_f("robot.sensing_radius", self.robot.sensing_radius, 0.0, 1e7, false)?;
+        range_f("radio.comm_radius", self.radio.comm_radius, 0.0, 1e7, false)?;
+        range_f("radio.loss", self.radio.loss, 0.0, 1.0, false)?;
+        range_f("radio.loss_at_range", self.radio.loss_at_range, 0.0, 1.0, false)?;
+        range_f("radio.loss_exponent", self.radio.loss_exponent, 0.0, 100.0, true)?;
+        range_u("radio.delay_ticks", self.radio.delay_ticks as u64, 0, 1000)?;
+        let min_margin = 2.0 * self.robot.v_max;
+        range_f("radio.link_margin", self.radio.link_margin, min_margin, 1e7, false)
+            .map_err(|mut err| {
+                err.message += " (at least 2 * robot.v_max, so no in-range message is missed)";
+                err
+            })?;
+        range_u("radio.link_linger_ticks", self.radio.link_linger_ticks as u64, 0, 100_000)?;
+        range_u("radio.max_links", self.radio.max_links as u64, 1, crate::frames::MAX_NEIGHBOURS as u64)?;
+        range_u("radio.max_message_bytes", self.radio.max_message_bytes as u64, 8, 65_536)?;
+        range_u(
+            "radio.max_messages_per_tick",
+            self.radio.max_messages_per_tick as u64,
+            1,
+            crate::frames::MAX_SENT as u64,
+        )?;
+        range_u("runtime.ack_deadline_ms", self.runtime.ack_deadline_ms, 10, 600_000)?;
+        range_u("runtime.poll_ms", self.runtime.poll_ms, 1, 10_000)?;
+        range_u("runtime.startup_timeout_s", self.runtime.startup_timeout_s, 1, 3600)?;
+        range_f("roam.l_r", self.roam.l_r, 0.0, 1e7, true)?;
+        range_f("roam.c", self.roam.c, 0.0, 1e7, true)?;
+        range_f("roam.l1", self.roam.l1, 0.0, 1e7, true)?;
+        range_f("roam.obstacle_range", self.roam.obstacle_range, 0.0, 1e7, false)?;
+        range_f("roam.obstacle_weight", self.roam.obstacle_weight, 0.0, 1e7, false)?;
+        Ok(())
+    }
+}
+
+/// Recursively overlays `over` onto `base` (tables merge, everything else replaces).
+fn merge(base: &mut toml::Table, over: toml::Table) {
+    for (k, v) in over {
+        match (base.get_mut(&k), v) {
+            (Some(toml::Value::Table(b)), toml::Value::Table(o)) => merge(b, o),
+            (_, v) => {
+                base.insert(k, v);
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn file(_: &str) -> String {
+        "test.toml".into()
+    }
+
+    #[test]
+    fn embedded_default_is_valid() {
+        let sc = Scenario::default();
+        sc.validate(&file).unwrap();
+        assert_eq!(sc.run.robots, 50);
+        assert_eq!(sc.arena.obstacles.len(), 5);
+    }
+
+    #[test]
+    fn partial_file_overrides_only_its_keys() {
+        let sc = Scenario::parse("[run]\nrobots = 7\n", "t.toml").unwrap();
+        assert_eq!(sc.run.robots, 7);
+        assert_eq!(sc.radio.comm_radius, 300.0);
+    }
+
+    #[test]
+    fn unknown_key_is_named() {
+        let err = Scenario::parse("[radio]\ncomm_radiuss = 3\n", "t.toml").unwrap_err();
+        assert!(err.to_string().contains("comm_radiuss"), "{err}");
+        assert!(err.to_string().contains("t.toml"), "{err}");
+    }
+
+    #[test]
+    fn out_of_range_values_name_key_and_range() {
+        let mut sc = Scenario::default();
+        sc.radio.loss = 1.5;
+        let err = sc.validate(&file).unwrap_err();
+        assert_eq!(err.key, "radio.loss");
+        assert!(err.to_string().contains("[0, 1]"), "{err}");
+        let mut sc = Scenario::default();
+        sc.run.robots = 0;
+        assert_eq!(sc.validate(&file).unwrap_err().key, "run.robots");
+        let mut sc = Scenario::default();
+        sc.radio.link_margin = 5.0;
+        assert_eq!(sc.validate(&file).unwrap_err().key, "radio.link_margin");
+        let mut sc = Scenario::default();
+        sc.run.behaviour = "dance".into();
+        assert!(sc.validate(&file).unwrap_err().to_string().contains("roam"));
+    }
+
+    #[test]
+    fn resolved_scenario_round_trips_through_toml() {
+        let sc = Scenario::default();
+        let again = Scenario::parse(&sc.to_toml(), "resolved").unwrap();
+        assert_eq!(sc, again);
+    }
+}

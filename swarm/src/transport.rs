@@ -1,0 +1,205 @@
+//! iceoryx2 plumbing of the multi-process executor: per-run configuration, service names and
+//! capacities.
+//!
+//! Every service is created by the world, with the capacities the run needs, before any agent
+//! starts; agents only open them. Each run has its own iceoryx2 prefix and root folder, so two
+//! runs never see each other and a run's leftovers are easy to find and remove.
+
+use crate::frames::{Action, Control, RadioHeader, Sense, WorldStatus};
+use crate::scenario::Scenario;
+use iceoryx2::prelude::*;
+use iceoryx2::service::port_factory::publish_subscribe::PortFactory;
+use std::path::PathBuf;
+
+pub type Error = Box<dyn std::error::Error + Send + Sync>;
+pub type Result<T> = std::result::Result<T, Error>;
+
+pub type SenseService = PortFactory<ipc::Service, Sense, ()>;
+pub type ActService = PortFactory<ipc::Service, Action, ()>;
+pub type RadioService = PortFactory<ipc::Service, [u8], RadioHeader>;
+pub type StatusService = PortFactory<ipc::Service, WorldStatus, ()>;
+pub type ControlService = PortFactory<ipc::Service, Control, ()>;
+
+/// Where iceoryx2 keeps a run's node and service folders (its shared memory is
+/// `/dev/shm/<prefix>*`).
+pub const IOX2_ROOT: &str = "/tmp/swarm-runtime/iox2";
+
+/// The per-run iceoryx2 file prefix: short, unique per run id.
+pub fn prefix_for(run_id: &str) -> String {
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    for b in run_id.bytes() {
+        h ^= b as u64;
+        h = h.wrapping_mul(0x100_0000_01b3);
+    }
+    format!("sw{:010x}_", h & 0xff_ffff_ffff)
+}
+
+pub fn root_for(prefix: &str) -> PathBuf {
+    PathBuf::from(IOX2_ROOT).join(prefix.trim_end_matches('_'))
+}
+
+fn err(what: &str, e: impl std::fmt::Debug) -> Error {
+    format!("{what}: {e:?}").into()
+}
+
+/// The iceoryx2 configuration of one run.
+pub fn run_config(prefix: &str) -> Result<Config> {
+    let mut c = Config::default();
+    c.global.prefix = FileName::new(prefix.as_bytes()).map_err(|e| err("iceoryx2 prefix", e))?;
+    let root = root_for(prefix);
+    let mut root_s = root.display().to_string();
+    root_s.push('/');
+    c.global
+        .set_root_path(&Path::new(root_s.as_bytes()).map_err(|e| err("iceoryx2 root path", e))?);
+    Ok(c)
+}
+
+/// A node of this run. Signal handling is left to our own code.
+pub fn node(config: &Config, name: &str) -> Result<Node<ipc::Service>> {
+    NodeBuilder::new()
+        .config(config)
+        .name(&NodeName::new(name).map_err(|e| err("node name", e))?)
+        .signal_handling_mode(SignalHandlingMode::Disabled)
+        .create::<ipc::Service>()
+        .map_err(|e| err("create node", e))
+}
+
+fn service_name(s: &str) -> Result<ServiceName> {
+    ServiceName::new(s).map_err(|e| err("service name", e))
+}
+
+pub fn sense_name(robot: u32) -> String {
+    format!("robot/{robot}/sense")
+}
+pub fn act_name(robot: u32) -> String {
+    format!("robot/{robot}/act")
+}
+pub fn radio_name(robot: u32) -> String {
+    format!("robot/{robot}/radio")
+}
+pub const STATUS_NAME: &str = "world/state";
+pub const CONTROL_NAME: &str = "run/control";
+
+/// Slack for a restarted agent whose dead predecessor's ports are not cleaned yet.
+const RESTART_SLACK: usize = 2;
+
+/// Subscribers one radio service must admit.
+pub fn radio_max_subscribers(sc: &Scenario) -> usize {
+    (sc.radio.max_links as usize).min(sc.run.robots as usize) + RESTART_SLACK
+}
+
+/// Radio messages that can wait in one link's buffer: this tick's and the next's.
+pub fn radio_buffer(sc: &Scenario) -> usize {
+    2 * sc.radio.max_messages_per_tick as usize
+}
+
+/// The world's side: creates (`create == true`) or opens robot i's three services.
+pub fn sense_service(node: &Node<ipc::Service>, robot: u32, create: bool) -> Result<SenseService> {
+    let b = node
+        .service_builder(&service_name(&sense_name(robot))?)
+        .publish_subscribe::<Sense>();
+    if create {
+        b.max_publishers(1 + RESTART_SLACK)
+            .max_subscribers(1 + RESTART_SLACK)
+            .max_nodes(2 + 2 * RESTART_SLACK)
+            .subscriber_max_buffer_size(1)
+            .history_size(0)
+            .create()
+            .map_err(|e| err("create sense service", e))
+    } else {
+        b.open().map_err(|e| err("open sense service", e))
+    }
+}
+
+pub fn act_service(node: &Node<ipc::Service>, robot: u32, create: bool) -> Result<ActService> {
+    let b = node
+        .service_builder(&service_name(&act_name(robot))?)
+        .publish_subscribe::<Action>();
+    if create {
+        b.max_publishers(1 + RESTART_SLACK)
+            .max_subscribers(1 + RESTART_SLACK)
+            .max_nodes(2 + 2 * RESTART_SLACK)
+            .subscriber_max_buffer_size(2)
+            .history_size(0)
+            .create()
+            .map_err(|e| err("create act service", e))
+    } else {
+        b.open().map_err(|e| err("open act service", e))
+    }
+}
+
+pub fn radio_service(
+    node: &Node<ipc::Service>,
+    robot: u32,
+    sc: &Scenario,
+    create: bool,
+) -> Result<RadioService> {
+    let b = node
+        .service_builder(&service_name(&radio_name(robot))?)
+        .publish_subscribe::<[u8]>()
+        .user_header::<RadioHeader>();
+    if create {
+        let subs = radio_max_subscribers(sc);
+        b.max_publishers(1 + RESTART_SLACK)
+            .max_subscribers(subs)
+            .max_nodes(subs + 1 + RESTART_SLACK + 1)
+            .subscriber_max_buffer_size(radio_buffer(sc))
+            .subscriber_max_borrowed_samples(1)
+            .history_size(0)
+            .create()
+            .map_err(|e| err("create radio service", e))
+    } else {
+        b.open().map_err(|e| err("open radio service", e))
+    }
+}
+
+pub fn status_service(node: &Node<ipc::Service>, create: bool) -> Result<StatusService> {
+    let b = node
+        .service_builder(&service_name(STATUS_NAME)?)
+        .publish_subscribe::<WorldStatus>();
+    if create {
+        b.max_publishers(1)
+            .max_subscribers(4)
+            .max_nodes(6)
+            .subscriber_max_buffer_size(1)
+            .create()
+            .map_err(|e| err("create status service", e))
+    } else {
+        b.open().map_err(|e| err("open status service", e))
+    }
+}
+
+pub fn control_service(node: &Node<ipc::Service>, create: bool) -> Result<ControlService> {
+    let b = node
+        .service_builder(&service_name(CONTROL_NAME)?)
+        .publish_subscribe::<Control>();
+    if create {
+        b.max_publishers(4)
+            .max_subscribers(1)
+            .max_nodes(6)
+            .subscriber_max_buffer_size(256)
+            .enable_safe_overflow(false)
+            .create()
+            .map_err(|e| err("create control service", e))
+    } else {
+        b.open().map_err(|e| err("open control service", e))
+    }
+}
+
+/// Radio publisher of robot i (fixed-size slots: no reallocation, no lost dynamic samples).
+pub fn radio_publisher(
+    svc: &RadioService,
+    sc: &Scenario,
+) -> Result<iceoryx2::port::publisher::Publisher<ipc::Service, [u8], RadioHeader>> {
+    svc.publisher_builder()
+        .initial_max_slice_len(sc.radio.max_message_bytes as usize)
+        .allocation_strategy(AllocationStrategy::Static)
+        .max_loaned_samples(1)
+        .create()
+        .map_err(|e| err("create radio publisher", e))
+}
+
+/// Quiets iceoryx2's own logging (it warns about the missing global config file otherwise).
+pub fn quiet_logs() {
+    set_log_level_from_env_or(LogLevel::Error);
+}
