@@ -1,0 +1,14 @@
+//! The world: ground truth, sensing, physics, radio accounting, mission metrics, outputs.
+//!
+//! `World` is a pure state machine (`sense` for every robot, then `apply` the actions); the
+//! world process drives it over iceoryx2, the in-process executor drives it directly.
+
+pub mod metrics;
+pub mod output;
+pub mod placement;
+pub mod sensing;
+pub mod svg;
+pub mod world;
+
+pub use output::{RunOutputs, Summary, Timing};
+pub use world::World;

@@ -1,0 +1,125 @@
+//! The run folder: scenario.toml, recording.bin, summary.json, run.svg.
+
+use crate::metrics::{mission, Mission};
+use crate::world::{Fault, World, REJECT_NAMES};
+use serde::Serialize;
+use std::collections::BTreeMap;
+use std::fs::File;
+use std::path::{Path, PathBuf};
+use swarm::radio::RadioCounters;
+use swarm::recording::{RecordingHeader, RecordingWriter, TickRecord, RECORDING_VERSION};
+use swarm::scenario::Scenario;
+
+/// Wall-clock facts of a run, measured by the executor.
+#[derive(Debug, Clone, Default)]
+pub struct Timing {
+    pub wall_seconds: f64,
+    /// Seconds spent in the tick loop (excludes start-up and outputs).
+    pub loop_seconds: f64,
+    pub startup_seconds: f64,
+    /// Duration of every tick, nanoseconds.
+    pub tick_ns: Vec<u64>,
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct TickTimes {
+    pub p50_us: f64,
+    pub p99_us: f64,
+    pub max_us: f64,
+}
+
+pub fn percentile(sorted: &[u64], q: f64) -> f64 {
+    if sorted.is_empty() {
+        return 0.0;
+    }
+    let idx = ((sorted.len() - 1) as f64 * q).round() as usize;
+    sorted[idx] as f64
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct Summary {
+    pub run_id: String,
+    pub executor: String,
+    pub behaviour: String,
+    pub robots: u32,
+    pub seed: u64,
+    pub ticks: u64,
+    pub max_ticks: u64,
+    /// How the run ended: "completed", "interrupted", "failed: ...".
+    pub end: String,
+    pub wall_seconds: f64,
+    pub startup_seconds: f64,
+    pub ticks_per_second: f64,
+    pub tick_time: TickTimes,
+    pub messages: RadioCounters,
+    pub rejected_actions: BTreeMap<String, u64>,
+    pub blocked_moves: u64,
+    pub distance_travelled: f64,
+    pub alive_at_end: u32,
+    pub faults: Vec<Fault>,
+    pub mission: Mission,
+}
+
+pub struct RunOutputs {
+    pub dir: PathBuf,
+    rec: Option<RecordingWriter<File>>,
+}
+
+impl RunOutputs {
+    pub fn create(dir: &Path, sc: &Scenario) -> std::io::Result<RunOutputs> {
+        std::fs::create_dir_all(dir)?;
+        std::fs::write(dir.join("scenario.toml"), sc.to_toml())?;
+        let header = RecordingHeader {
+            version: RECORDING_VERSION,
+            robots: sc.run.robots,
+            seed: sc.run.seed,
+            scenario: sc.to_toml(),
+        };
+        let rec = RecordingWriter::new(File::create(dir.join("recording.bin"))?, &header)?;
+        Ok(RunOutputs { dir: dir.to_path_buf(), rec: Some(rec) })
+    }
+
+    pub fn push(&mut self, t: &TickRecord) -> std::io::Result<()> {
+        self.rec.as_mut().expect("open").push(t)
+    }
+
+    /// Closes the recording and writes summary.json and run.svg.
+    pub fn finish(mut self, world: &mut World, timing: &Timing, run_id: &str, executor: &str, end: &str) -> std::io::Result<Summary> {
+        self.rec.take().expect("open").finish()?;
+        world.finish_radio();
+        let mut sorted = timing.tick_ns.clone();
+        sorted.sort_unstable();
+        let ticks = world.tick;
+        let summary = Summary {
+            run_id: run_id.to_string(),
+            executor: executor.to_string(),
+            behaviour: world.sc.run.behaviour.clone(),
+            robots: world.n as u32,
+            seed: world.sc.run.seed,
+            ticks,
+            max_ticks: world.sc.run.max_ticks,
+            end: end.to_string(),
+            wall_seconds: timing.wall_seconds,
+            startup_seconds: timing.startup_seconds,
+            ticks_per_second: if timing.loop_seconds > 0.0 { ticks as f64 / timing.loop_seconds } else { 0.0 },
+            tick_time: TickTimes {
+                p50_us: percentile(&sorted, 0.5) / 1e3,
+                p99_us: percentile(&sorted, 0.99) / 1e3,
+                max_us: sorted.last().copied().unwrap_or(0) as f64 / 1e3,
+            },
+            messages: world.radio,
+            rejected_actions: REJECT_NAMES.iter().zip(world.rejected).map(|(k, v)| (k.to_string(), v)).collect(),
+            blocked_moves: world.blocked_moves,
+            distance_travelled: world.distance_travelled,
+            alive_at_end: world.alive_count(),
+            faults: world.faults.clone(),
+            mission: mission(&world.coverage, &world.poses, &world.alive),
+        };
+        std::fs::write(
+            self.dir.join("summary.json"),
+            serde_json::to_string_pretty(&summary).map_err(std::io::Error::other)?,
+        )?;
+        crate::svg::write_svg(world, &self.dir.join("run.svg")).map_err(std::io::Error::other)?;
+        Ok(summary)
+    }
+}

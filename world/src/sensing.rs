@@ -1,0 +1,159 @@
+//! What each robot senses: obstacle / wall boundary points within the sensing radius and the
+//! robots within radio link range, both nearest first.
+
+use swarm::frames::{Sense, MAX_NEIGHBOURS, MAX_OBSTACLE_POINTS};
+use swarm::geometry::sample_boundary;
+use swarm::radio::distance;
+use swarm::scenario::Scenario;
+
+/// A uniform bucket grid over fixed points, for radius queries.
+pub struct PointGrid {
+    cell: f64,
+    cols: usize,
+    rows: usize,
+    cells: Vec<Vec<u32>>,
+    pub points: Vec<[f64; 2]>,
+}
+
+impl PointGrid {
+    pub fn new(points: Vec<[f64; 2]>, width: f64, height: f64, cell: f64) -> PointGrid {
+        let cell = cell.max(1.0);
+        let cols = (width / cell).ceil() as usize + 1;
+        let rows = (height / cell).ceil() as usize + 1;
+        let mut cells = vec![Vec::new(); cols * rows];
+        for (i, p) in points.iter().enumerate() {
+            let (c, r) = Self::cell_of(cell, cols, rows, *p);
+            cells[r * cols + c].push(i as u32);
+        }
+        PointGrid { cell, cols, rows, cells, points }
+    }
+
+    fn cell_of(cell: f64, cols: usize, rows: usize, p: [f64; 2]) -> (usize, usize) {
+        let c = ((p[0] / cell).floor().max(0.0) as usize).min(cols - 1);
+        let r = ((p[1] / cell).floor().max(0.0) as usize).min(rows - 1);
+        (c, r)
+    }
+
+    /// Indices of points within `radius` of q (any order).
+    pub fn within(&self, q: [f64; 2], radius: f64, out: &mut Vec<(f64, u32)>) {
+        let span = (radius / self.cell).ceil() as isize;
+        let (c0, r0) = Self::cell_of(self.cell, self.cols, self.rows, q);
+        for dr in -span..=span {
+            let r = r0 as isize + dr;
+            if r < 0 || r >= self.rows as isize {
+                continue;
+            }
+            for dc in -span..=span {
+                let c = c0 as isize + dc;
+                if c < 0 || c >= self.cols as isize {
+                    continue;
+                }
+                for &i in &self.cells[r as usize * self.cols + c as usize] {
+                    let d = distance(q, self.points[i as usize]);
+                    if d <= radius {
+                        out.push((d, i));
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// The static boundary points the robots can sense: obstacles, and the arena walls if sensed.
+pub fn static_points(sc: &Scenario) -> Vec<[f64; 2]> {
+    let mut pts = Vec::new();
+    for o in &sc.arena.obstacles {
+        pts.extend(sample_boundary(&o.points, sc.arena.boundary_spacing));
+    }
+    if sc.arena.walls_sensed {
+        let (w, h) = (sc.arena.width, sc.arena.height);
+        pts.extend(sample_boundary(&[[0.0, 0.0], [w, 0.0], [w, h], [0.0, h]], sc.arena.boundary_spacing));
+    }
+    pts
+}
+
+/// Scratch buffers reused across ticks (no allocation on the tick path once warm).
+#[derive(Default)]
+pub struct SenseScratch {
+    near: Vec<(f64, u32)>,
+}
+
+/// Fills the obstacle-point list of `out`: static points and dead robots within the sensing
+/// radius, nearest first (ties by index), at most MAX_OBSTACLE_POINTS.
+pub fn fill_obstacles(
+    grid: &PointGrid,
+    dead: &[[f64; 2]],
+    q: [f64; 2],
+    radius: f64,
+    scratch: &mut SenseScratch,
+    out: &mut Sense,
+) {
+    scratch.near.clear();
+    grid.within(q, radius, &mut scratch.near);
+    let base = grid.points.len() as u32;
+    for (j, p) in dead.iter().enumerate() {
+        let d = distance(q, *p);
+        if d <= radius {
+            scratch.near.push((d, base + j as u32));
+        }
+    }
+    scratch
+        .near
+        .sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+    let n = scratch.near.len().min(MAX_OBSTACLE_POINTS);
+    for (k, &(_, i)) in scratch.near[..n].iter().enumerate() {
+        out.obstacle_points[k] = if i < base { grid.points[i as usize] } else { dead[(i - base) as usize] };
+    }
+    out.n_obstacle_points = n as u32;
+}
+
+/// Fills the neighbour list of robot `me`: live robots within `range`, nearest first (ties by
+/// id), at most `cap`.
+pub fn fill_neighbours(
+    me: usize,
+    pos: &[[f64; 3]],
+    alive: &[bool],
+    range: f64,
+    cap: usize,
+    scratch: &mut SenseScratch,
+    out: &mut Sense,
+) {
+    scratch.near.clear();
+    let q = [pos[me][0], pos[me][1]];
+    for (j, p) in pos.iter().enumerate() {
+        if j == me || !alive[j] {
+            continue;
+        }
+        let d = distance(q, [p[0], p[1]]);
+        if d <= range {
+            scratch.near.push((d, j as u32));
+        }
+    }
+    scratch
+        .near
+        .sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+    let n = scratch.near.len().min(cap).min(MAX_NEIGHBOURS);
+    for (k, &(_, j)) in scratch.near[..n].iter().enumerate() {
+        out.neighbours[k] = j;
+    }
+    out.n_neighbours = n as u32;
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn grid_query_matches_brute_force() {
+        let pts: Vec<[f64; 2]> = (0..2000).map(|i| [((i * 37) % 1000) as f64, ((i * 91) % 1000) as f64]).collect();
+        let g = PointGrid::new(pts.clone(), 1000.0, 1000.0, 100.0);
+        for q in [[0.0, 0.0], [500.0, 500.0], [999.0, 3.0], [250.5, 730.2]] {
+            let mut got = vec![];
+            g.within(q, 100.0, &mut got);
+            let mut got: Vec<u32> = got.into_iter().map(|x| x.1).collect();
+            got.sort();
+            let want: Vec<u32> = (0..pts.len() as u32).filter(|&i| distance(q, pts[i as usize]) <= 100.0).collect();
+            assert_eq!(got, want);
+        }
+    }
+}

@@ -1,0 +1,77 @@
+//! `run.svg`: arena, obstacles, start region, trajectories, start and end positions.
+
+use crate::world::World;
+use plotters::prelude::*;
+use std::path::Path;
+
+/// Picture size in pixels (square arena maps to a square picture).
+const SIZE: u32 = 900;
+
+fn robot_colour(i: usize, n: usize) -> RGBColor {
+    let h = i as f64 / n.max(1) as f64;
+    let HSLColor(h, s, l) = HSLColor(h, 0.65, 0.45);
+    // HSL -> RGB
+    let c = (1.0 - (2.0 * l - 1.0).abs()) * s;
+    let hp = h * 6.0;
+    let x = c * (1.0 - (hp % 2.0 - 1.0).abs());
+    let (r, g, b) = match hp as u32 {
+        0 => (c, x, 0.0),
+        1 => (x, c, 0.0),
+        2 => (0.0, c, x),
+        3 => (0.0, x, c),
+        4 => (x, 0.0, c),
+        _ => (c, 0.0, x),
+    };
+    let m = l - c / 2.0;
+    RGBColor(((r + m) * 255.0) as u8, ((g + m) * 255.0) as u8, ((b + m) * 255.0) as u8)
+}
+
+pub fn write_svg(world: &World, path: &Path) -> Result<(), String> {
+    let sc = &world.sc;
+    let (w, h) = (sc.arena.width, sc.arena.height);
+    let aspect = h / w;
+    let root = SVGBackend::new(path, (SIZE, (SIZE as f64 * aspect).round().max(100.0) as u32)).into_drawing_area();
+    let e = |x: DrawingAreaErrorKind<std::io::Error>| format!("run.svg: {x:?}");
+    root.fill(&WHITE).map_err(e)?;
+    let area = root.margin(10, 10, 10, 10);
+    // Arena coordinates with y up.
+    let mut chart = ChartBuilder::on(&area)
+        .build_cartesian_2d(0f64..w, 0f64..h)
+        .map_err(e)?;
+    chart
+        .draw_series(std::iter::once(Rectangle::new([(0.0, 0.0), (w, h)], BLACK.stroke_width(2))))
+        .map_err(e)?;
+    let [x0, y0, x1, y1] = sc.arena.start_region;
+    chart
+        .draw_series(std::iter::once(Rectangle::new([(x0, y0), (x1, y1)], RGBColor(120, 120, 255).mix(0.15).filled())))
+        .map_err(e)?;
+    for o in &sc.arena.obstacles {
+        let pts: Vec<(f64, f64)> = o.points.iter().map(|p| (p[0], p[1])).collect();
+        chart.draw_series(std::iter::once(Polygon::new(pts, BLACK.mix(0.85).filled()))).map_err(e)?;
+    }
+    let n = world.n;
+    for (i, traj) in world.trajectories.iter().enumerate() {
+        let col = robot_colour(i, n);
+        let mut pts: Vec<(f64, f64)> = traj.iter().map(|p| (p[0], p[1])).collect();
+        pts.push((world.poses[i][0], world.poses[i][1]));
+        chart.draw_series(LineSeries::new(pts, col.mix(0.6).stroke_width(1))).map_err(e)?;
+    }
+    for (i, s) in world.start.iter().enumerate() {
+        let col = robot_colour(i, n);
+        chart.draw_series(std::iter::once(Circle::new((s[0], s[1]), 2, col.filled()))).map_err(e)?;
+    }
+    for i in 0..n {
+        let col = robot_colour(i, n);
+        let p = (world.poses[i][0], world.poses[i][1]);
+        if world.alive[i] {
+            chart.draw_series(std::iter::once(Circle::new(p, 4, col.filled()))).map_err(e)?;
+        } else {
+            // A dead robot: a black cross.
+            chart
+                .draw_series(std::iter::once(Cross::new(p, 5, BLACK.stroke_width(2))))
+                .map_err(e)?;
+        }
+    }
+    root.present().map_err(e)?;
+    Ok(())
+}

@@ -1,0 +1,412 @@
+//! Ground truth and the per-tick step: senses out, actions in.
+
+use crate::metrics::Coverage;
+use crate::placement::place_robots;
+use crate::sensing::{fill_neighbours, fill_obstacles, static_points, PointGrid, SenseScratch};
+use std::collections::VecDeque;
+use swarm::frames::{Action, Sense, WorldStatus, BROADCAST, MAX_SENT, RUN_RUNNING, RUN_STOPPING};
+use swarm::geometry::{polygon_hit, v2, Vec2};
+use swarm::radio::{distance, RadioCounters};
+use swarm::recording::{Event, RejectReason, TickRecord};
+use swarm::scenario::Scenario;
+
+/// How far short of an obstacle or wall a blocked move stops.
+const BLOCK_BACKOFF: f64 = 0.5;
+/// Relative tolerance on the speed limit (behaviours clamp with floating-point rounding).
+const SPEED_TOLERANCE: f64 = 1e-9;
+
+/// A robot that died, for the summary.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct Fault {
+    pub robot: u32,
+    /// First tick at which the world treated the robot as dead.
+    pub tick: u64,
+    pub cause: String,
+    /// Wall-clock milliseconds from the process's death to the world's knowing (if measured).
+    pub detection_ms: Option<f64>,
+}
+
+/// Messages sent at one tick whose outcome at the receivers is not in yet.
+struct InFlight {
+    tick: u64,
+    in_range: u64,
+}
+
+pub struct World {
+    pub sc: Scenario,
+    pub n: usize,
+    pub tick: u64,
+    pub poses: Vec<[f64; 3]>,
+    pub vel: Vec<[f64; 2]>,
+    pub alive: Vec<bool>,
+    grid: PointGrid,
+    dead_points: Vec<[f64; 2]>,
+    scratch: SenseScratch,
+    in_flight: VecDeque<InFlight>,
+    pub radio: RadioCounters,
+    pub faults: Vec<Fault>,
+    pub rejected: [u64; 5],
+    pub blocked_moves: u64,
+    pub distance_travelled: f64,
+    pending_events: Vec<Event>,
+    stopping: bool,
+    /// Trajectories for the picture, sampled every `traj_every` ticks.
+    pub trajectories: Vec<Vec<[f64; 2]>>,
+    pub coverage: Coverage,
+    pub start: Vec<[f64; 2]>,
+    traj_every: u64,
+}
+
+fn reason_index(r: RejectReason) -> usize {
+    match r {
+        RejectReason::NotFinite => 0,
+        RejectReason::TooFast => 1,
+        RejectReason::WrongRobot => 2,
+        RejectReason::WrongTick => 3,
+        RejectReason::BadRadioReport => 4,
+    }
+}
+
+pub const REJECT_NAMES: [&str; 5] = ["not_finite", "too_fast", "wrong_robot", "wrong_tick", "bad_radio_report"];
+
+impl World {
+    pub fn new(sc: &Scenario) -> Result<World, String> {
+        let mut rng = swarm::behaviour::robot_rng(sc.run.seed, u32::MAX, 1);
+        let start = place_robots(sc, &mut rng)?;
+        let n = start.len();
+        let grid = PointGrid::new(static_points(sc), sc.arena.width, sc.arena.height, sc.robot.sensing_radius.max(10.0));
+        let traj_every = (sc.run.max_ticks / 2000).max(1);
+        Ok(World {
+            sc: sc.clone(),
+            n,
+            tick: 0,
+            poses: start.iter().map(|p| [p[0], p[1], 0.0]).collect(),
+            vel: vec![[0.0; 2]; n],
+            alive: vec![true; n],
+            grid,
+            dead_points: Vec::new(),
+            scratch: SenseScratch::default(),
+            in_flight: VecDeque::new(),
+            radio: RadioCounters::default(),
+            faults: Vec::new(),
+            rejected: [0; 5],
+            blocked_moves: 0,
+            distance_travelled: 0.0,
+            pending_events: Vec::new(),
+            stopping: false,
+            coverage: {
+                let mut c = Coverage::new(sc.arena.width, sc.arena.height);
+                start.iter().for_each(|p| c.visit(*p));
+                c
+            },
+            trajectories: start.iter().map(|p| vec![*p]).collect(),
+            start,
+            traj_every,
+        })
+    }
+
+    pub fn alive_count(&self) -> u32 {
+        self.alive.iter().filter(|a| **a).count() as u32
+    }
+
+    pub fn live_robots(&self) -> impl Iterator<Item = u32> + '_ {
+        self.alive.iter().enumerate().filter(|(_, a)| **a).map(|(i, _)| i as u32)
+    }
+
+    /// The run will end after this tick; Sense frames say so.
+    pub fn set_stopping(&mut self) {
+        self.stopping = true;
+    }
+
+    /// Writes robot i's Sense frame for the current tick into `out` (in place: every field the
+    /// agent reads is written, lists up to their counts).
+    pub fn sense(&mut self, i: usize, out: &mut Sense) {
+        let p = self.poses[i];
+        out.tick = self.tick;
+        out.robot = i as u32;
+        out.run_state = if self.stopping { RUN_STOPPING } else { RUN_RUNNING };
+        out.pos = [p[0], p[1]];
+        out.heading = p[2];
+        out.vel = self.vel[i];
+        out.alive_robots = self.alive_count();
+        out.n_signals = 0;
+        let link_range = self.sc.radio.comm_radius + self.sc.radio.link_margin;
+        fill_neighbours(i, &self.poses, &self.alive, link_range, self.sc.radio.max_links as usize, &mut self.scratch, out);
+        fill_obstacles(&self.grid, &self.dead_points, [p[0], p[1]], self.sc.robot.sensing_radius, &mut self.scratch, out);
+    }
+
+    /// Marks a robot dead from the current tick on: it stands still as an obstacle.
+    pub fn mark_dead(&mut self, robot: u32, cause: &str, detection_ms: Option<f64>) {
+        let i = robot as usize;
+        if i >= self.n || !self.alive[i] {
+            return;
+        }
+        self.alive[i] = false;
+        self.vel[i] = [0.0; 2];
+        self.dead_points.push([self.poses[i][0], self.poses[i][1]]);
+        self.faults.push(Fault { robot, tick: self.tick, cause: cause.to_string(), detection_ms });
+        self.pending_events.push(Event::RobotDied { robot, cause: cause.to_string() });
+    }
+
+    fn validate(&self, i: usize, a: &Action) -> Result<(), RejectReason> {
+        if a.robot as usize != i {
+            return Err(RejectReason::WrongRobot);
+        }
+        if a.tick != self.tick {
+            return Err(RejectReason::WrongTick);
+        }
+        if !a.vel[0].is_finite() || !a.vel[1].is_finite() {
+            return Err(RejectReason::NotFinite);
+        }
+        if (a.vel[0] * a.vel[0] + a.vel[1] * a.vel[1]).sqrt() > self.sc.robot.v_max * (1.0 + SPEED_TOLERANCE) {
+            return Err(RejectReason::TooFast);
+        }
+        Ok(())
+    }
+
+    /// Where a step from p along v ends: stops short of obstacles and walls (the whole segment
+    /// is checked, not only its end point).
+    fn clip_move(&self, p: Vec2, v: Vec2) -> (Vec2, bool) {
+        let len = v.norm();
+        if len == 0.0 {
+            return (p, false);
+        }
+        let (w, h) = (self.sc.arena.width, self.sc.arena.height);
+        let walls = [[0.0, 0.0], [w, 0.0], [w, h], [0.0, h]];
+        let mut t = polygon_hit(p, v, &walls);
+        for o in &self.sc.arena.obstacles {
+            if let Some(x) = polygon_hit(p, v, &o.points) {
+                t = Some(t.map_or(x, |y: f64| y.min(x)));
+            }
+        }
+        match t {
+            None => (p + v, false),
+            Some(t) => {
+                let s = ((t * len - BLOCK_BACKOFF) / len).max(0.0);
+                (p + v * s, true)
+            }
+        }
+    }
+
+    /// Applies the actions of the current tick (index = robot; None = no action arrived) and
+    /// advances to the next tick. Returns the tick's record.
+    pub fn apply(&mut self, actions: &[Option<Action>]) -> TickRecord {
+        let k = self.tick;
+        let mut events = std::mem::take(&mut self.pending_events);
+        let mut radio = RadioCounters::default();
+        let live = self.alive_count() as u64;
+        let mut in_range_sent = 0u64;
+        // Radio accounting first, on the positions of tick k (those the senders reported).
+        for i in 0..self.n {
+            let Some(a) = actions.get(i).copied().flatten() else { continue };
+            if a.robot as usize != i || a.tick != k {
+                continue;
+            }
+            // Outcomes at this robot of messages now due.
+            radio.delivered += a.radio_delivered as u64;
+            radio.dropped_loss += a.radio_dropped_loss as u64;
+            radio.malformed += a.radio_malformed as u64;
+            let n_sent = a.n_sent as usize;
+            if n_sent > MAX_SENT.min(self.sc.radio.max_messages_per_tick as usize) {
+                self.reject(&mut events, i, RejectReason::BadRadioReport);
+                continue;
+            }
+            let me = [self.poses[i][0], self.poses[i][1]];
+            for &dest in &a.sent_to[..n_sent] {
+                if dest == BROADCAST {
+                    radio.offered += live.saturating_sub(1);
+                    let within = (0..self.n)
+                        .filter(|&j| j != i && self.alive[j])
+                        .filter(|&j| distance(me, [self.poses[j][0], self.poses[j][1]]) <= self.sc.radio.comm_radius)
+                        .count() as u64;
+                    in_range_sent += within;
+                    radio.dropped_range += live.saturating_sub(1) - within;
+                } else {
+                    radio.offered += 1;
+                    let j = dest as usize;
+                    if j < self.n
+                        && j != i
+                        && self.alive[j]
+                        && distance(me, [self.poses[j][0], self.poses[j][1]]) <= self.sc.radio.comm_radius
+                    {
+                        in_range_sent += 1;
+                    } else {
+                        radio.dropped_range += 1;
+                    }
+                }
+            }
+        }
+        // Messages sent at k - 1 - delay are due now: what no receiver reported went unlinked.
+        let delay = self.sc.radio.delay_ticks as u64;
+        self.in_flight.push_back(InFlight { tick: k, in_range: in_range_sent });
+        if let Some(front) = self.in_flight.front() {
+            if front.tick + 1 + delay == k {
+                let f = self.in_flight.pop_front().expect("front");
+                let reported = radio.delivered + radio.dropped_loss + radio.malformed;
+                radio.dropped_unlinked = f.in_range.saturating_sub(reported);
+            }
+        }
+        // Motion.
+        for i in 0..self.n {
+            if !self.alive[i] {
+                continue;
+            }
+            let Some(a) = actions.get(i).copied().flatten() else {
+                self.vel[i] = [0.0; 2];
+                continue;
+            };
+            if let Err(r) = self.validate(i, &a) {
+                self.reject(&mut events, i, r);
+                self.vel[i] = [0.0; 2];
+                continue;
+            }
+            if a.events != 0 {
+                events.push(Event::Declared { robot: i as u32, flags: a.events });
+            }
+            let p = Vec2::new(self.poses[i][0], self.poses[i][1]);
+            let (q, blocked) = self.clip_move(p, v2(a.vel));
+            if blocked {
+                self.blocked_moves += 1;
+                events.push(Event::MoveBlocked { robot: i as u32 });
+            }
+            let moved = q - p;
+            self.distance_travelled += moved.norm();
+            let heading = if moved.norm() > 0.0 { moved.y.atan2(moved.x) } else { self.poses[i][2] };
+            self.poses[i] = [q.x, q.y, heading];
+            self.coverage.visit([q.x, q.y]);
+            self.vel[i] = [moved.x, moved.y];
+        }
+        self.radio.add(&radio);
+        if (k + 1) % self.traj_every == 0 {
+            for i in 0..self.n {
+                self.trajectories[i].push([self.poses[i][0], self.poses[i][1]]);
+            }
+        }
+        self.tick += 1;
+        TickRecord {
+            tick: k,
+            poses: self.poses.clone(),
+            alive: self.alive.iter().map(|&a| a as u8).collect(),
+            events,
+            radio,
+        }
+    }
+
+    fn reject(&mut self, events: &mut Vec<Event>, i: usize, r: RejectReason) {
+        self.rejected[reason_index(r)] += 1;
+        events.push(Event::ActionRejected { robot: i as u32, reason: r });
+    }
+
+    /// Closes the radio books at the end of the run: what is still in flight.
+    pub fn finish_radio(&mut self) {
+        self.radio.in_flight = self.in_flight.drain(..).map(|f| f.in_range).sum();
+    }
+
+    pub fn status(&self, finished: bool) -> WorldStatus {
+        let alive = self.alive_count();
+        WorldStatus {
+            tick: self.tick,
+            max_ticks: self.sc.run.max_ticks,
+            alive,
+            dead: self.n as u32 - alive,
+            finished: finished as u32,
+            _pad: 0,
+            offered: self.radio.offered,
+            delivered: self.radio.delivered,
+            dropped_range: self.radio.dropped_range,
+            dropped_loss: self.radio.dropped_loss,
+            rejected_actions: self.rejected.iter().sum(),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn world() -> World {
+        let mut sc = Scenario::default();
+        sc.run.robots = 5;
+        World::new(&sc).unwrap()
+    }
+
+    #[test]
+    fn bad_actions_are_rejected_counted_and_the_world_carries_on() {
+        let mut w = world();
+        let mut acts: Vec<Option<Action>> = (0..5).map(|i| Some(Action::idle(0, i))).collect();
+        acts[0].as_mut().unwrap().vel = [f64::NAN, 0.0];
+        acts[1].as_mut().unwrap().vel = [f64::INFINITY, 0.0];
+        acts[2].as_mut().unwrap().vel = [1e9, 0.0];
+        acts[3].as_mut().unwrap().robot = 77;
+        acts[4].as_mut().unwrap().n_sent = 1000;
+        let before = w.poses.clone();
+        let rec = w.apply(&acts);
+        assert_eq!(w.rejected, [2, 1, 1, 0, 1]);
+        assert_eq!(rec.events.len(), 5);
+        assert_eq!(&w.poses[..4], &before[..4]);
+        assert!(w.poses.iter().all(|p| p.iter().all(|x| x.is_finite())));
+        assert_eq!(w.tick, 1);
+    }
+
+    #[test]
+    fn moves_never_cross_an_obstacle_or_leave_the_arena() {
+        let mut w = world();
+        // Robot 0 just left of the convex block's left edge, pushed right into it.
+        w.poses[0] = [285.0, 260.0, 0.0];
+        // Robot 1 at the wall, pushed out.
+        w.poses[1] = [3.0, 50.0, 0.0];
+        let mut acts: Vec<Option<Action>> = (0..5).map(|i| Some(Action::idle(0, i))).collect();
+        acts[0].as_mut().unwrap().vel = [10.0, 0.0];
+        acts[1].as_mut().unwrap().vel = [-10.0, 0.0];
+        w.apply(&acts);
+        // The block's left edge crosses y = 260 at x = 294.545...: the robot stops 0.5 short.
+        assert!((w.poses[0][0] - (300.0 - 600.0 / 110.0 - 0.5)).abs() < 1e-9, "{:?}", w.poses[0]);
+        let block = &w.sc.arena.obstacles[0].points;
+        assert!(!swarm::geometry::point_in_polygon(v2([w.poses[0][0], w.poses[0][1]]), block));
+        assert!(w.poses[1][0] >= 0.0, "{:?}", w.poses[1]);
+        assert_eq!(w.blocked_moves, 2);
+    }
+
+    #[test]
+    fn dead_robots_stand_still_and_are_sensed_as_obstacles() {
+        let mut w = world();
+        w.poses[1] = [50.0, 50.0, 0.0];
+        w.poses[0] = [60.0, 50.0, 0.0];
+        w.mark_dead(1, "test", None);
+        let acts: Vec<Option<Action>> = (0..5).map(|i| {
+            let mut a = Action::idle(0, i);
+            a.vel = [1.0, 0.0];
+            Some(a)
+        }).collect();
+        w.apply(&acts);
+        assert_eq!(&w.poses[1][..2], &[50.0, 50.0]);
+        let mut s = Sense::zeroed();
+        w.sense(0, &mut s);
+        assert!(s.obstacle_points().contains(&[50.0, 50.0]));
+        assert!(!s.neighbours().contains(&1));
+        assert_eq!(w.faults.len(), 1);
+    }
+
+    #[test]
+    fn broadcast_accounting_splits_offered_into_range_and_reported() {
+        let mut w = world();
+        for i in 0..5 {
+            w.poses[i] = [10.0 + i as f64 * 100.0, 10.0, 0.0];
+        }
+        let mut acts: Vec<Option<Action>> = (0..5).map(|i| Some(Action::idle(0, i))).collect();
+        let a0 = acts[0].as_mut().unwrap();
+        a0.n_sent = 1;
+        a0.sent_to[0] = BROADCAST;
+        let rec = w.apply(&acts);
+        // Robot 0 at x=10 reaches x=110, 210, 310 (<= 300 away) but not x=410.
+        assert_eq!(rec.radio.offered, 4);
+        assert_eq!(rec.radio.dropped_range, 1);
+        // Next tick: two receivers report delivery, one a loss; nobody the fourth.
+        let mut acts: Vec<Option<Action>> = (0..5).map(|i| Some(Action::idle(1, i))).collect();
+        acts[1].as_mut().unwrap().radio_delivered = 1;
+        acts[2].as_mut().unwrap().radio_delivered = 1;
+        acts[3].as_mut().unwrap().radio_dropped_loss = 1;
+        let rec = w.apply(&acts);
+        assert_eq!((rec.radio.delivered, rec.radio.dropped_loss, rec.radio.dropped_unlinked), (2, 1, 0));
+    }
+}
