@@ -1,0 +1,6 @@
+//! The robot side: behaviours (one per scenario) and the agent process loop.
+
+pub mod behaviours;
+pub mod process;
+
+pub use behaviours::{dispatch, BehaviourVisitor};

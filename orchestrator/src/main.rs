@@ -1,1 +1,51 @@
-fn main() {}
+//! `orchestrator`: starts, watches, hurts and measures swarm runs.
+
+mod bench;
+mod clean;
+mod inprocess;
+mod processes;
+mod registry;
+mod runid;
+mod signals;
+mod up;
+
+use clap::{Parser, Subcommand};
+
+#[derive(Parser)]
+#[command(name = "orchestrator", about = "Zero-copy multi-process swarm runtime", version)]
+struct Cli {
+    #[command(subcommand)]
+    cmd: Cmd,
+}
+
+#[derive(Subcommand)]
+enum Cmd {
+    /// Run a scenario: one world process and one agent process per robot.
+    Up(up::UpArgs),
+    /// Measure the runtime against raw iceoryx2 and the futex floor.
+    Bench(bench::BenchArgs),
+    /// Remove everything dead runs left in /dev/shm and in the run registry.
+    Clean,
+    /// (internal) A benchmark child process.
+    #[command(hide = true, name = "__bench-child")]
+    BenchChild(bench::ChildArgs),
+}
+
+fn main() {
+    swarm::transport::quiet_logs();
+    let cli = Cli::parse();
+    let code = match cli.cmd {
+        Cmd::Up(a) => up::up(a),
+        Cmd::Bench(a) => bench::bench(a),
+        Cmd::BenchChild(a) => bench::child(a),
+        Cmd::Clean => {
+            let r = clean::clean_dead_runs();
+            println!(
+                "cleaned {} dead run(s): {} /dev/shm file(s), {} leftover process(es)",
+                r.runs, r.shm_files, r.processes
+            );
+            0
+        }
+    };
+    std::process::exit(code);
+}

@@ -61,6 +61,10 @@ impl<M> Outbox<M> {
             refused: 0,
         }
     }
+    /// An outbox outside a runtime, for behaviour unit tests.
+    pub fn new_for_tests(limit: usize) -> Self {
+        Self::new(limit)
+    }
     /// Queues a message for every robot in range. Returns false if the per-tick limit is hit.
     pub fn broadcast(&mut self, msg: M) -> bool {
         self.push(BROADCAST, msg)
@@ -174,7 +178,10 @@ impl<B: Behaviour> AgentRuntime<B> {
     /// Takes one raw message off a link (straight from shared memory): decides range and loss
     /// now, decodes only if delivered, and holds it until its due tick.
     pub fn ingest(&mut self, h: &RadioHeader, payload: &[u8]) {
-        if h.sender == self.robot || (h.dest != BROADCAST && h.dest != self.robot) {
+        if h.sender == self.robot
+            || (h.dest != BROADCAST && h.dest != self.robot)
+            || !self.links.accepts(h.sender, h.tick)
+        {
             return;
         }
         let Some(own) = self.own_pos_at(h.tick) else {
@@ -325,18 +332,30 @@ mod tests {
         s
     }
 
+    /// Receiver 0's links to robots 1..=3, made while handling Sense_0.
+    fn linked_receiver(sc: &Scenario) -> AgentRuntime<Echo> {
+        let mut rx = AgentRuntime::new(sc, 0, Echo { heard: vec![] });
+        let mut s = sense(0, 0, [0.0, 0.0]);
+        s.neighbours[..3].copy_from_slice(&[1, 2, 3]);
+        s.n_neighbours = 3;
+        rx.begin(&s);
+        rx.step(&s, &mut Collect(vec![]));
+        rx.update_links(&s);
+        rx
+    }
+
     #[test]
     fn messages_arrive_next_tick_in_sender_order_and_out_of_range_is_ignored() {
         let sc = Scenario::default();
-        let mut rx = AgentRuntime::new(&sc, 0, Echo { heard: vec![] });
+        let mut rx = linked_receiver(&sc);
         let mut tx = Collect(vec![]);
         let mut senders: Vec<_> = (1..4).map(|i| AgentRuntime::new(&sc, i, Echo { heard: vec![] })).collect();
-        // Tick 0: robots 1..3 send; robot 3 is out of range.
-        let s0 = sense(0, 0, [0.0, 0.0]);
-        rx.begin(&s0);
+        // Tick 1: robots 1..3 send; robot 3 is out of range.
+        let s1 = sense(0, 1, [0.0, 0.0]);
+        rx.begin(&s1);
         for (j, a) in senders.iter_mut().enumerate() {
             let x = if j == 2 { 500.0 } else { 10.0 * (j + 1) as f64 };
-            let s = sense(a.robot, 0, [x, 0.0]);
+            let s = sense(a.robot, 1, [x, 0.0]);
             a.begin(&s);
             a.step(&s, &mut tx);
         }
@@ -344,29 +363,51 @@ mod tests {
         for (h, p) in tx.0.iter().rev() {
             rx.ingest(h, p);
         }
-        let act0 = rx.step(&s0, &mut Collect(vec![]));
-        assert_eq!(act0.radio_delivered, 0, "nothing is due at the send tick");
+        let act1 = rx.step(&s1, &mut Collect(vec![]));
+        assert_eq!(act1.radio_delivered, 0, "nothing is due at the send tick");
+        let s2 = sense(0, 2, [0.0, 0.0]);
+        rx.begin(&s2);
+        let act2 = rx.step(&s2, &mut Collect(vec![]));
+        assert_eq!(act2.radio_delivered, 2);
+        assert_eq!(rx.behaviour().heard, vec![(1, 1), (2, 1)]);
+    }
+
+    #[test]
+    fn messages_on_a_link_made_at_their_send_tick_or_no_link_are_not_received() {
+        let sc = Scenario::default();
+        let mut rx = linked_receiver(&sc);
         let s1 = sense(0, 1, [0.0, 0.0]);
         rx.begin(&s1);
-        let act1 = rx.step(&s1, &mut Collect(vec![]));
-        assert_eq!(act1.radio_delivered, 2);
-        assert_eq!(rx.behaviour().heard, vec![(1, 0), (2, 0)]);
+        let mut tx = Collect(vec![]);
+        for (robot, tick) in [(1, 0), (7, 1)] {
+            let mut a = AgentRuntime::new(&sc, robot, Echo { heard: vec![] });
+            let s = sense(robot, tick, [5.0, 0.0]);
+            a.begin(&s);
+            a.step(&s, &mut tx);
+        }
+        for (h, p) in &tx.0 {
+            rx.ingest(h, p);
+        }
+        rx.step(&s1, &mut Collect(vec![]));
+        let s2 = sense(0, 2, [0.0, 0.0]);
+        rx.begin(&s2);
+        assert_eq!(rx.step(&s2, &mut Collect(vec![])).radio_delivered, 0);
     }
 
     #[test]
     fn garbage_payload_is_counted_as_malformed_not_delivered() {
         let sc = Scenario::default();
-        let mut rx = AgentRuntime::new(&sc, 0, Echo { heard: vec![] });
-        let s0 = sense(0, 0, [0.0, 0.0]);
-        rx.begin(&s0);
-        let h = RadioHeader { sender: 1, len: 9, ..Default::default() };
-        rx.ingest(&h, &[0xff; 9]);
-        let h2 = RadioHeader { sender: 2, len: 200, ..Default::default() };
-        rx.ingest(&h2, &[1; 4]); // claims more bytes than it carries
-        rx.step(&s0, &mut Collect(vec![]));
+        let mut rx = linked_receiver(&sc);
         let s1 = sense(0, 1, [0.0, 0.0]);
         rx.begin(&s1);
-        let a = rx.step(&s1, &mut Collect(vec![]));
+        let h = RadioHeader { sender: 1, len: 9, tick: 1, ..Default::default() };
+        rx.ingest(&h, &[0xff; 9]);
+        let h2 = RadioHeader { sender: 2, len: 200, tick: 1, ..Default::default() };
+        rx.ingest(&h2, &[1; 4]); // claims more bytes than it carries
+        rx.step(&s1, &mut Collect(vec![]));
+        let s2 = sense(0, 2, [0.0, 0.0]);
+        rx.begin(&s2);
+        let a = rx.step(&s2, &mut Collect(vec![]));
         assert_eq!((a.radio_delivered, a.radio_malformed), (0, 2));
     }
 
@@ -374,17 +415,17 @@ mod tests {
     fn delay_holds_messages_for_extra_ticks() {
         let mut sc = Scenario::default();
         sc.radio.delay_ticks = 2;
-        let mut rx = AgentRuntime::new(&sc, 0, Echo { heard: vec![] });
+        let mut rx = linked_receiver(&sc);
         let mut tx = Collect(vec![]);
         let mut a = AgentRuntime::new(&sc, 1, Echo { heard: vec![] });
-        let s = sense(1, 0, [5.0, 0.0]);
+        let s = sense(1, 1, [5.0, 0.0]);
         a.begin(&s);
         a.step(&s, &mut tx);
         let mut delivered_at = None;
-        for k in 0..5 {
+        for k in 1..6 {
             let s = sense(0, k, [0.0, 0.0]);
             rx.begin(&s);
-            if k == 0 {
+            if k == 1 {
                 for (h, p) in &tx.0 {
                     rx.ingest(h, p);
                 }
@@ -393,7 +434,7 @@ mod tests {
                 delivered_at.get_or_insert(k);
             }
         }
-        assert_eq!(delivered_at, Some(3));
+        assert_eq!(delivered_at, Some(4));
     }
 
     #[test]

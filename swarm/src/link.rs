@@ -15,8 +15,8 @@
 pub struct LinkSet {
     max_links: usize,
     linger: u64,
-    /// (robot, last tick it was listed), sorted by robot id.
-    links: Vec<(u32, u64)>,
+    /// (robot, last tick it was listed, tick whose Sense created the link), sorted by robot id.
+    links: Vec<(u32, u64, u64)>,
     added: Vec<u32>,
     removed: Vec<u32>,
 }
@@ -43,14 +43,14 @@ impl LinkSet {
             match self.links.binary_search_by_key(&r, |l| l.0) {
                 Ok(i) => self.links[i].1 = tick,
                 Err(i) => {
-                    self.links.insert(i, (r, tick));
+                    self.links.insert(i, (r, tick, tick));
                     self.added.push(r);
                 }
             }
         }
         let linger = self.linger;
         let removed = &mut self.removed;
-        self.links.retain(|&(r, last)| {
+        self.links.retain(|&(r, last, _)| {
             let keep = tick.saturating_sub(last) <= linger;
             if !keep {
                 removed.push(r);
@@ -64,9 +64,9 @@ impl LinkSet {
                 .links
                 .iter()
                 .enumerate()
-                .min_by_key(|(_, &(r, last))| (last, std::cmp::Reverse(r)))
+                .min_by_key(|(_, &(r, last, _))| (last, std::cmp::Reverse(r)))
                 .expect("non-empty");
-            let (r, _) = self.links.remove(i);
+            let (r, _, _) = self.links.remove(i);
             self.removed.push(r);
         }
         self.added.sort_unstable();
@@ -75,6 +75,17 @@ impl LinkSet {
         let removed = &self.removed;
         self.added.retain(|r| removed.binary_search(r).is_err());
         (&self.added, &self.removed)
+    }
+
+    /// Whether a message sent by `sender` at tick `msg_tick` counts as received on this link.
+    /// A link made while handling Sense_j carries only messages sent after tick j: whether
+    /// one sent at j itself was seen depends on scheduling, so it never counts (the world
+    /// counts it as unlinked). This keeps both executors identical even when max_links binds.
+    pub fn accepts(&self, sender: u32, msg_tick: u64) -> bool {
+        match self.links.binary_search_by_key(&sender, |l| l.0) {
+            Ok(i) => self.links[i].2 < msg_tick,
+            Err(_) => false,
+        }
     }
 
     pub fn contains(&self, robot: u32) -> bool {
@@ -121,6 +132,7 @@ mod tests {
         let (_, r) = l.update(3, &[1], 0);
         assert_eq!(r.to_vec(), vec![3]);
         assert!(!l.contains(3));
+        assert!(l.accepts(1, 1) && !l.accepts(1, 0) && !l.accepts(3, 5));
     }
 
     #[test]

@@ -6,6 +6,7 @@
 pub mod metrics;
 pub mod output;
 pub mod placement;
+pub mod process;
 pub mod sensing;
 pub mod svg;
 pub mod world;

@@ -1,1 +1,41 @@
-fn main() {}
+//! `world --run-dir DIR --prefix P`: the world process of a run. Started by the orchestrator.
+
+use clap::Parser;
+use std::path::PathBuf;
+use swarm::scenario::Scenario;
+
+#[derive(Parser)]
+#[command(about = "The world process of a swarm run (started by `orchestrator up`)")]
+struct Args {
+    #[arg(long)]
+    run_id: String,
+    #[arg(long)]
+    prefix: String,
+    /// The run folder; holds the resolved scenario.toml and receives the outputs.
+    #[arg(long)]
+    run_dir: PathBuf,
+}
+
+fn main() {
+    // SAFETY: prctl with constant arguments.
+    unsafe {
+        libc::prctl(libc::PR_SET_PDEATHSIG, libc::SIGKILL);
+    }
+    swarm::transport::quiet_logs();
+    let args = Args::parse();
+    let sc = match Scenario::load(&args.run_dir.join("scenario.toml")) {
+        Ok(s) => s,
+        Err(e) => {
+            eprintln!("world: {e}");
+            std::process::exit(2);
+        }
+    };
+    let a = world::process::WorldArgs { run_id: args.run_id, prefix: args.prefix, run_dir: args.run_dir, scenario: sc };
+    match world::process::run(&a) {
+        Ok(code) => std::process::exit(code),
+        Err(e) => {
+            eprintln!("world: {e}");
+            std::process::exit(1);
+        }
+    }
+}

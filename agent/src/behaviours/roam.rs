@@ -1,0 +1,111 @@
+//! Roaming by virtual force (search paper, spec/search.md 2.3-2.4): full speed along the net
+//! repulsion from the two nearest robots *heard on the radio*, plus repulsion from obstacle
+//! and wall points the robot senses. Each robot broadcasts its position every tick.
+
+use rand::Rng;
+use serde::{Deserialize, Serialize};
+use swarm::behaviour::robot_rng;
+use swarm::scenario::{RoamParams, Scenario};
+use swarm::{Behaviour, Command, Outbox, Received, Sense};
+
+/// The position beacon every roaming robot broadcasts.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+pub struct Beacon {
+    pub pos: [f64; 2],
+}
+
+pub struct Roam {
+    p: RoamParams,
+    v_max: f64,
+    /// Current heading, kept while no force acts (spec/search.md 5 item 5).
+    heading: f64,
+}
+
+impl Roam {
+    pub fn new(sc: &Scenario, robot: u32) -> Roam {
+        let mut rng = robot_rng(sc.run.seed, robot, 2);
+        Roam {
+            p: sc.roam.clone(),
+            v_max: sc.robot.v_max,
+            heading: rng.gen_range(-std::f64::consts::PI..std::f64::consts::PI),
+        }
+    }
+
+    /// Eq. (5): ||f_vr|| = c (l_1 / d)^2 for 0 < d <= d_0, directed away from the object.
+    fn repulsion(&self, me: [f64; 2], other: [f64; 2], d0: f64) -> [f64; 2] {
+        let (dx, dy) = (me[0] - other[0], me[1] - other[1]);
+        let d = (dx * dx + dy * dy).sqrt();
+        if d <= 1e-9 || d > d0 {
+            return [0.0, 0.0];
+        }
+        let f = self.p.c * (self.p.l1 / d).powi(2);
+        [f * dx / d, f * dy / d]
+    }
+}
+
+impl Behaviour for Roam {
+    type Msg = Beacon;
+
+    fn step(&mut self, s: &Sense, inbox: &[Received<Beacon>], out: &mut Outbox<Beacon>) -> Command {
+        out.broadcast(Beacon { pos: s.pos });
+        let me = s.pos;
+        // The two nearest robots heard (positions they sent last tick); ties by sender id.
+        let mut heard: Vec<(f64, u32, [f64; 2])> = inbox
+            .iter()
+            .map(|r| (swarm::radio::distance(me, r.msg.pos), r.from, r.msg.pos))
+            .collect();
+        heard.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+        let d0 = 2.0 * self.p.l_r;
+        let mut f = [0.0, 0.0];
+        for &(_, _, pos) in heard.iter().take(2) {
+            let r = self.repulsion(me, pos, d0);
+            f[0] += r[0];
+            f[1] += r[1];
+        }
+        for &q in s.obstacle_points() {
+            let r = self.repulsion(me, q, self.p.obstacle_range);
+            f[0] += self.p.obstacle_weight * r[0];
+            f[1] += self.p.obstacle_weight * r[1];
+        }
+        if f[0] != 0.0 || f[1] != 0.0 {
+            self.heading = f[1].atan2(f[0]);
+        }
+        // V_if(t+1) = V_max (cos angle(f), sin angle(f)).
+        Command { vel: [self.v_max * self.heading.cos(), self.v_max * self.heading.sin()], events: 0 }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn received(from: u32, pos: [f64; 2]) -> Received<Beacon> {
+        Received { from, tick: 0, seq: 1, sender_pos: pos, unicast: false, msg: Beacon { pos } }
+    }
+
+    #[test]
+    fn moves_away_from_the_two_nearest_heard_robots_at_full_speed() {
+        let sc = Scenario::default();
+        let mut r = Roam::new(&sc, 0);
+        let mut s = Sense::zeroed();
+        s.pos = [500.0, 500.0];
+        let inbox = vec![received(1, [490.0, 500.0]), received(2, [500.0, 490.0]), received(3, [560.0, 560.0])];
+        let mut out = Outbox::new_for_tests(4);
+        let c = r.step(&s, &inbox, &mut out);
+        let speed = (c.vel[0].powi(2) + c.vel[1].powi(2)).sqrt();
+        assert!((speed - 10.0).abs() < 1e-9);
+        // Away from (490,500) and (500,490): up and to the right, at 45 degrees.
+        assert!((c.vel[0] - c.vel[1]).abs() < 1e-9 && c.vel[0] > 0.0, "{:?}", c.vel);
+    }
+
+    #[test]
+    fn keeps_heading_when_nothing_is_heard() {
+        let sc = Scenario::default();
+        let mut r = Roam::new(&sc, 4);
+        let mut s = Sense::zeroed();
+        s.pos = [500.0, 500.0];
+        let a = r.step(&s, &[], &mut Outbox::new_for_tests(4));
+        let b = r.step(&s, &[], &mut Outbox::new_for_tests(4));
+        assert_eq!(a, b);
+    }
+}

@@ -1,0 +1,150 @@
+//! The agent process: one robot, one behaviour, over iceoryx2 and the tick barrier.
+
+use crate::behaviours::{dispatch, BehaviourVisitor};
+use iceoryx2::port::publisher::Publisher;
+use iceoryx2::port::subscriber::Subscriber;
+use iceoryx2::prelude::*;
+use std::collections::BTreeMap;
+use std::time::Duration;
+use swarm::barrier::{TickBarrier, Wake};
+use swarm::behaviour::RadioTx;
+use swarm::frames::RadioHeader;
+use swarm::scenario::Scenario;
+use swarm::transport::{self, Result};
+use swarm::{AgentRuntime, Behaviour};
+
+pub struct AgentArgs {
+    pub robot: u32,
+    pub prefix: String,
+    pub scenario: Scenario,
+}
+
+/// Exit codes of the agent process.
+pub const EXIT_OK: i32 = 0;
+pub const EXIT_WORLD_GONE: i32 = 3;
+pub const EXIT_SETUP: i32 = 4;
+
+/// Sends radio messages by loaning a slot in the robot's own radio service and encoding the
+/// message straight into it.
+struct ShmTx<'a> {
+    publisher: &'a Publisher<ipc::Service, [u8], RadioHeader>,
+    failures: u64,
+}
+
+impl RadioTx for ShmTx<'_> {
+    fn transmit(&mut self, h: &RadioHeader, fill: &mut dyn FnMut(&mut [u8])) {
+        let len = (h.len as usize).max(1);
+        match self.publisher.loan_slice_uninit(len) {
+            Ok(sample) => {
+                let mut sample = sample.write_from_fn(|_| 0u8);
+                *sample.user_header_mut() = *h;
+                fill(&mut sample.payload_mut()[..h.len as usize]);
+                if sample.send().is_err() {
+                    self.failures += 1;
+                }
+            }
+            Err(_) => self.failures += 1,
+        }
+    }
+}
+
+struct Link {
+    _service: transport::RadioService,
+    sub: Subscriber<ipc::Service, [u8], RadioHeader>,
+}
+
+fn world_alive(pid: u32) -> bool {
+    // SAFETY: signal 0 only checks for existence.
+    pid != 0 && unsafe { libc::kill(pid as i32, 0) } == 0
+}
+
+struct Run<'a>(&'a AgentArgs);
+
+impl BehaviourVisitor for Run<'_> {
+    type Out = Result<i32>;
+    fn visit<B: Behaviour + 'static>(self, make: &dyn Fn(u32) -> B) -> Result<i32> {
+        run_loop(self.0, AgentRuntime::new(&self.0.scenario, self.0.robot, make(self.0.robot)))
+    }
+}
+
+pub fn run(args: &AgentArgs) -> Result<i32> {
+    dispatch(&args.scenario, Run(args))
+}
+
+fn run_loop<B: Behaviour>(args: &AgentArgs, mut rt: AgentRuntime<B>) -> Result<i32> {
+    let sc = &args.scenario;
+    let robot = args.robot;
+    let config = transport::run_config(&args.prefix)?;
+    let node = transport::node(&config, &format!("agent-{robot}"))?;
+    let sense_svc = transport::sense_service(&node, robot, false)?;
+    let sense_sub = sense_svc.subscriber_builder().buffer_size(1).create().map_err(|e| format!("sense subscriber: {e:?}"))?;
+    let act_svc = transport::act_service(&node, robot, false)?;
+    let act_pub = act_svc.publisher_builder().create().map_err(|e| format!("act publisher: {e:?}"))?;
+    let radio_svc = transport::radio_service(&node, robot, sc, false)?;
+    let radio_pub = transport::radio_publisher(&radio_svc, sc)?;
+    let barrier = TickBarrier::open(&args.prefix)?;
+    let world_pid = barrier.world_pid();
+    let poll = Duration::from_millis(sc.runtime.poll_ms);
+    let mut links: BTreeMap<u32, Link> = BTreeMap::new();
+    let mut tx = ShmTx { publisher: &radio_pub, failures: 0 };
+    let mut done = barrier.acked_up_to(robot);
+    barrier.mark_ready();
+    loop {
+        let k = match barrier.wait_release(done, poll) {
+            Wake::Shutdown => return Ok(EXIT_OK),
+            Wake::Timeout => {
+                if !world_alive(world_pid) {
+                    return Ok(EXIT_WORLD_GONE);
+                }
+                continue;
+            }
+            Wake::Tick(k) => k,
+        };
+        // The world published Sense_k before releasing tick k: read it in place.
+        let mut latest = None;
+        while let Some(s) = sense_sub.receive().map_err(|e| format!("sense receive: {e:?}"))? {
+            latest = Some(s);
+        }
+        let Some(sense) = latest else {
+            // Not for us yet (a restarted agent attaching mid-tick): wait for the next one.
+            done = k + 1;
+            continue;
+        };
+        if sense.tick != k || sense.robot != robot {
+            done = k + 1;
+            continue;
+        }
+        rt.begin(&sense);
+        // Drain every link: messages sent at k-1 (and any at k from faster peers).
+        for link in links.values() {
+            while let Ok(Some(m)) = link.sub.receive() {
+                rt.ingest(m.user_header(), m.payload());
+            }
+        }
+        let action = rt.step(&sense, &mut tx);
+        let (added, removed) = rt.update_links(&sense);
+        for r in removed {
+            links.remove(r);
+        }
+        for &r in added {
+            match transport::radio_service(&node, r, sc, false).and_then(|svc| {
+                let sub = svc
+                    .subscriber_builder()
+                    .buffer_size(transport::radio_buffer(sc))
+                    .create()
+                    .map_err(|e| format!("radio subscriber: {e:?}"))?;
+                Ok(Link { _service: svc, sub })
+            }) {
+                Ok(l) => {
+                    links.insert(r, l);
+                }
+                Err(e) => eprintln!("agent {robot}: no link to robot {r}: {e}"),
+            }
+        }
+        let sample = act_pub.loan_uninit().map_err(|e| format!("act loan: {e:?}"))?;
+        sample.write_payload(action).send().map_err(|e| format!("act send: {e:?}"))?;
+        drop(sense);
+        barrier.ack(robot, k);
+        done = k + 1;
+    }
+}

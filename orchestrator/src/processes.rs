@@ -1,0 +1,208 @@
+//! The multi-process executor: one world process and one agent process per robot.
+
+use crate::registry::{self, RunEntry};
+use crate::signals;
+use std::collections::BTreeMap;
+use std::io::{BufRead, BufReader};
+use std::os::unix::process::CommandExt;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
+use swarm::barrier::TickBarrier;
+use swarm::frames::{Control, WorldStatus, CONTROL_ROBOT_DIED, CONTROL_STOP};
+use swarm::scenario::Scenario;
+use swarm::{cleanup, transport};
+
+/// How long the world gets to finish after a stop request before everything is killed.
+const STOP_GRACE: Duration = Duration::from_secs(10);
+/// How long agents get to exit after the world shut the run down.
+const AGENT_EXIT_GRACE: Duration = Duration::from_secs(3);
+/// How often the orchestrator reaps children and refreshes the progress bar.
+const SUPERVISE_PERIOD: Duration = Duration::from_millis(5);
+
+pub struct ProcessRun<'a> {
+    pub sc: &'a Scenario,
+    pub run_id: &'a str,
+    pub run_dir: &'a Path,
+    pub on_status: &'a mut dyn FnMut(&WorldStatus),
+}
+
+#[derive(Debug)]
+pub struct ProcessOutcome {
+    /// Exit status of the world: Ok(code) or Err(signal).
+    pub world_exit: Result<i32, i32>,
+    pub interrupted: bool,
+    /// Robots whose process died during the run, with the tick the orchestrator saw it at.
+    pub deaths: Vec<(u32, u64)>,
+    pub shm_removed: usize,
+}
+
+fn bin(name: &str) -> PathBuf {
+    let exe = std::env::current_exe().expect("current exe");
+    exe.parent().expect("exe dir").join(name)
+}
+
+/// Decoded waitpid status.
+fn exit_of(status: i32) -> Result<i32, i32> {
+    if libc::WIFEXITED(status) {
+        Ok(libc::WEXITSTATUS(status))
+    } else {
+        Err(libc::WTERMSIG(status))
+    }
+}
+
+fn kill(pid: u32) {
+    // SAFETY: plain kill of our own child.
+    unsafe {
+        libc::kill(pid as i32, libc::SIGKILL);
+    }
+}
+
+/// Reaps one exited child, if any.
+fn reap() -> Option<(u32, i32)> {
+    let mut status = 0;
+    // SAFETY: waitpid on our own children with a valid status pointer.
+    let pid = unsafe { libc::waitpid(-1, &mut status, libc::WNOHANG) };
+    (pid > 0).then_some((pid as u32, status))
+}
+
+pub fn run(mut p: ProcessRun) -> Result<ProcessOutcome, String> {
+    let sc = p.sc;
+    let prefix = transport::prefix_for(p.run_id);
+    let scenario_path = p.run_dir.join("scenario.toml");
+    std::fs::create_dir_all(p.run_dir).map_err(|e| format!("{}: {e}", p.run_dir.display()))?;
+    std::fs::write(&scenario_path, sc.to_toml()).map_err(|e| format!("{}: {e}", scenario_path.display()))?;
+    let mut entry = RunEntry {
+        run_id: p.run_id.to_string(),
+        prefix: prefix.clone(),
+        orchestrator_pid: std::process::id(),
+        world_pid: 0,
+        agent_pids: vec![],
+        run_dir: p.run_dir.display().to_string(),
+    };
+    registry::write(&entry).map_err(|e| format!("run registry: {e}"))?;
+    let result = supervise(&mut p, &prefix, &scenario_path, &mut entry);
+    // Whatever happened: no process and nothing in /dev/shm of this run stays.
+    for &pid in std::iter::once(&entry.world_pid).chain(entry.agent_pids.iter()) {
+        if pid != 0 && registry::pid_alive(pid) {
+            kill(pid);
+        }
+    }
+    while reap().is_some() {}
+    let removed = cleanup::remove_run(&prefix);
+    registry::remove(p.run_id);
+    result.map(|mut o| {
+        o.shm_removed = removed;
+        o
+    })
+}
+
+fn supervise(p: &mut ProcessRun, prefix: &str, scenario_path: &Path, entry: &mut RunEntry) -> Result<ProcessOutcome, String> {
+    let sc = p.sc;
+    let n = sc.run.robots;
+    let mut world = Command::new(bin("world"))
+        .args(["--run-id", p.run_id, "--prefix", prefix, "--run-dir"])
+        .arg(p.run_dir)
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .process_group(0)
+        .spawn()
+        .map_err(|e| format!("cannot start {}: {e}", bin("world").display()))?;
+    entry.world_pid = world.id();
+    registry::write(entry).map_err(|e| format!("run registry: {e}"))?;
+    // Wait for READY: every service exists.
+    let stdout = world.stdout.take().expect("piped");
+    let (tx, rx) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        let mut line = String::new();
+        let _ = BufReader::new(stdout).read_line(&mut line);
+        let _ = tx.send(line);
+    });
+    let ready_timeout = Duration::from_secs(60);
+    match rx.recv_timeout(ready_timeout) {
+        Ok(l) if l.trim() == "READY" => {}
+        Ok(_) | Err(_) => {
+            let code = world.try_wait().ok().flatten();
+            return Err(format!("the world process did not get ready (exit: {code:?}); see its messages above"));
+        }
+    }
+    let config = transport::run_config(prefix).map_err(|e| e.to_string())?;
+    let node = transport::node(&config, "orchestrator").map_err(|e| e.to_string())?;
+    let control_svc = transport::control_service(&node, false).map_err(|e| e.to_string())?;
+    let control = control_svc.publisher_builder().create().map_err(|e| format!("control publisher: {e:?}"))?;
+    let status_svc = transport::status_service(&node, false).map_err(|e| e.to_string())?;
+    let status = status_svc.subscriber_builder().create().map_err(|e| format!("status subscriber: {e:?}"))?;
+    let barrier = TickBarrier::open(prefix).map_err(|e| format!("tick barrier: {e}"))?;
+    let mut agents: BTreeMap<u32, u32> = BTreeMap::new(); // pid -> robot
+    for i in 0..n {
+        let child = Command::new(bin("agent"))
+            .args(["--robot", &i.to_string(), "--prefix", prefix, "--run-id", p.run_id, "--scenario"])
+            .arg(scenario_path)
+            .stdin(Stdio::null())
+            .stdout(Stdio::null())
+            .process_group(0)
+            .spawn()
+            .map_err(|e| format!("cannot start {}: {e}", bin("agent").display()))?;
+        agents.insert(child.id(), i);
+        entry.agent_pids.push(child.id());
+    }
+    registry::write(entry).map_err(|e| format!("run registry: {e}"))?;
+    let send_control = |kind: u32, robot: u32, value: u64| {
+        if let Ok(s) = control.loan_uninit() {
+            let _ = s.write_payload(Control { kind, robot, value }).send();
+        }
+        barrier.nudge_world();
+    };
+    let mut last = WorldStatus::default();
+    let mut deaths = Vec::new();
+    let mut stop_sent: Option<Instant> = None;
+    let world_pid = entry.world_pid;
+    let world_exit;
+    'outer: loop {
+        while let Some((pid, st)) = reap() {
+            if pid == world_pid {
+                world_exit = exit_of(st);
+                break 'outer;
+            }
+            if let Some(robot) = agents.remove(&pid) {
+                deaths.push((robot, last.tick));
+                send_control(CONTROL_ROBOT_DIED, robot, monotonic_us());
+            }
+        }
+        while let Ok(Some(s)) = status.receive() {
+            last = *s;
+        }
+        (p.on_status)(&last);
+        if signals::interrupted() && stop_sent.is_none() {
+            send_control(CONTROL_STOP, 0, 0);
+            stop_sent = Some(Instant::now());
+        }
+        if let Some(t) = stop_sent {
+            if t.elapsed() > STOP_GRACE {
+                kill(world_pid);
+            }
+        }
+        std::thread::sleep(SUPERVISE_PERIOD);
+    }
+    // The world is gone: agents exit on its shutdown word (or notice it died).
+    let t = Instant::now();
+    while !agents.is_empty() && t.elapsed() < AGENT_EXIT_GRACE {
+        while let Some((pid, _)) = reap() {
+            agents.remove(&pid);
+        }
+        std::thread::sleep(Duration::from_millis(2));
+    }
+    for &pid in agents.keys() {
+        kill(pid);
+    }
+    drop(status);
+    drop(control);
+    drop(barrier);
+    drop(node);
+    Ok(ProcessOutcome { world_exit, interrupted: stop_sent.is_some(), deaths, shm_removed: 0 })
+}
+
+/// CLOCK_MONOTONIC in microseconds (the world compares it with its own clock).
+pub fn monotonic_us() -> u64 {
+    world::process::monotonic_us()
+}

@@ -1,0 +1,205 @@
+//! `orchestrator up`: resolve the scenario, run it, print the summary.
+
+use crate::{clean, inprocess, processes, runid, signals};
+use clap::{Args, ValueEnum};
+use indicatif::{ProgressBar, ProgressStyle};
+use std::path::{Path, PathBuf};
+use swarm::scenario::{ConfigError, Scenario};
+
+#[derive(Copy, Clone, Debug, PartialEq, Eq, ValueEnum)]
+pub enum Executor {
+    /// One OS process per robot over iceoryx2 (the product).
+    Processes,
+    /// Everything in this process (unit tests, sweeps); same results.
+    Inprocess,
+}
+
+#[derive(Args, Debug, Clone)]
+pub struct UpArgs {
+    /// Number of robots (one agent process each) [scenario: run.robots].
+    #[arg(long)]
+    pub robots: Option<u32>,
+    /// Scenario file (TOML); keys it leaves out take the embedded default's values.
+    #[arg(long)]
+    pub scenario: Option<PathBuf>,
+    /// Seed of every random stream [scenario: run.seed].
+    #[arg(long)]
+    pub seed: Option<u64>,
+    /// Ticks to run [scenario: run.max_ticks].
+    #[arg(long)]
+    pub max_ticks: Option<u64>,
+    /// Communication radius [scenario: radio.comm_radius].
+    #[arg(long)]
+    pub comm_radius: Option<f64>,
+    /// Message loss probability, 0..=1 [scenario: radio.loss].
+    #[arg(long)]
+    pub loss: Option<f64>,
+    /// Radio delay in ticks [scenario: radio.delay_ticks].
+    #[arg(long)]
+    pub delay: Option<u32>,
+    /// Run folder (default runs/<run-id>).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    #[arg(long, value_enum, default_value_t = Executor::Processes)]
+    pub executor: Executor,
+    /// No progress bar.
+    #[arg(long)]
+    pub quiet: bool,
+}
+
+/// Which flag set a scenario key, for error messages.
+const FLAG_KEYS: &[(&str, &str)] = &[
+    ("run.robots", "--robots"),
+    ("run.seed", "--seed"),
+    ("run.max_ticks", "--max-ticks"),
+    ("radio.comm_radius", "--comm-radius"),
+    ("radio.loss", "--loss"),
+    ("radio.delay_ticks", "--delay"),
+];
+
+/// The scenario with the flags applied and validated.
+pub fn resolve(a: &UpArgs) -> Result<Scenario, ConfigError> {
+    let (mut sc, file) = match &a.scenario {
+        Some(p) => (Scenario::load(p)?, p.display().to_string()),
+        None => (Scenario::default(), "embedded default scenario".to_string()),
+    };
+    let mut from_flag: Vec<&str> = Vec::new();
+    let mut set = |key: &'static str, apply: &mut dyn FnMut()| {
+        apply();
+        from_flag.push(key);
+    };
+    if let Some(v) = a.robots {
+        set("run.robots", &mut || sc.run.robots = v);
+    }
+    if let Some(v) = a.seed {
+        set("run.seed", &mut || sc.run.seed = v);
+    }
+    if let Some(v) = a.max_ticks {
+        set("run.max_ticks", &mut || sc.run.max_ticks = v);
+    }
+    if let Some(v) = a.comm_radius {
+        set("radio.comm_radius", &mut || sc.radio.comm_radius = v);
+    }
+    if let Some(v) = a.loss {
+        set("radio.loss", &mut || sc.radio.loss = v);
+    }
+    if let Some(v) = a.delay {
+        set("radio.delay_ticks", &mut || sc.radio.delay_ticks = v);
+    }
+    sc.validate(&|key: &str| {
+        FLAG_KEYS
+            .iter()
+            .find(|(k, _)| *k == key && from_flag.contains(k))
+            .map(|(_, f)| f.to_string())
+            .unwrap_or_else(|| file.clone())
+    })?;
+    Ok(sc)
+}
+
+fn progress(sc: &Scenario, quiet: bool) -> ProgressBar {
+    if quiet {
+        return ProgressBar::hidden();
+    }
+    let pb = ProgressBar::new(sc.run.max_ticks);
+    pb.set_style(
+        ProgressStyle::with_template("{spinner} tick {pos}/{len} [{bar:30}] {per_sec} | {msg}")
+            .expect("template")
+            .progress_chars("=> "),
+    );
+    pb
+}
+
+fn bar_msg(alive: u32, n: u32, delivered: u64, lost: u64) -> String {
+    format!("robots alive {alive}/{n} | messages delivered {delivered} lost {lost}")
+}
+
+pub fn up(a: UpArgs) -> i32 {
+    let sc = match resolve(&a) {
+        Ok(s) => s,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return 2;
+        }
+    };
+    signals::install();
+    let cleaned = clean::clean_dead_runs();
+    if cleaned.runs > 0 {
+        eprintln!("cleaned {} dead run(s) left by earlier orchestrators", cleaned.runs);
+    }
+    let run_id = runid::new_run_id();
+    let run_dir = a.out.clone().unwrap_or_else(|| Path::new("runs").join(&run_id));
+    let pb = progress(&sc, a.quiet);
+    let n = sc.run.robots;
+    let result: Result<(), String> = match a.executor {
+        Executor::Inprocess => inprocess::run(&sc, &run_dir, &run_id, &mut |w| {
+            pb.set_position(w.tick);
+            if w.tick % 16 == 0 {
+                let lost = w.radio.dropped_loss + w.radio.dropped_range + w.radio.dropped_unlinked;
+                pb.set_message(bar_msg(w.alive_count(), n, w.radio.delivered, lost));
+            }
+        })
+        .map(|_| ())
+        .map_err(|e| e.to_string()),
+        Executor::Processes => processes::run(processes::ProcessRun {
+            sc: &sc,
+            run_id: &run_id,
+            run_dir: &run_dir,
+            on_status: &mut |s| {
+                pb.set_position(s.tick);
+                pb.set_message(bar_msg(s.alive, n, s.delivered, s.dropped_loss + s.dropped_range));
+            },
+        })
+        .and_then(|o| match o.world_exit {
+            Ok(0) => Ok(()),
+            Ok(c) => Err(format!("the world process failed with exit code {c}")),
+            Err(sig) => Err(format!("the world process was killed by signal {sig}")),
+        }),
+    };
+    pb.finish_and_clear();
+    if let Err(e) = result {
+        eprintln!("error: run {run_id}: {e}");
+        return 1;
+    }
+    match std::fs::read_to_string(run_dir.join("summary.json")) {
+        Ok(s) => {
+            let v: serde_json::Value = serde_json::from_str(&s).unwrap_or_default();
+            print_summary(&v, &run_dir);
+            0
+        }
+        Err(e) => {
+            eprintln!("error: run {run_id}: no summary.json: {e}");
+            1
+        }
+    }
+}
+
+fn print_summary(v: &serde_json::Value, dir: &Path) {
+    let g = |p: &str| v.pointer(p).cloned().unwrap_or_default();
+    let f = |p: &str| v.pointer(p).and_then(|x| x.as_f64()).unwrap_or(0.0);
+    println!("run {}  ({} executor, {})", g("/run_id").as_str().unwrap_or(""), g("/executor").as_str().unwrap_or(""), g("/end").as_str().unwrap_or(""));
+    println!(
+        "  robots {}  behaviour {}  seed {}  ticks {}/{}",
+        g("/robots"), g("/behaviour").as_str().unwrap_or(""), g("/seed"), g("/ticks"), g("/max_ticks")
+    );
+    println!(
+        "  wall {:.2} s (start-up {:.2} s)  {:.0} ticks/s  tick p50 {:.0} us  p99 {:.0} us",
+        f("/wall_seconds"), f("/startup_seconds"), f("/ticks_per_second"), f("/tick_time/p50_us"), f("/tick_time/p99_us")
+    );
+    println!(
+        "  messages offered {}  delivered {}  dropped: range {}  loss {}  unlinked {}  malformed {}  in flight {}",
+        g("/messages/offered"), g("/messages/delivered"), g("/messages/dropped_range"), g("/messages/dropped_loss"),
+        g("/messages/dropped_unlinked"), g("/messages/malformed"), g("/messages/in_flight")
+    );
+    let rejected: u64 = v.pointer("/rejected_actions").and_then(|r| r.as_object()).map(|o| o.values().filter_map(|x| x.as_u64()).sum()).unwrap_or(0);
+    println!("  rejected actions {rejected}  blocked moves {}  alive at end {}", g("/blocked_moves"), g("/alive_at_end"));
+    if let Some(faults) = v.pointer("/faults").and_then(|x| x.as_array()) {
+        for fl in faults {
+            println!("  fault: robot {} at tick {}: {}", fl["robot"], fl["tick"], fl["cause"].as_str().unwrap_or(""));
+        }
+    }
+    println!(
+        "  mission: coverage {:.1} %  spread {:.1}  mean nearest neighbour {:.1}",
+        100.0 * f("/mission/coverage"), f("/mission/spread"), f("/mission/mean_nearest_neighbour")
+    );
+    println!("  outputs: {}/{{scenario.toml, summary.json, recording.bin, run.svg}}", dir.display());
+}

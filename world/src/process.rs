@@ -1,0 +1,192 @@
+//! The world process: drives `World` over iceoryx2 and the tick barrier.
+
+use crate::output::{RunOutputs, Timing};
+use crate::world::World;
+use iceoryx2::port::publisher::Publisher;
+use iceoryx2::port::subscriber::Subscriber;
+use iceoryx2::prelude::*;
+use std::io::Write;
+use std::path::PathBuf;
+use std::time::{Duration, Instant};
+use swarm::barrier::TickBarrier;
+use swarm::frames::{Action, Control, Sense, CONTROL_ROBOT_DIED, CONTROL_STOP};
+use swarm::scenario::Scenario;
+use swarm::transport::{self, Result};
+
+pub struct WorldArgs {
+    pub run_id: String,
+    pub prefix: String,
+    pub run_dir: PathBuf,
+    pub scenario: Scenario,
+}
+
+struct Robot {
+    sense: Publisher<ipc::Service, Sense, ()>,
+    act: Subscriber<ipc::Service, Action, ()>,
+    _sense_svc: transport::SenseService,
+    _act_svc: transport::ActService,
+    _radio_svc: transport::RadioService,
+}
+
+/// What the control channel said.
+#[derive(Default)]
+struct ControlState {
+    stop: bool,
+}
+
+fn drain_control(
+    sub: &Subscriber<ipc::Service, Control, ()>,
+    world: &mut World,
+    state: &mut ControlState,
+    t0: Instant,
+) {
+    while let Ok(Some(c)) = sub.receive() {
+        match c.kind {
+            CONTROL_ROBOT_DIED => {
+                // value: microseconds since the orchestrator's epoch when it reaped the process;
+                // the world measures its own side from t0 (same clock: CLOCK_MONOTONIC).
+                let now_us = monotonic_us();
+                let detection_ms = (now_us.saturating_sub(c.value)) as f64 / 1e3;
+                let _ = t0;
+                world.mark_dead(c.robot, "process died (reaped by orchestrator)", Some(detection_ms));
+            }
+            CONTROL_STOP => state.stop = true,
+            _ => {}
+        }
+    }
+}
+
+/// CLOCK_MONOTONIC in microseconds: comparable across processes on one machine.
+pub fn monotonic_us() -> u64 {
+    let mut ts = libc::timespec { tv_sec: 0, tv_nsec: 0 };
+    // SAFETY: valid pointer to a timespec.
+    unsafe {
+        libc::clock_gettime(libc::CLOCK_MONOTONIC, &mut ts);
+    }
+    ts.tv_sec as u64 * 1_000_000 + ts.tv_nsec as u64 / 1000
+}
+
+pub fn run(args: &WorldArgs) -> Result<i32> {
+    let t_start = Instant::now();
+    let sc = &args.scenario;
+    let n = sc.run.robots;
+    let mut world = World::new(sc)?;
+    let config = transport::run_config(&args.prefix)?;
+    let node = transport::node(&config, "world")?;
+    let mut robots = Vec::with_capacity(n as usize);
+    for i in 0..n {
+        let sense_svc = transport::sense_service(&node, i, true)?;
+        let act_svc = transport::act_service(&node, i, true)?;
+        let radio_svc = transport::radio_service(&node, i, sc, true)?;
+        let sense = sense_svc.publisher_builder().max_loaned_samples(1).create().map_err(|e| format!("sense publisher: {e:?}"))?;
+        let act = act_svc.subscriber_builder().buffer_size(2).create().map_err(|e| format!("act subscriber: {e:?}"))?;
+        robots.push(Robot { sense, act, _sense_svc: sense_svc, _act_svc: act_svc, _radio_svc: radio_svc });
+    }
+    let status_svc = transport::status_service(&node, true)?;
+    let status_pub = status_svc.publisher_builder().create().map_err(|e| format!("status publisher: {e:?}"))?;
+    let control_svc = transport::control_service(&node, true)?;
+    let control = control_svc.subscriber_builder().create().map_err(|e| format!("control subscriber: {e:?}"))?;
+    let barrier = TickBarrier::create(&args.prefix, n)?;
+    let mut outputs = RunOutputs::create(&args.run_dir, sc)?;
+    // Tell the orchestrator every service exists: agents may start.
+    println!("READY");
+    std::io::stdout().flush()?;
+
+    let mut ctl = ControlState::default();
+    let poll = Duration::from_millis(sc.runtime.poll_ms);
+    // Wait for every agent (or its death) before the first tick.
+    let startup_deadline = Instant::now() + Duration::from_secs(sc.runtime.startup_timeout_s);
+    while barrier.ready_count() + (n - world.alive_count()) < n {
+        drain_control(&control, &mut world, &mut ctl, t_start);
+        if ctl.stop {
+            break;
+        }
+        if Instant::now() > startup_deadline {
+            return Err(format!(
+                "only {} of {n} agents attached within runtime.startup_timeout_s = {} s",
+                barrier.ready_count(),
+                sc.runtime.startup_timeout_s
+            )
+            .into());
+        }
+        std::thread::sleep(Duration::from_millis(2));
+    }
+    let startup_seconds = t_start.elapsed().as_secs_f64();
+    let t_loop = Instant::now();
+    let mut tick_ns = Vec::with_capacity(sc.run.max_ticks.min(10_000_000) as usize);
+    let mut actions: Vec<Option<Action>> = vec![None; n as usize];
+    let deadline = Duration::from_millis(sc.runtime.ack_deadline_ms);
+    let mut end = "completed".to_string();
+    while world.tick < sc.run.max_ticks {
+        let t_tick = Instant::now();
+        let k = world.tick;
+        if ctl.stop || k + 1 == sc.run.max_ticks {
+            world.set_stopping();
+        }
+        // Sense_k, written in place into each live robot's loaned sample.
+        for i in 0..n as usize {
+            if !world.alive[i] {
+                continue;
+            }
+            let mut sample = robots[i].sense.loan_uninit().map_err(|e| format!("sense loan: {e:?}"))?;
+            let p = sample.payload_mut().as_mut_ptr();
+            // SAFETY: Sense is plain old data, valid when zeroed; we zero the fixed part
+            // (the lists are written up to their counts) and then write through a reference.
+            let s = unsafe {
+                std::ptr::write_bytes(p as *mut u8, 0, 72);
+                &mut *p
+            };
+            world.sense(i, s);
+            // SAFETY: fully initialised above.
+            let sample = unsafe { sample.assume_init() };
+            sample.send().map_err(|e| format!("sense send: {e:?}"))?;
+        }
+        barrier.release(k, world.alive_count());
+        let waited = Instant::now();
+        loop {
+            if world.live_robots().all(|i| barrier.acked(i, k)) {
+                break;
+            }
+            barrier.wait_acks(poll);
+            drain_control(&control, &mut world, &mut ctl, t_start);
+            if waited.elapsed() > deadline {
+                let silent: Vec<u32> = world.live_robots().filter(|&i| !barrier.acked(i, k)).collect();
+                for i in silent {
+                    world.mark_dead(i, "no action within runtime.ack_deadline_ms", None);
+                }
+            }
+        }
+        for i in 0..n as usize {
+            actions[i] = None;
+            if !world.alive[i] {
+                continue;
+            }
+            while let Ok(Some(a)) = robots[i].act.receive() {
+                actions[i] = Some(*a);
+            }
+        }
+        let rec = world.apply(&actions);
+        outputs.push(&rec)?;
+        tick_ns.push(t_tick.elapsed().as_nanos() as u64);
+        if let Ok(s) = status_pub.loan_uninit() {
+            let _ = s.write_payload(world.status(false)).send();
+        }
+        drain_control(&control, &mut world, &mut ctl, t_start);
+        if ctl.stop {
+            end = "interrupted".to_string();
+            break;
+        }
+        if world.alive_count() == 0 {
+            end = "all robots dead".to_string();
+            break;
+        }
+    }
+    let loop_seconds = t_loop.elapsed().as_secs_f64();
+    barrier.shutdown();
+    let timing = Timing { wall_seconds: t_start.elapsed().as_secs_f64(), loop_seconds, startup_seconds, tick_ns };
+    outputs.finish(&mut world, &timing, &args.run_id, "processes", &end)?;
+    if let Ok(s) = status_pub.loan_uninit() {
+        let _ = s.write_payload(world.status(true)).send();
+    }
+    Ok(0)
+}
