@@ -37,10 +37,18 @@ fn main() {
         }
     };
     if args.robot >= sc.run.robots {
-        eprintln!("agent: --robot {} is out of range: allowed 0..={}", args.robot, sc.run.robots - 1);
+        eprintln!(
+            "agent: --robot {} is out of range: allowed 0..={}",
+            args.robot,
+            sc.run.robots - 1
+        );
         std::process::exit(2);
     }
-    let a = agent::process::AgentArgs { robot: args.robot, prefix: args.prefix, scenario: sc };
+    let a = agent::process::AgentArgs {
+        robot: args.robot,
+        prefix: args.prefix,
+        scenario: sc,
+    };
     match agent::process::run(&a) {
         Ok(code) => std::process::exit(code),
         Err(e) => {

@@ -63,7 +63,10 @@ struct Run<'a>(&'a AgentArgs);
 impl BehaviourVisitor for Run<'_> {
     type Out = Result<i32>;
     fn visit<B: Behaviour + 'static>(self, make: &dyn Fn(u32) -> B) -> Result<i32> {
-        run_loop(self.0, AgentRuntime::new(&self.0.scenario, self.0.robot, make(self.0.robot)))
+        run_loop(
+            self.0,
+            AgentRuntime::new(&self.0.scenario, self.0.robot, make(self.0.robot)),
+        )
     }
 }
 
@@ -77,16 +80,27 @@ fn run_loop<B: Behaviour>(args: &AgentArgs, mut rt: AgentRuntime<B>) -> Result<i
     let config = transport::run_config(&args.prefix)?;
     let node = transport::node(&config, &format!("agent-{robot}"))?;
     let sense_svc = transport::sense_service(&node, robot, false)?;
-    let sense_sub = sense_svc.subscriber_builder().buffer_size(1).create().map_err(|e| format!("sense subscriber: {e:?}"))?;
+    let sense_sub = sense_svc
+        .subscriber_builder()
+        .buffer_size(1)
+        .create()
+        .map_err(|e| format!("sense subscriber: {e:?}"))?;
     let act_svc = transport::act_service(&node, robot, false)?;
-    let act_pub = act_svc.publisher_builder().create().map_err(|e| format!("act publisher: {e:?}"))?;
+    let act_pub = act_svc
+        .publisher_builder()
+        .create()
+        .map_err(|e| format!("act publisher: {e:?}"))?;
     let radio_svc = transport::radio_service(&node, robot, sc, false)?;
     let radio_pub = transport::radio_publisher(&radio_svc, sc)?;
     let barrier = TickBarrier::open(&args.prefix)?;
     let world_pid = barrier.world_pid();
     let poll = Duration::from_millis(sc.runtime.poll_ms);
     let mut links: BTreeMap<u32, Link> = BTreeMap::new();
-    let mut tx = ShmTx { publisher: &radio_pub, failures: 0 };
+    let mut tx = ShmTx {
+        publisher: &radio_pub,
+        failures: 0,
+    };
+    let debug = std::env::var_os("SWARM_DEBUG_TIMING").is_some();
     let mut done = barrier.acked_up_to(robot);
     barrier.mark_ready();
     loop {
@@ -102,7 +116,10 @@ fn run_loop<B: Behaviour>(args: &AgentArgs, mut rt: AgentRuntime<B>) -> Result<i
         };
         // The world published Sense_k before releasing tick k: read it in place.
         let mut latest = None;
-        while let Some(s) = sense_sub.receive().map_err(|e| format!("sense receive: {e:?}"))? {
+        while let Some(s) = sense_sub
+            .receive()
+            .map_err(|e| format!("sense receive: {e:?}"))?
+        {
             latest = Some(s);
         }
         let Some(sense) = latest else {
@@ -121,8 +138,11 @@ fn run_loop<B: Behaviour>(args: &AgentArgs, mut rt: AgentRuntime<B>) -> Result<i
                 rt.ingest(m.user_header(), m.payload());
             }
         }
+        let t_step = std::time::Instant::now();
         let action = rt.step(&sense, &mut tx);
+        let t_link = std::time::Instant::now();
         let (added, removed) = rt.update_links(&sense);
+        let n_added = added.len();
         for r in removed {
             links.remove(r);
         }
@@ -141,8 +161,20 @@ fn run_loop<B: Behaviour>(args: &AgentArgs, mut rt: AgentRuntime<B>) -> Result<i
                 Err(e) => eprintln!("agent {robot}: no link to robot {r}: {e}"),
             }
         }
-        let sample = act_pub.loan_uninit().map_err(|e| format!("act loan: {e:?}"))?;
-        sample.write_payload(action).send().map_err(|e| format!("act send: {e:?}"))?;
+        if debug && n_added > 0 {
+            eprintln!(
+                "agent {robot} tick {k}: step {:?} link {n_added} in {:?}",
+                t_link - t_step,
+                t_link.elapsed()
+            );
+        }
+        let sample = act_pub
+            .loan_uninit()
+            .map_err(|e| format!("act loan: {e:?}"))?;
+        sample
+            .write_payload(action)
+            .send()
+            .map_err(|e| format!("act send: {e:?}"))?;
         drop(sense);
         barrier.ack(robot, k);
         done = k + 1;

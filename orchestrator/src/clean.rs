@@ -6,7 +6,8 @@ use swarm::cleanup;
 /// Shared-memory names that look like a run of ours: `sw` + 10 hex digits + `_`.
 fn run_prefix_of(name: &str) -> Option<&str> {
     let p = name.get(..13)?;
-    let ok = p.starts_with("sw") && p.ends_with('_') && p[2..12].bytes().all(|b| b.is_ascii_hexdigit());
+    let ok =
+        p.starts_with("sw") && p.ends_with('_') && p[2..12].bytes().all(|b| b.is_ascii_hexdigit());
     ok.then_some(p)
 }
 
@@ -18,7 +19,11 @@ pub struct CleanReport {
 
 /// Cleans dead runs. A run is dead when its orchestrator process is gone.
 pub fn clean_dead_runs() -> CleanReport {
-    let mut report = CleanReport { runs: 0, shm_files: 0, processes: 0 };
+    let mut report = CleanReport {
+        runs: 0,
+        shm_files: 0,
+        processes: 0,
+    };
     let entries = registry::list();
     let mut live_prefixes = Vec::new();
     for e in &entries {

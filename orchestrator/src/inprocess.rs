@@ -49,7 +49,9 @@ impl BehaviourVisitor for InProcess<'_> {
         let mut world = World::new(sc).map_err(std::io::Error::other)?;
         let mut outputs = RunOutputs::create(self.out_dir, sc)?;
         let n = world.n;
-        let mut rts: Vec<AgentRuntime<B>> = (0..n as u32).map(|i| AgentRuntime::new(sc, i, make(i))).collect();
+        let mut rts: Vec<AgentRuntime<B>> = (0..n as u32)
+            .map(|i| AgentRuntime::new(sc, i, make(i)))
+            .collect();
         let mut senses: Vec<Box<Sense>> = (0..n).map(|_| Sense::zeroed()).collect();
         let mut prev = Air::default();
         let mut cur = Air::default();
@@ -96,6 +98,19 @@ impl BehaviourVisitor for InProcess<'_> {
     }
 }
 
-pub fn run(sc: &Scenario, out_dir: &Path, run_id: &str, on_tick: &mut dyn FnMut(&World)) -> std::io::Result<Summary> {
-    dispatch(sc, InProcess { sc, out_dir, run_id, on_tick })
+pub fn run(
+    sc: &Scenario,
+    out_dir: &Path,
+    run_id: &str,
+    on_tick: &mut dyn FnMut(&World),
+) -> std::io::Result<Summary> {
+    dispatch(
+        sc,
+        InProcess {
+            sc,
+            out_dir,
+            run_id,
+            on_tick,
+        },
+    )
 }

@@ -12,7 +12,11 @@ mod up;
 use clap::{Parser, Subcommand};
 
 #[derive(Parser)]
-#[command(name = "orchestrator", about = "Zero-copy multi-process swarm runtime", version)]
+#[command(
+    name = "orchestrator",
+    about = "Zero-copy multi-process swarm runtime",
+    version
+)]
 struct Cli {
     #[command(subcommand)]
     cmd: Cmd,
@@ -21,6 +25,7 @@ struct Cli {
 #[derive(Subcommand)]
 enum Cmd {
     /// Run a scenario: one world process and one agent process per robot.
+    #[command(allow_negative_numbers = true)]
     Up(up::UpArgs),
     /// Measure the runtime against raw iceoryx2 and the futex floor.
     Bench(bench::BenchArgs),

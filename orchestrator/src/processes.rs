@@ -31,9 +31,6 @@ pub struct ProcessRun<'a> {
 pub struct ProcessOutcome {
     /// Exit status of the world: Ok(code) or Err(signal).
     pub world_exit: Result<i32, i32>,
-    pub interrupted: bool,
-    /// Robots whose process died during the run, with the tick the orchestrator saw it at.
-    pub deaths: Vec<(u32, u64)>,
     pub shm_removed: usize,
 }
 
@@ -71,7 +68,8 @@ pub fn run(mut p: ProcessRun) -> Result<ProcessOutcome, String> {
     let prefix = transport::prefix_for(p.run_id);
     let scenario_path = p.run_dir.join("scenario.toml");
     std::fs::create_dir_all(p.run_dir).map_err(|e| format!("{}: {e}", p.run_dir.display()))?;
-    std::fs::write(&scenario_path, sc.to_toml()).map_err(|e| format!("{}: {e}", scenario_path.display()))?;
+    std::fs::write(&scenario_path, sc.to_toml())
+        .map_err(|e| format!("{}: {e}", scenario_path.display()))?;
     let mut entry = RunEntry {
         run_id: p.run_id.to_string(),
         prefix: prefix.clone(),
@@ -97,7 +95,12 @@ pub fn run(mut p: ProcessRun) -> Result<ProcessOutcome, String> {
     })
 }
 
-fn supervise(p: &mut ProcessRun, prefix: &str, scenario_path: &Path, entry: &mut RunEntry) -> Result<ProcessOutcome, String> {
+fn supervise(
+    p: &mut ProcessRun,
+    prefix: &str,
+    scenario_path: &Path,
+    entry: &mut RunEntry,
+) -> Result<ProcessOutcome, String> {
     let sc = p.sc;
     let n = sc.run.robots;
     let mut world = Command::new(bin("world"))
@@ -123,20 +126,36 @@ fn supervise(p: &mut ProcessRun, prefix: &str, scenario_path: &Path, entry: &mut
         Ok(l) if l.trim() == "READY" => {}
         Ok(_) | Err(_) => {
             let code = world.try_wait().ok().flatten();
-            return Err(format!("the world process did not get ready (exit: {code:?}); see its messages above"));
+            return Err(format!(
+                "the world process did not get ready (exit: {code:?}); see its messages above"
+            ));
         }
     }
     let config = transport::run_config(prefix).map_err(|e| e.to_string())?;
     let node = transport::node(&config, "orchestrator").map_err(|e| e.to_string())?;
     let control_svc = transport::control_service(&node, false).map_err(|e| e.to_string())?;
-    let control = control_svc.publisher_builder().create().map_err(|e| format!("control publisher: {e:?}"))?;
+    let control = control_svc
+        .publisher_builder()
+        .create()
+        .map_err(|e| format!("control publisher: {e:?}"))?;
     let status_svc = transport::status_service(&node, false).map_err(|e| e.to_string())?;
-    let status = status_svc.subscriber_builder().create().map_err(|e| format!("status subscriber: {e:?}"))?;
+    let status = status_svc
+        .subscriber_builder()
+        .create()
+        .map_err(|e| format!("status subscriber: {e:?}"))?;
     let barrier = TickBarrier::open(prefix).map_err(|e| format!("tick barrier: {e}"))?;
     let mut agents: BTreeMap<u32, u32> = BTreeMap::new(); // pid -> robot
     for i in 0..n {
         let child = Command::new(bin("agent"))
-            .args(["--robot", &i.to_string(), "--prefix", prefix, "--run-id", p.run_id, "--scenario"])
+            .args([
+                "--robot",
+                &i.to_string(),
+                "--prefix",
+                prefix,
+                "--run-id",
+                p.run_id,
+                "--scenario",
+            ])
             .arg(scenario_path)
             .stdin(Stdio::null())
             .stdout(Stdio::null())
@@ -154,7 +173,6 @@ fn supervise(p: &mut ProcessRun, prefix: &str, scenario_path: &Path, entry: &mut
         barrier.nudge_world();
     };
     let mut last = WorldStatus::default();
-    let mut deaths = Vec::new();
     let mut stop_sent: Option<Instant> = None;
     let world_pid = entry.world_pid;
     let world_exit;
@@ -165,7 +183,6 @@ fn supervise(p: &mut ProcessRun, prefix: &str, scenario_path: &Path, entry: &mut
                 break 'outer;
             }
             if let Some(robot) = agents.remove(&pid) {
-                deaths.push((robot, last.tick));
                 send_control(CONTROL_ROBOT_DIED, robot, monotonic_us());
             }
         }
@@ -199,7 +216,10 @@ fn supervise(p: &mut ProcessRun, prefix: &str, scenario_path: &Path, entry: &mut
     drop(control);
     drop(barrier);
     drop(node);
-    Ok(ProcessOutcome { world_exit, interrupted: stop_sent.is_some(), deaths, shm_removed: 0 })
+    Ok(ProcessOutcome {
+        world_exit,
+        shm_removed: 0,
+    })
 }
 
 /// CLOCK_MONOTONIC in microseconds (the world compares it with its own clock).

@@ -23,7 +23,10 @@ fn path(run_id: &str) -> PathBuf {
 pub fn write(e: &RunEntry) -> std::io::Result<()> {
     std::fs::create_dir_all(REGISTRY_DIR)?;
     let tmp = path(&format!(".{}", e.run_id));
-    std::fs::write(&tmp, serde_json::to_string_pretty(e).map_err(std::io::Error::other)?)?;
+    std::fs::write(
+        &tmp,
+        serde_json::to_string_pretty(e).map_err(std::io::Error::other)?,
+    )?;
     std::fs::rename(tmp, path(&e.run_id))
 }
 

@@ -17,13 +17,20 @@ fn civil(days: i64) -> (i64, u32, u32) {
 }
 
 pub fn new_run_id() -> String {
-    let now = SystemTime::now().duration_since(UNIX_EPOCH).expect("clock after 1970");
+    let now = SystemTime::now()
+        .duration_since(UNIX_EPOCH)
+        .expect("clock after 1970");
     let secs = now.as_secs() as i64;
     let (y, mo, d) = civil(secs.div_euclid(86_400));
     let s = secs.rem_euclid(86_400);
     // Not a simulation draw: only makes concurrent runs' ids differ.
     let salt = (now.subsec_nanos() ^ std::process::id().wrapping_mul(2_654_435_761)) & 0xffff;
-    format!("{y:04}{mo:02}{d:02}-{:02}{:02}{:02}-{salt:04x}", s / 3600, s / 60 % 60, s % 60)
+    format!(
+        "{y:04}{mo:02}{d:02}-{:02}{:02}{:02}-{salt:04x}",
+        s / 3600,
+        s / 60 % 60,
+        s % 60
+    )
 }
 
 #[cfg(test)]

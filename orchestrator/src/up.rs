@@ -124,10 +124,16 @@ pub fn up(a: UpArgs) -> i32 {
     signals::install();
     let cleaned = clean::clean_dead_runs();
     if cleaned.runs > 0 {
-        eprintln!("cleaned {} dead run(s) left by earlier orchestrators", cleaned.runs);
+        eprintln!(
+            "cleaned {} dead run(s) left by earlier orchestrators",
+            cleaned.runs
+        );
     }
     let run_id = runid::new_run_id();
-    let run_dir = a.out.clone().unwrap_or_else(|| Path::new("runs").join(&run_id));
+    let run_dir = a
+        .out
+        .clone()
+        .unwrap_or_else(|| Path::new("runs").join(&run_id));
     let pb = progress(&sc, a.quiet);
     let n = sc.run.robots;
     let result: Result<(), String> = match a.executor {
@@ -146,7 +152,12 @@ pub fn up(a: UpArgs) -> i32 {
             run_dir: &run_dir,
             on_status: &mut |s| {
                 pb.set_position(s.tick);
-                pb.set_message(bar_msg(s.alive, n, s.delivered, s.dropped_loss + s.dropped_range));
+                pb.set_message(bar_msg(
+                    s.alive,
+                    n,
+                    s.delivered,
+                    s.dropped_loss + s.dropped_range,
+                ));
             },
         })
         .and_then(|o| match o.world_exit {
@@ -176,30 +187,61 @@ pub fn up(a: UpArgs) -> i32 {
 fn print_summary(v: &serde_json::Value, dir: &Path) {
     let g = |p: &str| v.pointer(p).cloned().unwrap_or_default();
     let f = |p: &str| v.pointer(p).and_then(|x| x.as_f64()).unwrap_or(0.0);
-    println!("run {}  ({} executor, {})", g("/run_id").as_str().unwrap_or(""), g("/executor").as_str().unwrap_or(""), g("/end").as_str().unwrap_or(""));
+    println!(
+        "run {}  ({} executor, {})",
+        g("/run_id").as_str().unwrap_or(""),
+        g("/executor").as_str().unwrap_or(""),
+        g("/end").as_str().unwrap_or("")
+    );
     println!(
         "  robots {}  behaviour {}  seed {}  ticks {}/{}",
-        g("/robots"), g("/behaviour").as_str().unwrap_or(""), g("/seed"), g("/ticks"), g("/max_ticks")
+        g("/robots"),
+        g("/behaviour").as_str().unwrap_or(""),
+        g("/seed"),
+        g("/ticks"),
+        g("/max_ticks")
     );
     println!(
         "  wall {:.2} s (start-up {:.2} s)  {:.0} ticks/s  tick p50 {:.0} us  p99 {:.0} us",
-        f("/wall_seconds"), f("/startup_seconds"), f("/ticks_per_second"), f("/tick_time/p50_us"), f("/tick_time/p99_us")
+        f("/wall_seconds"),
+        f("/startup_seconds"),
+        f("/ticks_per_second"),
+        f("/tick_time/p50_us"),
+        f("/tick_time/p99_us")
     );
     println!(
         "  messages offered {}  delivered {}  dropped: range {}  loss {}  unlinked {}  malformed {}  in flight {}",
         g("/messages/offered"), g("/messages/delivered"), g("/messages/dropped_range"), g("/messages/dropped_loss"),
         g("/messages/dropped_unlinked"), g("/messages/malformed"), g("/messages/in_flight")
     );
-    let rejected: u64 = v.pointer("/rejected_actions").and_then(|r| r.as_object()).map(|o| o.values().filter_map(|x| x.as_u64()).sum()).unwrap_or(0);
-    println!("  rejected actions {rejected}  blocked moves {}  alive at end {}", g("/blocked_moves"), g("/alive_at_end"));
+    let rejected: u64 = v
+        .pointer("/rejected_actions")
+        .and_then(|r| r.as_object())
+        .map(|o| o.values().filter_map(|x| x.as_u64()).sum())
+        .unwrap_or(0);
+    println!(
+        "  rejected actions {rejected}  blocked moves {}  alive at end {}",
+        g("/blocked_moves"),
+        g("/alive_at_end")
+    );
     if let Some(faults) = v.pointer("/faults").and_then(|x| x.as_array()) {
         for fl in faults {
-            println!("  fault: robot {} at tick {}: {}", fl["robot"], fl["tick"], fl["cause"].as_str().unwrap_or(""));
+            println!(
+                "  fault: robot {} at tick {}: {}",
+                fl["robot"],
+                fl["tick"],
+                fl["cause"].as_str().unwrap_or("")
+            );
         }
     }
     println!(
         "  mission: coverage {:.1} %  spread {:.1}  mean nearest neighbour {:.1}",
-        100.0 * f("/mission/coverage"), f("/mission/spread"), f("/mission/mean_nearest_neighbour")
+        100.0 * f("/mission/coverage"),
+        f("/mission/spread"),
+        f("/mission/mean_nearest_neighbour")
     );
-    println!("  outputs: {}/{{scenario.toml, summary.json, recording.bin, run.svg}}", dir.display());
+    println!(
+        "  outputs: {}/{{scenario.toml, summary.json, recording.bin, run.svg}}",
+        dir.display()
+    );
 }

@@ -98,7 +98,11 @@ impl TickBarrier {
         let len = Self::size_for(robots);
         // SAFETY: plain POSIX calls with checked results.
         unsafe {
-            let fd = libc::shm_open(name.as_ptr(), libc::O_CREAT | libc::O_EXCL | libc::O_RDWR, 0o600);
+            let fd = libc::shm_open(
+                name.as_ptr(),
+                libc::O_CREAT | libc::O_EXCL | libc::O_RDWR,
+                0o600,
+            );
             if fd < 0 {
                 return Err(std::io::Error::last_os_error());
             }
@@ -126,7 +130,9 @@ impl TickBarrier {
                 return Err(std::io::Error::last_os_error());
             }
             let mut st: libc::stat = std::mem::zeroed();
-            if libc::fstat(fd, &mut st) != 0 || (st.st_size as usize) < std::mem::size_of::<Header>() {
+            if libc::fstat(fd, &mut st) != 0
+                || (st.st_size as usize) < std::mem::size_of::<Header>()
+            {
                 libc::close(fd);
                 return Err(std::io::Error::other("barrier segment too small"));
             }
@@ -153,7 +159,11 @@ impl TickBarrier {
         if p == libc::MAP_FAILED {
             return Err(std::io::Error::last_os_error());
         }
-        Ok(TickBarrier { base: p as *mut u8, len, robots })
+        Ok(TickBarrier {
+            base: p as *mut u8,
+            len,
+            robots,
+        })
     }
 
     fn header(&self) -> &Header {
@@ -164,7 +174,12 @@ impl TickBarrier {
     fn slot(&self, robot: u32) -> &AtomicU64 {
         assert!(robot < self.robots, "robot {robot} out of range");
         // SAFETY: slots follow the header, 8-byte aligned, within len.
-        unsafe { &*(self.base.add(std::mem::size_of::<Header>() + 8 * robot as usize) as *const AtomicU64) }
+        unsafe {
+            &*(self
+                .base
+                .add(std::mem::size_of::<Header>() + 8 * robot as usize)
+                as *const AtomicU64)
+        }
     }
 
     pub fn robots(&self) -> u32 {

@@ -92,7 +92,8 @@ pub trait RadioTx {
 /// A seeded random stream for (run seed, robot, purpose). Every random draw of a behaviour
 /// comes from such a stream.
 pub fn robot_rng(seed: u64, robot: u32, stream: u64) -> ChaCha8Rng {
-    let mut r = ChaCha8Rng::seed_from_u64(seed ^ 0x9e37_79b9_7f4a_7c15u64.wrapping_mul(robot as u64 + 1));
+    let mut r =
+        ChaCha8Rng::seed_from_u64(seed ^ 0x9e37_79b9_7f4a_7c15u64.wrapping_mul(robot as u64 + 1));
     r.set_stream(stream);
     r
 }
@@ -144,7 +145,10 @@ impl<B: Behaviour> AgentRuntime<B> {
             behaviour,
             seed: sc.run.seed,
             radio: sc.radio.clone(),
-            links: LinkSet::new(sc.radio.max_links as usize, sc.radio.link_linger_ticks as u64),
+            links: LinkSet::new(
+                sc.radio.max_links as usize,
+                sc.radio.link_linger_ticks as u64,
+            ),
             seq: 0,
             positions: VecDeque::new(),
             pending: Vec::new(),
@@ -205,9 +209,12 @@ impl<B: Behaviour> AgentRuntime<B> {
             Verdict::Deliver => {
                 let len = h.len as usize;
                 let decoded = if len <= payload.len() {
-                    bincode::serde::decode_from_slice::<B::Msg, _>(&payload[..len], bincode_config())
-                        .ok()
-                        .filter(|(_, used)| *used == len)
+                    bincode::serde::decode_from_slice::<B::Msg, _>(
+                        &payload[..len],
+                        bincode_config(),
+                    )
+                    .ok()
+                    .filter(|(_, used)| *used == len)
                 } else {
                     None
                 };
@@ -282,8 +289,7 @@ impl<B: Behaviour> AgentRuntime<B> {
                 sender_pos: sense.pos,
             };
             tx.transmit(&header, &mut |buf: &mut [u8]| {
-                bincode::serde::encode_into_slice(msg, buf, bincode_config())
-                    .expect("sized above");
+                bincode::serde::encode_into_slice(msg, buf, bincode_config()).expect("sized above");
             });
             action.sent_to[action.n_sent as usize] = *dest;
             action.n_sent += 1;
@@ -293,7 +299,8 @@ impl<B: Behaviour> AgentRuntime<B> {
 
     /// Applies Sense_k's neighbour list to the links: (added, removed).
     pub fn update_links(&mut self, sense: &Sense) -> (&[u32], &[u32]) {
-        self.links.update(sense.tick, sense.neighbours(), self.robot)
+        self.links
+            .update(sense.tick, sense.neighbours(), self.robot)
     }
 }
 
@@ -349,7 +356,9 @@ mod tests {
         let sc = Scenario::default();
         let mut rx = linked_receiver(&sc);
         let mut tx = Collect(vec![]);
-        let mut senders: Vec<_> = (1..4).map(|i| AgentRuntime::new(&sc, i, Echo { heard: vec![] })).collect();
+        let mut senders: Vec<_> = (1..4)
+            .map(|i| AgentRuntime::new(&sc, i, Echo { heard: vec![] }))
+            .collect();
         // Tick 1: robots 1..3 send; robot 3 is out of range.
         let s1 = sense(0, 1, [0.0, 0.0]);
         rx.begin(&s1);
@@ -400,9 +409,19 @@ mod tests {
         let mut rx = linked_receiver(&sc);
         let s1 = sense(0, 1, [0.0, 0.0]);
         rx.begin(&s1);
-        let h = RadioHeader { sender: 1, len: 9, tick: 1, ..Default::default() };
+        let h = RadioHeader {
+            sender: 1,
+            len: 9,
+            tick: 1,
+            ..Default::default()
+        };
         rx.ingest(&h, &[0xff; 9]);
-        let h2 = RadioHeader { sender: 2, len: 200, tick: 1, ..Default::default() };
+        let h2 = RadioHeader {
+            sender: 2,
+            len: 200,
+            tick: 1,
+            ..Default::default()
+        };
         rx.ingest(&h2, &[1; 4]); // claims more bytes than it carries
         rx.step(&s1, &mut Collect(vec![]));
         let s2 = sense(0, 2, [0.0, 0.0]);

@@ -21,7 +21,12 @@ pub fn shm_files(prefix: &str) -> Vec<String> {
 pub fn remove_run(prefix: &str) -> usize {
     let files = shm_files(prefix);
     for f in &files {
-        let _ = std::fs::remove_file(Path::new("/dev/shm").join(f));
+        let p = Path::new("/dev/shm").join(f);
+        if p.is_dir() {
+            let _ = std::fs::remove_dir_all(&p);
+        } else {
+            let _ = std::fs::remove_file(&p);
+        }
     }
     let _ = std::fs::remove_dir_all(crate::transport::root_for(prefix));
     files.len()

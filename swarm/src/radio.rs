@@ -74,7 +74,18 @@ pub fn decide(
 }
 
 /// Run-wide message counters, per (message, intended receiver) pair.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize, bincode::Encode, bincode::Decode)]
+#[derive(
+    Debug,
+    Clone,
+    Copy,
+    Default,
+    PartialEq,
+    Eq,
+    Serialize,
+    Deserialize,
+    bincode::Encode,
+    bincode::Decode,
+)]
 pub struct RadioCounters {
     /// Pairs offered: a broadcast counts once per other live robot, a unicast once.
     pub offered: u64,
@@ -153,8 +164,14 @@ mod tests {
     #[test]
     fn range_is_checked_before_loss() {
         let p = Scenario::default().radio;
-        assert_eq!(decide(&p, 0, 0, 1, [0.0, 0.0], 2, [300.0, 0.0], 0), Verdict::Deliver);
-        assert_eq!(decide(&p, 0, 0, 1, [0.0, 0.0], 2, [300.001, 0.0], 0), Verdict::OutOfRange);
+        assert_eq!(
+            decide(&p, 0, 0, 1, [0.0, 0.0], 2, [300.0, 0.0], 0),
+            Verdict::Deliver
+        );
+        assert_eq!(
+            decide(&p, 0, 0, 1, [0.0, 0.0], 2, [300.001, 0.0], 0),
+            Verdict::OutOfRange
+        );
     }
 
     #[test]

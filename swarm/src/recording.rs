@@ -67,11 +67,13 @@ pub struct RecordingWriter<W: Write> {
 impl<W: Write> RecordingWriter<W> {
     pub fn new(w: W, header: &RecordingHeader) -> std::io::Result<Self> {
         let mut out = BufWriter::new(w);
-        bincode::serde::encode_into_std_write(header, &mut out, cfg()).map_err(std::io::Error::other)?;
+        bincode::serde::encode_into_std_write(header, &mut out, cfg())
+            .map_err(std::io::Error::other)?;
         Ok(RecordingWriter { out })
     }
     pub fn push(&mut self, rec: &TickRecord) -> std::io::Result<()> {
-        bincode::serde::encode_into_std_write(rec, &mut self.out, cfg()).map_err(std::io::Error::other)?;
+        bincode::serde::encode_into_std_write(rec, &mut self.out, cfg())
+            .map_err(std::io::Error::other)?;
         Ok(())
     }
     pub fn finish(mut self) -> std::io::Result<()> {
@@ -106,13 +108,27 @@ mod tests {
 
     #[test]
     fn recording_round_trips() {
-        let h = RecordingHeader { version: RECORDING_VERSION, robots: 2, seed: 3, scenario: "x".into() };
+        let h = RecordingHeader {
+            version: RECORDING_VERSION,
+            robots: 2,
+            seed: 3,
+            scenario: "x".into(),
+        };
         let t = TickRecord {
             tick: 0,
             poses: vec![[1.0, 2.0, 0.5], [3.0, 4.0, 0.0]],
             alive: vec![1, 0],
-            events: vec![Event::MoveBlocked { robot: 1 }, Event::RobotDied { robot: 1, cause: "SIGKILL".into() }],
-            radio: RadioCounters { offered: 5, ..Default::default() },
+            events: vec![
+                Event::MoveBlocked { robot: 1 },
+                Event::RobotDied {
+                    robot: 1,
+                    cause: "SIGKILL".into(),
+                },
+            ],
+            radio: RadioCounters {
+                offered: 5,
+                ..Default::default()
+            },
         };
         let mut buf = Vec::new();
         let mut w = RecordingWriter::new(&mut buf, &h).unwrap();

@@ -103,7 +103,8 @@ pub struct RoamParams {
 }
 
 /// Behaviours an agent can run.
-pub const BEHAVIOURS: &[&str] = &["roam"];
+/// `faulty` roams but sends invalid commands on a schedule (fault-injection tests).
+pub const BEHAVIOURS: &[&str] = &["roam", "faulty"];
 /// Hard limits that come from the fixed-size frames.
 pub const MAX_ROBOTS: u32 = 4096;
 
@@ -178,7 +179,10 @@ impl Scenario {
         };
         let range_u = |key: &str, v: u64, lo: u64, hi: u64| {
             if v < lo || v > hi {
-                Err(e(key, format!("= {v} is out of range: allowed {lo}..={hi}")))
+                Err(e(
+                    key,
+                    format!("= {v} is out of range: allowed {lo}..={hi}"),
+                ))
             } else {
                 Ok(())
             }
@@ -187,7 +191,10 @@ impl Scenario {
             let below = if lo_open { v <= lo } else { v < lo };
             if !v.is_finite() || below || v > hi {
                 let l = if lo_open { "(" } else { "[" };
-                Err(e(key, format!("= {v} is out of range: allowed {l}{lo}, {hi}]")))
+                Err(e(
+                    key,
+                    format!("= {v} is out of range: allowed {l}{lo}, {hi}]"),
+                ))
             } else {
                 Ok(())
             }
@@ -195,7 +202,10 @@ impl Scenario {
         if !BEHAVIOURS.contains(&self.run.behaviour.as_str()) {
             return Err(e(
                 "run.behaviour",
-                format!("= {:?} is unknown: allowed {:?}", self.run.behaviour, BEHAVIOURS),
+                format!(
+                    "= {:?} is unknown: allowed {:?}",
+                    self.run.behaviour, BEHAVIOURS
+                ),
             ));
         }
         range_u("run.robots", self.run.robots as u64, 1, MAX_ROBOTS as u64)?;
@@ -214,45 +224,119 @@ impl Scenario {
                 ),
             ));
         }
-        range_f("arena.boundary_spacing", self.arena.boundary_spacing, 0.0, 100.0, true)?;
+        range_f(
+            "arena.boundary_spacing",
+            self.arena.boundary_spacing,
+            0.0,
+            100.0,
+            true,
+        )?;
         for (i, o) in self.arena.obstacles.iter().enumerate() {
-            if o.points.len() < 3 || o.points.iter().any(|p| !p[0].is_finite() || !p[1].is_finite()) {
+            if o.points.len() < 3
+                || o.points
+                    .iter()
+                    .any(|p| !p[0].is_finite() || !p[1].is_finite())
+            {
                 return Err(e(
                     &format!("arena.obstacles[{i}].points"),
-                    format!("(obstacle {:?}) must hold at least 3 finite [x, y] points", o.name),
+                    format!(
+                        "(obstacle {:?}) must hold at least 3 finite [x, y] points",
+                        o.name
+                    ),
                 ));
             }
         }
         range_f("robot.v_max", self.robot.v_max, 0.0, 1e6, true)?;
-        range_f("robot.sensing_radius", self.robot.sensing_radius, 0.0, 1e7, false)?;
+        range_f(
+            "robot.sensing_radius",
+            self.robot.sensing_radius,
+            0.0,
+            1e7,
+            false,
+        )?;
         range_f("radio.comm_radius", self.radio.comm_radius, 0.0, 1e7, false)?;
         range_f("radio.loss", self.radio.loss, 0.0, 1.0, false)?;
-        range_f("radio.loss_at_range", self.radio.loss_at_range, 0.0, 1.0, false)?;
-        range_f("radio.loss_exponent", self.radio.loss_exponent, 0.0, 100.0, true)?;
+        range_f(
+            "radio.loss_at_range",
+            self.radio.loss_at_range,
+            0.0,
+            1.0,
+            false,
+        )?;
+        range_f(
+            "radio.loss_exponent",
+            self.radio.loss_exponent,
+            0.0,
+            100.0,
+            true,
+        )?;
         range_u("radio.delay_ticks", self.radio.delay_ticks as u64, 0, 1000)?;
         let min_margin = 2.0 * self.robot.v_max;
-        range_f("radio.link_margin", self.radio.link_margin, min_margin, 1e7, false)
-            .map_err(|mut err| {
-                err.message += " (at least 2 * robot.v_max, so no in-range message is missed)";
-                err
-            })?;
-        range_u("radio.link_linger_ticks", self.radio.link_linger_ticks as u64, 0, 100_000)?;
-        range_u("radio.max_links", self.radio.max_links as u64, 1, crate::frames::MAX_NEIGHBOURS as u64)?;
-        range_u("radio.max_message_bytes", self.radio.max_message_bytes as u64, 8, 65_536)?;
+        range_f(
+            "radio.link_margin",
+            self.radio.link_margin,
+            min_margin,
+            1e7,
+            false,
+        )
+        .map_err(|mut err| {
+            err.message += " (at least 2 * robot.v_max, so no in-range message is missed)";
+            err
+        })?;
+        range_u(
+            "radio.link_linger_ticks",
+            self.radio.link_linger_ticks as u64,
+            0,
+            100_000,
+        )?;
+        range_u(
+            "radio.max_links",
+            self.radio.max_links as u64,
+            1,
+            crate::frames::MAX_NEIGHBOURS as u64,
+        )?;
+        range_u(
+            "radio.max_message_bytes",
+            self.radio.max_message_bytes as u64,
+            8,
+            65_536,
+        )?;
         range_u(
             "radio.max_messages_per_tick",
             self.radio.max_messages_per_tick as u64,
             1,
             crate::frames::MAX_SENT as u64,
         )?;
-        range_u("runtime.ack_deadline_ms", self.runtime.ack_deadline_ms, 10, 600_000)?;
+        range_u(
+            "runtime.ack_deadline_ms",
+            self.runtime.ack_deadline_ms,
+            10,
+            600_000,
+        )?;
         range_u("runtime.poll_ms", self.runtime.poll_ms, 1, 10_000)?;
-        range_u("runtime.startup_timeout_s", self.runtime.startup_timeout_s, 1, 3600)?;
+        range_u(
+            "runtime.startup_timeout_s",
+            self.runtime.startup_timeout_s,
+            1,
+            3600,
+        )?;
         range_f("roam.l_r", self.roam.l_r, 0.0, 1e7, true)?;
         range_f("roam.c", self.roam.c, 0.0, 1e7, true)?;
         range_f("roam.l1", self.roam.l1, 0.0, 1e7, true)?;
-        range_f("roam.obstacle_range", self.roam.obstacle_range, 0.0, 1e7, false)?;
-        range_f("roam.obstacle_weight", self.roam.obstacle_weight, 0.0, 1e7, false)?;
+        range_f(
+            "roam.obstacle_range",
+            self.roam.obstacle_range,
+            0.0,
+            1e7,
+            false,
+        )?;
+        range_f(
+            "roam.obstacle_weight",
+            self.roam.obstacle_weight,
+            0.0,
+            1e7,
+            false,
+        )?;
         Ok(())
     }
 }

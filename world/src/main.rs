@@ -30,7 +30,12 @@ fn main() {
             std::process::exit(2);
         }
     };
-    let a = world::process::WorldArgs { run_id: args.run_id, prefix: args.prefix, run_dir: args.run_dir, scenario: sc };
+    let a = world::process::WorldArgs {
+        run_id: args.run_id,
+        prefix: args.prefix,
+        run_dir: args.run_dir,
+        scenario: sc,
+    };
     match world::process::run(&a) {
         Ok(code) => std::process::exit(code),
         Err(e) => {

@@ -18,7 +18,12 @@ impl Coverage {
     pub fn new(width: f64, height: f64) -> Coverage {
         let cols = (width / COVERAGE_CELL).ceil().max(1.0) as usize;
         let rows = (height / COVERAGE_CELL).ceil().max(1.0) as usize;
-        Coverage { cols, rows, seen: vec![false; cols * rows], count: 0 }
+        Coverage {
+            cols,
+            rows,
+            seen: vec![false; cols * rows],
+            count: 0,
+        }
     }
     pub fn visit(&mut self, p: [f64; 2]) {
         let c = ((p[0] / COVERAGE_CELL) as usize).min(self.cols - 1);
@@ -70,7 +75,11 @@ pub fn mission(coverage: &Coverage, poses: &[[f64; 3]], alive: &[bool]) -> Missi
             .sum::<f64>()
             / n
     };
-    Mission { coverage: coverage.fraction(), spread, mean_nearest_neighbour: nn }
+    Mission {
+        coverage: coverage.fraction(),
+        spread,
+        mean_nearest_neighbour: nn,
+    }
 }
 
 #[cfg(test)]
@@ -89,7 +98,11 @@ mod tests {
     #[test]
     fn spread_and_nearest_neighbour() {
         let c = Coverage::new(100.0, 100.0);
-        let m = mission(&c, &[[0.0, 0.0, 0.0], [10.0, 0.0, 0.0], [500.0, 0.0, 0.0]], &[true, true, false]);
+        let m = mission(
+            &c,
+            &[[0.0, 0.0, 0.0], [10.0, 0.0, 0.0], [500.0, 0.0, 0.0]],
+            &[true, true, false],
+        );
         assert!((m.spread - 5.0).abs() < 1e-12);
         assert!((m.mean_nearest_neighbour - 10.0).abs() < 1e-12);
     }

@@ -76,7 +76,10 @@ impl RunOutputs {
             scenario: sc.to_toml(),
         };
         let rec = RecordingWriter::new(File::create(dir.join("recording.bin"))?, &header)?;
-        Ok(RunOutputs { dir: dir.to_path_buf(), rec: Some(rec) })
+        Ok(RunOutputs {
+            dir: dir.to_path_buf(),
+            rec: Some(rec),
+        })
     }
 
     pub fn push(&mut self, t: &TickRecord) -> std::io::Result<()> {
@@ -84,7 +87,14 @@ impl RunOutputs {
     }
 
     /// Closes the recording and writes summary.json and run.svg.
-    pub fn finish(mut self, world: &mut World, timing: &Timing, run_id: &str, executor: &str, end: &str) -> std::io::Result<Summary> {
+    pub fn finish(
+        mut self,
+        world: &mut World,
+        timing: &Timing,
+        run_id: &str,
+        executor: &str,
+        end: &str,
+    ) -> std::io::Result<Summary> {
         self.rec.take().expect("open").finish()?;
         world.finish_radio();
         let mut sorted = timing.tick_ns.clone();
@@ -101,14 +111,22 @@ impl RunOutputs {
             end: end.to_string(),
             wall_seconds: timing.wall_seconds,
             startup_seconds: timing.startup_seconds,
-            ticks_per_second: if timing.loop_seconds > 0.0 { ticks as f64 / timing.loop_seconds } else { 0.0 },
+            ticks_per_second: if timing.loop_seconds > 0.0 {
+                ticks as f64 / timing.loop_seconds
+            } else {
+                0.0
+            },
             tick_time: TickTimes {
                 p50_us: percentile(&sorted, 0.5) / 1e3,
                 p99_us: percentile(&sorted, 0.99) / 1e3,
                 max_us: sorted.last().copied().unwrap_or(0) as f64 / 1e3,
             },
             messages: world.radio,
-            rejected_actions: REJECT_NAMES.iter().zip(world.rejected).map(|(k, v)| (k.to_string(), v)).collect(),
+            rejected_actions: REJECT_NAMES
+                .iter()
+                .zip(world.rejected)
+                .map(|(k, v)| (k.to_string(), v))
+                .collect(),
             blocked_moves: world.blocked_moves,
             distance_travelled: world.distance_travelled,
             alive_at_end: world.alive_count(),

@@ -48,7 +48,11 @@ fn drain_control(
                 let now_us = monotonic_us();
                 let detection_ms = (now_us.saturating_sub(c.value)) as f64 / 1e3;
                 let _ = t0;
-                world.mark_dead(c.robot, "process died (reaped by orchestrator)", Some(detection_ms));
+                world.mark_dead(
+                    c.robot,
+                    "process died (reaped by orchestrator)",
+                    Some(detection_ms),
+                );
             }
             CONTROL_STOP => state.stop = true,
             _ => {}
@@ -58,7 +62,10 @@ fn drain_control(
 
 /// CLOCK_MONOTONIC in microseconds: comparable across processes on one machine.
 pub fn monotonic_us() -> u64 {
-    let mut ts = libc::timespec { tv_sec: 0, tv_nsec: 0 };
+    let mut ts = libc::timespec {
+        tv_sec: 0,
+        tv_nsec: 0,
+    };
     // SAFETY: valid pointer to a timespec.
     unsafe {
         libc::clock_gettime(libc::CLOCK_MONOTONIC, &mut ts);
@@ -78,14 +85,34 @@ pub fn run(args: &WorldArgs) -> Result<i32> {
         let sense_svc = transport::sense_service(&node, i, true)?;
         let act_svc = transport::act_service(&node, i, true)?;
         let radio_svc = transport::radio_service(&node, i, sc, true)?;
-        let sense = sense_svc.publisher_builder().max_loaned_samples(1).create().map_err(|e| format!("sense publisher: {e:?}"))?;
-        let act = act_svc.subscriber_builder().buffer_size(2).create().map_err(|e| format!("act subscriber: {e:?}"))?;
-        robots.push(Robot { sense, act, _sense_svc: sense_svc, _act_svc: act_svc, _radio_svc: radio_svc });
+        let sense = sense_svc
+            .publisher_builder()
+            .max_loaned_samples(1)
+            .create()
+            .map_err(|e| format!("sense publisher: {e:?}"))?;
+        let act = act_svc
+            .subscriber_builder()
+            .buffer_size(2)
+            .create()
+            .map_err(|e| format!("act subscriber: {e:?}"))?;
+        robots.push(Robot {
+            sense,
+            act,
+            _sense_svc: sense_svc,
+            _act_svc: act_svc,
+            _radio_svc: radio_svc,
+        });
     }
     let status_svc = transport::status_service(&node, true)?;
-    let status_pub = status_svc.publisher_builder().create().map_err(|e| format!("status publisher: {e:?}"))?;
+    let status_pub = status_svc
+        .publisher_builder()
+        .create()
+        .map_err(|e| format!("status publisher: {e:?}"))?;
     let control_svc = transport::control_service(&node, true)?;
-    let control = control_svc.subscriber_builder().create().map_err(|e| format!("control subscriber: {e:?}"))?;
+    let control = control_svc
+        .subscriber_builder()
+        .create()
+        .map_err(|e| format!("control subscriber: {e:?}"))?;
     let barrier = TickBarrier::create(&args.prefix, n)?;
     let mut outputs = RunOutputs::create(&args.run_dir, sc)?;
     // Tell the orchestrator every service exists: agents may start.
@@ -124,11 +151,14 @@ pub fn run(args: &WorldArgs) -> Result<i32> {
             world.set_stopping();
         }
         // Sense_k, written in place into each live robot's loaned sample.
-        for i in 0..n as usize {
+        for (i, robot) in robots.iter().enumerate() {
             if !world.alive[i] {
                 continue;
             }
-            let mut sample = robots[i].sense.loan_uninit().map_err(|e| format!("sense loan: {e:?}"))?;
+            let mut sample = robot
+                .sense
+                .loan_uninit()
+                .map_err(|e| format!("sense loan: {e:?}"))?;
             let p = sample.payload_mut().as_mut_ptr();
             // SAFETY: Sense is plain old data, valid when zeroed; we zero the fixed part
             // (the lists are written up to their counts) and then write through a reference.
@@ -150,7 +180,10 @@ pub fn run(args: &WorldArgs) -> Result<i32> {
             barrier.wait_acks(poll);
             drain_control(&control, &mut world, &mut ctl, t_start);
             if waited.elapsed() > deadline {
-                let silent: Vec<u32> = world.live_robots().filter(|&i| !barrier.acked(i, k)).collect();
+                let silent: Vec<u32> = world
+                    .live_robots()
+                    .filter(|&i| !barrier.acked(i, k))
+                    .collect();
                 for i in silent {
                     world.mark_dead(i, "no action within runtime.ack_deadline_ms", None);
                 }
@@ -183,7 +216,12 @@ pub fn run(args: &WorldArgs) -> Result<i32> {
     }
     let loop_seconds = t_loop.elapsed().as_secs_f64();
     barrier.shutdown();
-    let timing = Timing { wall_seconds: t_start.elapsed().as_secs_f64(), loop_seconds, startup_seconds, tick_ns };
+    let timing = Timing {
+        wall_seconds: t_start.elapsed().as_secs_f64(),
+        loop_seconds,
+        startup_seconds,
+        tick_ns,
+    };
     outputs.finish(&mut world, &timing, &args.run_id, "processes", &end)?;
     if let Ok(s) = status_pub.loan_uninit() {
         let _ = s.write_payload(world.status(true)).send();

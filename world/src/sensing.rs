@@ -25,7 +25,13 @@ impl PointGrid {
             let (c, r) = Self::cell_of(cell, cols, rows, *p);
             cells[r * cols + c].push(i as u32);
         }
-        PointGrid { cell, cols, rows, cells, points }
+        PointGrid {
+            cell,
+            cols,
+            rows,
+            cells,
+            points,
+        }
     }
 
     fn cell_of(cell: f64, cols: usize, rows: usize, p: [f64; 2]) -> (usize, usize) {
@@ -67,7 +73,10 @@ pub fn static_points(sc: &Scenario) -> Vec<[f64; 2]> {
     }
     if sc.arena.walls_sensed {
         let (w, h) = (sc.arena.width, sc.arena.height);
-        pts.extend(sample_boundary(&[[0.0, 0.0], [w, 0.0], [w, h], [0.0, h]], sc.arena.boundary_spacing));
+        pts.extend(sample_boundary(
+            &[[0.0, 0.0], [w, 0.0], [w, h], [0.0, h]],
+            sc.arena.boundary_spacing,
+        ));
     }
     pts
 }
@@ -102,7 +111,11 @@ pub fn fill_obstacles(
         .sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
     let n = scratch.near.len().min(MAX_OBSTACLE_POINTS);
     for (k, &(_, i)) in scratch.near[..n].iter().enumerate() {
-        out.obstacle_points[k] = if i < base { grid.points[i as usize] } else { dead[(i - base) as usize] };
+        out.obstacle_points[k] = if i < base {
+            grid.points[i as usize]
+        } else {
+            dead[(i - base) as usize]
+        };
     }
     out.n_obstacle_points = n as u32;
 }
@@ -145,14 +158,18 @@ mod tests {
 
     #[test]
     fn grid_query_matches_brute_force() {
-        let pts: Vec<[f64; 2]> = (0..2000).map(|i| [((i * 37) % 1000) as f64, ((i * 91) % 1000) as f64]).collect();
+        let pts: Vec<[f64; 2]> = (0..2000)
+            .map(|i| [((i * 37) % 1000) as f64, ((i * 91) % 1000) as f64])
+            .collect();
         let g = PointGrid::new(pts.clone(), 1000.0, 1000.0, 100.0);
         for q in [[0.0, 0.0], [500.0, 500.0], [999.0, 3.0], [250.5, 730.2]] {
             let mut got = vec![];
             g.within(q, 100.0, &mut got);
             let mut got: Vec<u32> = got.into_iter().map(|x| x.1).collect();
             got.sort();
-            let want: Vec<u32> = (0..pts.len() as u32).filter(|&i| distance(q, pts[i as usize]) <= 100.0).collect();
+            let want: Vec<u32> = (0..pts.len() as u32)
+                .filter(|&i| distance(q, pts[i as usize]) <= 100.0)
+                .collect();
             assert_eq!(got, want);
         }
     }

@@ -23,14 +23,22 @@ fn robot_colour(i: usize, n: usize) -> RGBColor {
         _ => (c, 0.0, x),
     };
     let m = l - c / 2.0;
-    RGBColor(((r + m) * 255.0) as u8, ((g + m) * 255.0) as u8, ((b + m) * 255.0) as u8)
+    RGBColor(
+        ((r + m) * 255.0) as u8,
+        ((g + m) * 255.0) as u8,
+        ((b + m) * 255.0) as u8,
+    )
 }
 
 pub fn write_svg(world: &World, path: &Path) -> Result<(), String> {
     let sc = &world.sc;
     let (w, h) = (sc.arena.width, sc.arena.height);
     let aspect = h / w;
-    let root = SVGBackend::new(path, (SIZE, (SIZE as f64 * aspect).round().max(100.0) as u32)).into_drawing_area();
+    let root = SVGBackend::new(
+        path,
+        (SIZE, (SIZE as f64 * aspect).round().max(100.0) as u32),
+    )
+    .into_drawing_area();
     let e = |x: DrawingAreaErrorKind<std::io::Error>| format!("run.svg: {x:?}");
     root.fill(&WHITE).map_err(e)?;
     let area = root.margin(10, 10, 10, 10);
@@ -39,32 +47,46 @@ pub fn write_svg(world: &World, path: &Path) -> Result<(), String> {
         .build_cartesian_2d(0f64..w, 0f64..h)
         .map_err(e)?;
     chart
-        .draw_series(std::iter::once(Rectangle::new([(0.0, 0.0), (w, h)], BLACK.stroke_width(2))))
+        .draw_series(std::iter::once(Rectangle::new(
+            [(0.0, 0.0), (w, h)],
+            BLACK.stroke_width(2),
+        )))
         .map_err(e)?;
     let [x0, y0, x1, y1] = sc.arena.start_region;
     chart
-        .draw_series(std::iter::once(Rectangle::new([(x0, y0), (x1, y1)], RGBColor(120, 120, 255).mix(0.15).filled())))
+        .draw_series(std::iter::once(Rectangle::new(
+            [(x0, y0), (x1, y1)],
+            RGBColor(120, 120, 255).mix(0.15).filled(),
+        )))
         .map_err(e)?;
     for o in &sc.arena.obstacles {
         let pts: Vec<(f64, f64)> = o.points.iter().map(|p| (p[0], p[1])).collect();
-        chart.draw_series(std::iter::once(Polygon::new(pts, BLACK.mix(0.85).filled()))).map_err(e)?;
+        chart
+            .draw_series(std::iter::once(Polygon::new(pts, BLACK.mix(0.85).filled())))
+            .map_err(e)?;
     }
     let n = world.n;
     for (i, traj) in world.trajectories.iter().enumerate() {
         let col = robot_colour(i, n);
         let mut pts: Vec<(f64, f64)> = traj.iter().map(|p| (p[0], p[1])).collect();
         pts.push((world.poses[i][0], world.poses[i][1]));
-        chart.draw_series(LineSeries::new(pts, col.mix(0.6).stroke_width(1))).map_err(e)?;
+        chart
+            .draw_series(LineSeries::new(pts, col.mix(0.6).stroke_width(1)))
+            .map_err(e)?;
     }
     for (i, s) in world.start.iter().enumerate() {
         let col = robot_colour(i, n);
-        chart.draw_series(std::iter::once(Circle::new((s[0], s[1]), 2, col.filled()))).map_err(e)?;
+        chart
+            .draw_series(std::iter::once(Circle::new((s[0], s[1]), 2, col.filled())))
+            .map_err(e)?;
     }
     for i in 0..n {
         let col = robot_colour(i, n);
         let p = (world.poses[i][0], world.poses[i][1]);
         if world.alive[i] {
-            chart.draw_series(std::iter::once(Circle::new(p, 4, col.filled()))).map_err(e)?;
+            chart
+                .draw_series(std::iter::once(Circle::new(p, 4, col.filled())))
+                .map_err(e)?;
         } else {
             // A dead robot: a black cross.
             chart

@@ -67,14 +67,25 @@ fn reason_index(r: RejectReason) -> usize {
     }
 }
 
-pub const REJECT_NAMES: [&str; 5] = ["not_finite", "too_fast", "wrong_robot", "wrong_tick", "bad_radio_report"];
+pub const REJECT_NAMES: [&str; 5] = [
+    "not_finite",
+    "too_fast",
+    "wrong_robot",
+    "wrong_tick",
+    "bad_radio_report",
+];
 
 impl World {
     pub fn new(sc: &Scenario) -> Result<World, String> {
         let mut rng = swarm::behaviour::robot_rng(sc.run.seed, u32::MAX, 1);
         let start = place_robots(sc, &mut rng)?;
         let n = start.len();
-        let grid = PointGrid::new(static_points(sc), sc.arena.width, sc.arena.height, sc.robot.sensing_radius.max(10.0));
+        let grid = PointGrid::new(
+            static_points(sc),
+            sc.arena.width,
+            sc.arena.height,
+            sc.robot.sensing_radius.max(10.0),
+        );
         let traj_every = (sc.run.max_ticks / 2000).max(1);
         Ok(World {
             sc: sc.clone(),
@@ -110,7 +121,11 @@ impl World {
     }
 
     pub fn live_robots(&self) -> impl Iterator<Item = u32> + '_ {
-        self.alive.iter().enumerate().filter(|(_, a)| **a).map(|(i, _)| i as u32)
+        self.alive
+            .iter()
+            .enumerate()
+            .filter(|(_, a)| **a)
+            .map(|(i, _)| i as u32)
     }
 
     /// The run will end after this tick; Sense frames say so.
@@ -124,15 +139,34 @@ impl World {
         let p = self.poses[i];
         out.tick = self.tick;
         out.robot = i as u32;
-        out.run_state = if self.stopping { RUN_STOPPING } else { RUN_RUNNING };
+        out.run_state = if self.stopping {
+            RUN_STOPPING
+        } else {
+            RUN_RUNNING
+        };
         out.pos = [p[0], p[1]];
         out.heading = p[2];
         out.vel = self.vel[i];
         out.alive_robots = self.alive_count();
         out.n_signals = 0;
         let link_range = self.sc.radio.comm_radius + self.sc.radio.link_margin;
-        fill_neighbours(i, &self.poses, &self.alive, link_range, self.sc.radio.max_links as usize, &mut self.scratch, out);
-        fill_obstacles(&self.grid, &self.dead_points, [p[0], p[1]], self.sc.robot.sensing_radius, &mut self.scratch, out);
+        fill_neighbours(
+            i,
+            &self.poses,
+            &self.alive,
+            link_range,
+            self.sc.radio.max_links as usize,
+            &mut self.scratch,
+            out,
+        );
+        fill_obstacles(
+            &self.grid,
+            &self.dead_points,
+            [p[0], p[1]],
+            self.sc.robot.sensing_radius,
+            &mut self.scratch,
+            out,
+        );
     }
 
     /// Marks a robot dead from the current tick on: it stands still as an obstacle.
@@ -144,8 +178,16 @@ impl World {
         self.alive[i] = false;
         self.vel[i] = [0.0; 2];
         self.dead_points.push([self.poses[i][0], self.poses[i][1]]);
-        self.faults.push(Fault { robot, tick: self.tick, cause: cause.to_string(), detection_ms });
-        self.pending_events.push(Event::RobotDied { robot, cause: cause.to_string() });
+        self.faults.push(Fault {
+            robot,
+            tick: self.tick,
+            cause: cause.to_string(),
+            detection_ms,
+        });
+        self.pending_events.push(Event::RobotDied {
+            robot,
+            cause: cause.to_string(),
+        });
     }
 
     fn validate(&self, i: usize, a: &Action) -> Result<(), RejectReason> {
@@ -158,7 +200,9 @@ impl World {
         if !a.vel[0].is_finite() || !a.vel[1].is_finite() {
             return Err(RejectReason::NotFinite);
         }
-        if (a.vel[0] * a.vel[0] + a.vel[1] * a.vel[1]).sqrt() > self.sc.robot.v_max * (1.0 + SPEED_TOLERANCE) {
+        if (a.vel[0] * a.vel[0] + a.vel[1] * a.vel[1]).sqrt()
+            > self.sc.robot.v_max * (1.0 + SPEED_TOLERANCE)
+        {
             return Err(RejectReason::TooFast);
         }
         Ok(())
@@ -198,7 +242,9 @@ impl World {
         let mut in_range_sent = 0u64;
         // Radio accounting first, on the positions of tick k (those the senders reported).
         for i in 0..self.n {
-            let Some(a) = actions.get(i).copied().flatten() else { continue };
+            let Some(a) = actions.get(i).copied().flatten() else {
+                continue;
+            };
             if a.robot as usize != i || a.tick != k {
                 continue;
             }
@@ -217,7 +263,10 @@ impl World {
                     radio.offered += live.saturating_sub(1);
                     let within = (0..self.n)
                         .filter(|&j| j != i && self.alive[j])
-                        .filter(|&j| distance(me, [self.poses[j][0], self.poses[j][1]]) <= self.sc.radio.comm_radius)
+                        .filter(|&j| {
+                            distance(me, [self.poses[j][0], self.poses[j][1]])
+                                <= self.sc.radio.comm_radius
+                        })
                         .count() as u64;
                     in_range_sent += within;
                     radio.dropped_range += live.saturating_sub(1) - within;
@@ -227,7 +276,8 @@ impl World {
                     if j < self.n
                         && j != i
                         && self.alive[j]
-                        && distance(me, [self.poses[j][0], self.poses[j][1]]) <= self.sc.radio.comm_radius
+                        && distance(me, [self.poses[j][0], self.poses[j][1]])
+                            <= self.sc.radio.comm_radius
                     {
                         in_range_sent += 1;
                     } else {
@@ -238,7 +288,10 @@ impl World {
         }
         // Messages sent at k - 1 - delay are due now: what no receiver reported went unlinked.
         let delay = self.sc.radio.delay_ticks as u64;
-        self.in_flight.push_back(InFlight { tick: k, in_range: in_range_sent });
+        self.in_flight.push_back(InFlight {
+            tick: k,
+            in_range: in_range_sent,
+        });
         if let Some(front) = self.in_flight.front() {
             if front.tick + 1 + delay == k {
                 let f = self.in_flight.pop_front().expect("front");
@@ -261,7 +314,10 @@ impl World {
                 continue;
             }
             if a.events != 0 {
-                events.push(Event::Declared { robot: i as u32, flags: a.events });
+                events.push(Event::Declared {
+                    robot: i as u32,
+                    flags: a.events,
+                });
             }
             let p = Vec2::new(self.poses[i][0], self.poses[i][1]);
             let (q, blocked) = self.clip_move(p, v2(a.vel));
@@ -271,13 +327,17 @@ impl World {
             }
             let moved = q - p;
             self.distance_travelled += moved.norm();
-            let heading = if moved.norm() > 0.0 { moved.y.atan2(moved.x) } else { self.poses[i][2] };
+            let heading = if moved.norm() > 0.0 {
+                moved.y.atan2(moved.x)
+            } else {
+                self.poses[i][2]
+            };
             self.poses[i] = [q.x, q.y, heading];
             self.coverage.visit([q.x, q.y]);
             self.vel[i] = [moved.x, moved.y];
         }
         self.radio.add(&radio);
-        if (k + 1) % self.traj_every == 0 {
+        if (k + 1).is_multiple_of(self.traj_every) {
             for i in 0..self.n {
                 self.trajectories[i].push([self.poses[i][0], self.poses[i][1]]);
             }
@@ -294,7 +354,10 @@ impl World {
 
     fn reject(&mut self, events: &mut Vec<Event>, i: usize, r: RejectReason) {
         self.rejected[reason_index(r)] += 1;
-        events.push(Event::ActionRejected { robot: i as u32, reason: r });
+        events.push(Event::ActionRejected {
+            robot: i as u32,
+            reason: r,
+        });
     }
 
     /// Closes the radio books at the end of the run: what is still in flight.
@@ -360,9 +423,16 @@ mod tests {
         acts[1].as_mut().unwrap().vel = [-10.0, 0.0];
         w.apply(&acts);
         // The block's left edge crosses y = 260 at x = 294.545...: the robot stops 0.5 short.
-        assert!((w.poses[0][0] - (300.0 - 600.0 / 110.0 - 0.5)).abs() < 1e-9, "{:?}", w.poses[0]);
+        assert!(
+            (w.poses[0][0] - (300.0 - 600.0 / 110.0 - 0.5)).abs() < 1e-9,
+            "{:?}",
+            w.poses[0]
+        );
         let block = &w.sc.arena.obstacles[0].points;
-        assert!(!swarm::geometry::point_in_polygon(v2([w.poses[0][0], w.poses[0][1]]), block));
+        assert!(!swarm::geometry::point_in_polygon(
+            v2([w.poses[0][0], w.poses[0][1]]),
+            block
+        ));
         assert!(w.poses[1][0] >= 0.0, "{:?}", w.poses[1]);
         assert_eq!(w.blocked_moves, 2);
     }
@@ -373,11 +443,13 @@ mod tests {
         w.poses[1] = [50.0, 50.0, 0.0];
         w.poses[0] = [60.0, 50.0, 0.0];
         w.mark_dead(1, "test", None);
-        let acts: Vec<Option<Action>> = (0..5).map(|i| {
-            let mut a = Action::idle(0, i);
-            a.vel = [1.0, 0.0];
-            Some(a)
-        }).collect();
+        let acts: Vec<Option<Action>> = (0..5)
+            .map(|i| {
+                let mut a = Action::idle(0, i);
+                a.vel = [1.0, 0.0];
+                Some(a)
+            })
+            .collect();
         w.apply(&acts);
         assert_eq!(&w.poses[1][..2], &[50.0, 50.0]);
         let mut s = Sense::zeroed();
@@ -407,6 +479,13 @@ mod tests {
         acts[2].as_mut().unwrap().radio_delivered = 1;
         acts[3].as_mut().unwrap().radio_dropped_loss = 1;
         let rec = w.apply(&acts);
-        assert_eq!((rec.radio.delivered, rec.radio.dropped_loss, rec.radio.dropped_unlinked), (2, 1, 0));
+        assert_eq!(
+            (
+                rec.radio.delivered,
+                rec.radio.dropped_loss,
+                rec.radio.dropped_unlinked
+            ),
+            (2, 1, 0)
+        );
     }
 }

@@ -1,5 +1,6 @@
 //! Behaviours, chosen by the scenario's `run.behaviour`.
 
+pub mod faulty;
 pub mod roam;
 
 use swarm::scenario::Scenario;
@@ -15,6 +16,7 @@ pub trait BehaviourVisitor {
 pub fn dispatch<V: BehaviourVisitor>(sc: &Scenario, v: V) -> V::Out {
     match sc.run.behaviour.as_str() {
         "roam" => v.visit(&|i| roam::Roam::new(sc, i)),
+        "faulty" => v.visit(&|i| faulty::Faulty::new(sc, i)),
         other => panic!("unknown behaviour {other:?} (the scenario was not validated)"),
     }
 }

@@ -71,7 +71,13 @@ impl Behaviour for Roam {
             self.heading = f[1].atan2(f[0]);
         }
         // V_if(t+1) = V_max (cos angle(f), sin angle(f)).
-        Command { vel: [self.v_max * self.heading.cos(), self.v_max * self.heading.sin()], events: 0 }
+        Command {
+            vel: [
+                self.v_max * self.heading.cos(),
+                self.v_max * self.heading.sin(),
+            ],
+            events: 0,
+        }
     }
 }
 
@@ -80,7 +86,14 @@ mod tests {
     use super::*;
 
     fn received(from: u32, pos: [f64; 2]) -> Received<Beacon> {
-        Received { from, tick: 0, seq: 1, sender_pos: pos, unicast: false, msg: Beacon { pos } }
+        Received {
+            from,
+            tick: 0,
+            seq: 1,
+            sender_pos: pos,
+            unicast: false,
+            msg: Beacon { pos },
+        }
     }
 
     #[test]
@@ -89,13 +102,21 @@ mod tests {
         let mut r = Roam::new(&sc, 0);
         let mut s = Sense::zeroed();
         s.pos = [500.0, 500.0];
-        let inbox = vec![received(1, [490.0, 500.0]), received(2, [500.0, 490.0]), received(3, [560.0, 560.0])];
+        let inbox = vec![
+            received(1, [490.0, 500.0]),
+            received(2, [500.0, 490.0]),
+            received(3, [560.0, 560.0]),
+        ];
         let mut out = Outbox::new_for_tests(4);
         let c = r.step(&s, &inbox, &mut out);
         let speed = (c.vel[0].powi(2) + c.vel[1].powi(2)).sqrt();
         assert!((speed - 10.0).abs() < 1e-9);
         // Away from (490,500) and (500,490): up and to the right, at 45 degrees.
-        assert!((c.vel[0] - c.vel[1]).abs() < 1e-9 && c.vel[0] > 0.0, "{:?}", c.vel);
+        assert!(
+            (c.vel[0] - c.vel[1]).abs() < 1e-9 && c.vel[0] > 0.0,
+            "{:?}",
+            c.vel
+        );
     }
 
     #[test]

@@ -1,0 +1,175 @@
+//! Faults with real processes and real signals: SIGKILL of an agent mid-run, Ctrl-C on the
+//! orchestrator, a misbehaving agent, two runs at once.
+
+use e2e::*;
+use std::path::Path;
+use std::process::{Child, Command, Stdio};
+use std::time::{Duration, Instant};
+
+fn spawn_up(args: &[&str], out: &Path) -> Child {
+    Command::new(orchestrator())
+        .arg("up")
+        .arg("--quiet")
+        .arg("--out")
+        .arg(out)
+        .args(args)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("spawn orchestrator")
+}
+
+/// The registry entry of the run writing to `out`, once all its agents are started.
+fn registry_entry(out: &Path, robots: usize) -> serde_json::Value {
+    let t = Instant::now();
+    loop {
+        assert!(
+            t.elapsed() < Duration::from_secs(30),
+            "run never registered its agents"
+        );
+        for e in std::fs::read_dir("/tmp/swarm-runtime/runs")
+            .into_iter()
+            .flatten()
+            .flatten()
+        {
+            let Ok(s) = std::fs::read_to_string(e.path()) else {
+                continue;
+            };
+            let Ok(v) = serde_json::from_str::<serde_json::Value>(&s) else {
+                continue;
+            };
+            if v["run_dir"].as_str() == Some(&out.display().to_string())
+                && v["agent_pids"].as_array().map(|a| a.len()) == Some(robots)
+            {
+                return v;
+            }
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+}
+
+fn wait_with_timeout(mut c: Child, limit: Duration) -> std::process::Output {
+    let t = Instant::now();
+    while c.try_wait().unwrap().is_none() {
+        if t.elapsed() > limit {
+            let _ = c.kill();
+            panic!("orchestrator did not finish within {limit:?}");
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    c.wait_with_output().unwrap()
+}
+
+#[test]
+fn sigkill_of_an_agent_is_survived_and_reported() {
+    let _g = serial();
+    let out = tmp_dir("kill9");
+    let child = spawn_up(&["--robots", "10", "--max-ticks", "2500"], &out);
+    let entry = registry_entry(&out, 10);
+    // Agents carry their robot id in argv.
+    let pid = entry["agent_pids"][3].as_u64().unwrap() as i32;
+    let cmdline = String::from_utf8_lossy(&std::fs::read(format!("/proc/{pid}/cmdline")).unwrap())
+        .into_owned();
+    assert!(cmdline.contains("--robot\u{0}3\u{0}"), "{cmdline:?}");
+    std::thread::sleep(Duration::from_millis(400));
+    // SAFETY: SIGKILL to the agent process of this test's run.
+    assert_eq!(unsafe { libc::kill(pid, libc::SIGKILL) }, 0);
+    let o = wait_with_timeout(child, Duration::from_secs(120));
+    assert!(o.status.success(), "exit {:?}: {}", o.status, stderr(&o));
+    let s = summary(&out);
+    assert_eq!(s["ticks"], 2500, "the run finished");
+    assert_eq!(s["alive_at_end"], 9);
+    let faults = s["faults"].as_array().unwrap();
+    assert_eq!(faults.len(), 1, "{faults:?}");
+    assert_eq!(faults[0]["robot"], 3);
+    let tick = faults[0]["tick"].as_u64().unwrap();
+    assert!(tick > 0 && tick < 2500, "fault tick {tick}");
+    // From that tick on robot 3 stands still and is recorded dead.
+    let (_, ticks) =
+        swarm::recording::read_recording(std::fs::File::open(out.join("recording.bin")).unwrap())
+            .unwrap();
+    let at = ticks[tick as usize].poses[3];
+    for t in &ticks[tick as usize..] {
+        assert_eq!(t.alive[3], 0);
+        assert_eq!(t.poses[3], at);
+    }
+    assert_eq!(ticks[tick as usize - 1].alive[3], 1);
+    assert_left_nothing(&out);
+}
+
+#[test]
+fn ctrl_c_ends_the_run_cleanly() {
+    let _g = serial();
+    let out = tmp_dir("sigint");
+    let child = spawn_up(&["--robots", "6", "--max-ticks", "1000000"], &out);
+    registry_entry(&out, 6);
+    std::thread::sleep(Duration::from_millis(500));
+    // SAFETY: SIGINT to our own child, as Ctrl-C in a terminal would.
+    unsafe {
+        libc::kill(child.id() as i32, libc::SIGINT);
+    }
+    let o = wait_with_timeout(child, Duration::from_secs(30));
+    assert!(o.status.success(), "exit {:?}: {}", o.status, stderr(&o));
+    let s = summary(&out);
+    assert_eq!(s["end"], "interrupted");
+    assert!(s["ticks"].as_u64().unwrap() > 0 && s["ticks"].as_u64().unwrap() < 1_000_000);
+    assert_left_nothing(&out);
+}
+
+#[test]
+fn a_misbehaving_agent_is_rejected_counted_and_the_world_carries_on() {
+    let _g = serial();
+    let out = tmp_dir("faulty");
+    let dir = tmp_dir("faulty-sc");
+    std::fs::create_dir_all(&dir).unwrap();
+    let sc = dir.join("faulty.toml");
+    std::fs::write(&sc, "[run]\nbehaviour = \"faulty\"\n").unwrap();
+    let o = up(
+        &[
+            "--scenario",
+            sc.to_str().unwrap(),
+            "--robots",
+            "5",
+            "--max-ticks",
+            "60",
+        ],
+        &out,
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let s = summary(&out);
+    let r = &s["rejected_actions"];
+    // Ticks 9,19,..,59: NaN at 9,39; inf at 19,49; too fast at 29,59; each by all 5 robots.
+    assert_eq!(r["not_finite"], 20, "{r}");
+    assert_eq!(r["too_fast"], 10, "{r}");
+    assert_eq!(s["ticks"], 60);
+    assert_eq!(s["alive_at_end"], 5);
+    assert_left_nothing(&out);
+}
+
+#[test]
+fn two_concurrent_runs_do_not_see_each_other() {
+    let _g = serial();
+    let a = tmp_dir("conc-a");
+    let b = tmp_dir("conc-b");
+    let solo = tmp_dir("conc-solo");
+    let args = ["--robots", "8", "--max-ticks", "300", "--seed", "5"];
+    let ca = spawn_up(&args, &a);
+    let cb = spawn_up(&args, &b);
+    let oa = wait_with_timeout(ca, Duration::from_secs(120));
+    let ob = wait_with_timeout(cb, Duration::from_secs(120));
+    assert!(
+        oa.status.success() && ob.status.success(),
+        "{} {}",
+        stderr(&oa),
+        stderr(&ob)
+    );
+    assert_ne!(summary(&a)["run_id"], summary(&b)["run_id"]);
+    let o = up(&args, &solo);
+    assert!(o.status.success());
+    let rec = |d: &Path| std::fs::read(d.join("recording.bin")).unwrap();
+    // Same seed: had they seen each other's robots or messages, they would differ.
+    assert!(rec(&a) == rec(&solo) && rec(&b) == rec(&solo));
+    assert_eq!(summary(&a)["messages"], summary(&solo)["messages"]);
+    assert_left_nothing(&a);
+    assert_left_nothing(&b);
+}
