@@ -1,17 +1,383 @@
-//! `orchestrator bench` (filled in below).
-use clap::Args;
+//! `orchestrator bench tick`: the runtime's lock-step tick next to a raw iceoryx2 round and the
+//! futex floor, all measured in the same run on the same machine.
+//!
+//! - runtime: `up` with the default scenario (processes executor), N robots, T ticks;
+//! - iox2 round: N child processes; per round 1 notify to N listeners, N notifications back,
+//!   no work (the spec's Appendix A harness);
+//! - futex floor: N child processes released by one futex word (one FUTEX_WAKE for all) and
+//!   counting themselves back through the same `TickBarrier` the runtime uses, no work.
+
+use crate::processes;
+use clap::{Args, Subcommand};
+use iceoryx2::prelude::*;
+use serde::Serialize;
+use std::path::PathBuf;
+use std::process::{Child, Command, Stdio};
+use std::time::{Duration, Instant};
+use swarm::barrier::{TickBarrier, Wake};
+use swarm::scenario::Scenario;
+use swarm::{cleanup, transport};
+use world::output::percentile;
 
 #[derive(Args, Debug)]
-pub struct BenchArgs {}
-
-#[derive(Args, Debug)]
-pub struct ChildArgs {}
-
-pub fn bench(_a: BenchArgs) -> i32 {
-    eprintln!("not yet");
-    1
+pub struct BenchArgs {
+    #[command(subcommand)]
+    what: BenchWhat,
 }
 
-pub fn child(_a: ChildArgs) -> i32 {
-    1
+#[derive(Subcommand, Debug)]
+enum BenchWhat {
+    /// Lock-step tick rate: runtime vs raw iceoryx2 round vs futex floor.
+    Tick {
+        /// Swarm sizes, comma separated.
+        #[arg(long, value_delimiter = ',', default_value = "10,50,100")]
+        robots: Vec<u32>,
+        /// Ticks (rounds) measured per size.
+        #[arg(long, default_value_t = 2000)]
+        ticks: u64,
+        /// Also write the table as JSON.
+        #[arg(long)]
+        json: Option<PathBuf>,
+    },
+}
+
+#[derive(Args, Debug)]
+pub struct ChildArgs {
+    /// iox2 or futex
+    kind: String,
+    #[arg(long)]
+    prefix: String,
+    #[arg(long)]
+    index: u32,
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct Row {
+    pub robots: u32,
+    pub runtime_ticks_per_s: f64,
+    pub runtime_p50_us: f64,
+    pub runtime_p99_us: f64,
+    pub iox2_rounds_per_s: f64,
+    pub iox2_p50_us: f64,
+    pub iox2_p99_us: f64,
+    pub futex_rounds_per_s: f64,
+    pub futex_p50_us: f64,
+    pub futex_p99_us: f64,
+}
+
+struct Stats {
+    per_s: f64,
+    p50_us: f64,
+    p99_us: f64,
+}
+
+fn stats(mut ns: Vec<u64>) -> Stats {
+    let total: u64 = ns.iter().sum();
+    ns.sort_unstable();
+    Stats {
+        per_s: ns.len() as f64 / (total as f64 / 1e9),
+        p50_us: percentile(&ns, 0.5) / 1e3,
+        p99_us: percentile(&ns, 0.99) / 1e3,
+    }
+}
+
+pub fn bench(a: BenchArgs) -> i32 {
+    match a.what {
+        BenchWhat::Tick { robots, ticks, json } => match bench_tick(&robots, ticks) {
+            Ok(rows) => {
+                print_table(&rows, ticks);
+                if let Some(p) = json {
+                    if let Err(e) = std::fs::write(&p, serde_json::to_string_pretty(&rows).expect("json")) {
+                        eprintln!("error: {}: {e}", p.display());
+                        return 1;
+                    }
+                }
+                0
+            }
+            Err(e) => {
+                eprintln!("error: bench tick: {e}");
+                1
+            }
+        },
+    }
+}
+
+fn print_table(rows: &[Row], ticks: u64) {
+    println!("lock-step tick, {ticks} ticks per size (default scenario for the runtime; no work for the others)");
+    println!(
+        "{:>6} | {:>10} {:>8} {:>8} | {:>10} {:>8} {:>8} | {:>10} {:>8} {:>8} | {:>9} {:>9}",
+        "robots", "runtime/s", "p50 us", "p99 us", "iox2 rd/s", "p50 us", "p99 us", "futex rd/s", "p50 us", "p99 us", "rt/iox2", "rt/futex"
+    );
+    for r in rows {
+        println!(
+            "{:>6} | {:>10.0} {:>8.0} {:>8.0} | {:>10.0} {:>8.0} {:>8.0} | {:>10.0} {:>8.0} {:>8.0} | {:>8.2}x {:>8.2}x",
+            r.robots,
+            r.runtime_ticks_per_s,
+            r.runtime_p50_us,
+            r.runtime_p99_us,
+            r.iox2_rounds_per_s,
+            r.iox2_p50_us,
+            r.iox2_p99_us,
+            r.futex_rounds_per_s,
+            r.futex_p50_us,
+            r.futex_p99_us,
+            r.iox2_rounds_per_s / r.runtime_ticks_per_s,
+            r.futex_rounds_per_s / r.runtime_ticks_per_s,
+        );
+    }
+    println!("rt/iox2 = runtime tick time / raw iceoryx2 round time (mean); below 1 means faster than the raw round.");
+}
+
+fn bench_tick(sizes: &[u32], ticks: u64) -> Result<Vec<Row>, String> {
+    let mut rows = Vec::new();
+    for &n in sizes {
+        let rt = runtime(n, ticks)?;
+        let iox = raw_iox2(n, ticks)?;
+        let fx = futex_floor(n, ticks)?;
+        rows.push(Row {
+            robots: n,
+            runtime_ticks_per_s: rt.per_s,
+            runtime_p50_us: rt.p50_us,
+            runtime_p99_us: rt.p99_us,
+            iox2_rounds_per_s: iox.per_s,
+            iox2_p50_us: iox.p50_us,
+            iox2_p99_us: iox.p99_us,
+            futex_rounds_per_s: fx.per_s,
+            futex_p50_us: fx.p50_us,
+            futex_p99_us: fx.p99_us,
+        });
+    }
+    Ok(rows)
+}
+
+/// The runtime itself: the default scenario with N robots for `ticks` ticks (+ warm-up).
+fn runtime(n: u32, ticks: u64) -> Result<Stats, String> {
+    let mut sc = Scenario::default();
+    sc.run.robots = n;
+    let warmup = (ticks / 20).max(10);
+    sc.run.max_ticks = ticks + warmup;
+    sc.validate(&|_| "bench".into()).map_err(|e| e.to_string())?;
+    let run_id = crate::runid::new_run_id();
+    let dir = std::env::temp_dir().join(format!("swarm-bench-{run_id}"));
+    let out = processes::run(processes::ProcessRun { sc: &sc, run_id: &run_id, run_dir: &dir, on_status: &mut |_| {} })?;
+    if out.world_exit != Ok(0) {
+        return Err(format!("runtime run failed: {:?}", out.world_exit));
+    }
+    let s: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).map_err(|e| e.to_string())?)
+            .map_err(|e| e.to_string())?;
+    let _ = std::fs::remove_dir_all(&dir);
+    Ok(Stats {
+        per_s: s["steady_ticks_per_second"].as_f64().unwrap_or(0.0),
+        p50_us: s["tick_time"]["p50_us"].as_f64().unwrap_or(0.0),
+        p99_us: s["tick_time"]["p99_us"].as_f64().unwrap_or(0.0),
+    })
+}
+
+fn spawn_children(kind: &str, prefix: &str, n: u32) -> Result<Vec<Child>, String> {
+    let exe = std::env::current_exe().map_err(|e| e.to_string())?;
+    (0..n)
+        .map(|i| {
+            Command::new(&exe)
+                .args(["__bench-child", kind, "--prefix", prefix, "--index", &i.to_string()])
+                .stdin(Stdio::null())
+                .process_group(0)
+                .spawn()
+                .map_err(|e| format!("spawn bench child: {e}"))
+        })
+        .collect()
+}
+
+use std::os::unix::process::CommandExt;
+
+fn reap_children(children: Vec<Child>) {
+    for mut c in children {
+        let t = Instant::now();
+        while c.try_wait().ok().flatten().is_none() {
+            if t.elapsed() > Duration::from_secs(2) {
+                let _ = c.kill();
+                let _ = c.wait();
+                break;
+            }
+            std::thread::sleep(Duration::from_millis(1));
+        }
+    }
+}
+
+fn bench_prefix(kind: &str) -> String {
+    transport::prefix_for(&format!("bench-{kind}-{}", crate::runid::new_run_id()))
+}
+
+fn iox2_services(
+    node: &Node<ipc::Service>,
+    n: usize,
+) -> Result<
+    (
+        iceoryx2::service::port_factory::event::PortFactory<ipc::Service>,
+        iceoryx2::service::port_factory::event::PortFactory<ipc::Service>,
+    ),
+    String,
+> {
+    let e = |x: &dyn std::fmt::Debug| format!("{x:?}");
+    let down = node
+        .service_builder(&"bench/down".try_into().map_err(|x| e(&x))?)
+        .event()
+        .max_listeners(n + 2)
+        .max_notifiers(2)
+        .max_nodes(n + 4)
+        .open_or_create()
+        .map_err(|x| e(&x))?;
+    let up = node
+        .service_builder(&"bench/up".try_into().map_err(|x| e(&x))?)
+        .event()
+        .max_listeners(2)
+        .max_notifiers(n + 2)
+        .max_nodes(n + 4)
+        .open_or_create()
+        .map_err(|x| e(&x))?;
+    Ok((down, up))
+}
+
+/// 1 notify to N listeners, N notifications back.
+fn raw_iox2(n: u32, rounds: u64) -> Result<Stats, String> {
+    let prefix = bench_prefix("iox2");
+    let result = (|| {
+        let config = transport::run_config(&prefix).map_err(|e| e.to_string())?;
+        let node = transport::node(&config, "bench-parent").map_err(|e| e.to_string())?;
+        let (down, up) = iox2_services(&node, n as usize)?;
+        let notifier = down.notifier_builder().create().map_err(|e| format!("{e:?}"))?;
+        let listener = up.listener_builder().create().map_err(|e| format!("{e:?}"))?;
+        let children = spawn_children("iox2", &prefix, n)?;
+        let t = Instant::now();
+        while up.dynamic_config().number_of_notifiers() < n as usize {
+            if t.elapsed() > Duration::from_secs(60) {
+                return Err("bench children did not attach".to_string());
+            }
+            std::thread::sleep(Duration::from_millis(5));
+        }
+        let mut ns = Vec::with_capacity(rounds as usize);
+        let warm = (rounds / 20).max(10);
+        for r in 0..rounds + warm {
+            let t = Instant::now();
+            notifier.notify().map_err(|e| format!("{e:?}"))?;
+            let mut got = 0u64;
+            while got < n as u64 {
+                listener
+                    .timed_wait(|ev| got += ev.count as u64, Duration::from_secs(5))
+                    .map_err(|e| format!("{e:?}"))?;
+            }
+            if r >= warm {
+                ns.push(t.elapsed().as_nanos() as u64);
+            }
+        }
+        drop(notifier);
+        reap_children(children);
+        Ok(stats(ns))
+    })();
+    cleanup::remove_run(&prefix);
+    result
+}
+
+/// N processes released by one futex word and counting themselves back.
+fn futex_floor(n: u32, rounds: u64) -> Result<Stats, String> {
+    let prefix = bench_prefix("futex");
+    let result = (|| {
+        let b = TickBarrier::create(&prefix, n).map_err(|e| e.to_string())?;
+        let children = spawn_children("futex", &prefix, n)?;
+        let t = Instant::now();
+        while b.ready_count() < n {
+            if t.elapsed() > Duration::from_secs(60) {
+                return Err("bench children did not attach".to_string());
+            }
+            std::thread::sleep(Duration::from_millis(5));
+        }
+        let mut ns = Vec::with_capacity(rounds as usize);
+        let warm = (rounds / 20).max(10);
+        for k in 0..rounds + warm {
+            let t = Instant::now();
+            b.release(k, n);
+            while !(0..n).all(|i| b.acked(i, k)) {
+                b.wait_acks(Duration::from_secs(5));
+            }
+            if k >= warm {
+                ns.push(t.elapsed().as_nanos() as u64);
+            }
+        }
+        b.shutdown();
+        reap_children(children);
+        Ok(stats(ns))
+    })();
+    swarm::barrier::unlink(&prefix);
+    cleanup::remove_run(&prefix);
+    result
+}
+
+/// A benchmark child: does no work, only takes part in the rounds.
+pub fn child(a: ChildArgs) -> i32 {
+    // SAFETY: prctl with constant arguments: die with the bench parent.
+    unsafe {
+        libc::prctl(libc::PR_SET_PDEATHSIG, libc::SIGKILL);
+    }
+    match a.kind.as_str() {
+        "futex" => {
+            let Ok(b) = TickBarrier::open(&a.prefix) else { return 1 };
+            b.mark_ready();
+            let mut done = 0;
+            loop {
+                match b.wait_release(done, Duration::from_millis(500)) {
+                    Wake::Tick(k) => {
+                        b.ack(a.index, k);
+                        done = k + 1;
+                    }
+                    Wake::Shutdown => return 0,
+                    Wake::Timeout => {}
+                }
+            }
+        }
+        "iox2" => {
+            let run = || -> Result<(), String> {
+                let config = transport::run_config(&a.prefix).map_err(|e| e.to_string())?;
+                let node = transport::node(&config, &format!("bench-{}", a.index)).map_err(|e| e.to_string())?;
+                let down = node
+                    .service_builder(&"bench/down".try_into().map_err(|e| format!("{e:?}"))?)
+                    .event()
+                    .open()
+                    .map_err(|e| format!("{e:?}"))?;
+                let up = node
+                    .service_builder(&"bench/up".try_into().map_err(|e| format!("{e:?}"))?)
+                    .event()
+                    .open()
+                    .map_err(|e| format!("{e:?}"))?;
+                let listener = down.listener_builder().create().map_err(|e| format!("{e:?}"))?;
+                // The reply notifier last: the parent counts notifiers to know we are ready.
+                let notifier = up.notifier_builder().create().map_err(|e| format!("{e:?}"))?;
+                loop {
+                    let mut k = 0u64;
+                    listener
+                        .timed_wait(|ev| k += ev.count as u64, Duration::from_millis(500))
+                        .map_err(|e| format!("{e:?}"))?;
+                    if k == 0 {
+                        // No round for a while: is the service still there (parent alive)?
+                        if down.dynamic_config().number_of_notifiers() == 0 {
+                            return Ok(());
+                        }
+                    }
+                    for _ in 0..k {
+                        notifier.notify().map_err(|e| format!("{e:?}"))?;
+                    }
+                }
+            };
+            match run() {
+                Ok(()) => 0,
+                Err(e) => {
+                    eprintln!("bench child {}: {e}", a.index);
+                    1
+                }
+            }
+        }
+        other => {
+            eprintln!("unknown bench child kind {other:?}: allowed iox2, futex");
+            2
+        }
+    }
 }

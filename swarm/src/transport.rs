@@ -89,11 +89,15 @@ pub const STATUS_NAME: &str = "world/state";
 pub const CONTROL_NAME: &str = "run/control";
 
 /// Slack for a restarted agent whose dead predecessor's ports are not cleaned yet.
-const RESTART_SLACK: usize = 2;
+const RESTART_SLACK: usize = 1;
 
-/// Subscribers one radio service must admit.
+/// Subscribers one radio service must admit. Each agent holds at most radio.max_links links,
+/// but the robots linked to one sender are bounded only by the swarm (links linger, and
+/// "among my nearest max_links" is not symmetric). A subscription refused for capacity would
+/// make delivery depend on timing, so every robot can always link to every other one. The
+/// data segment is sized for it, but only the slots in use are ever touched.
 pub fn radio_max_subscribers(sc: &Scenario) -> usize {
-    (sc.radio.max_links as usize).min(sc.run.robots as usize) + RESTART_SLACK
+    (sc.run.robots as usize).saturating_sub(1).max(1) + RESTART_SLACK
 }
 
 /// Radio messages that can wait in one link's buffer: this tick's and the next's.

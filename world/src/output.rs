@@ -50,6 +50,9 @@ pub struct Summary {
     pub wall_seconds: f64,
     pub startup_seconds: f64,
     pub ticks_per_second: f64,
+    /// Ticks per second after the warm-up (the first max(10, 5 %) ticks, which include making
+    /// the initial radio links).
+    pub steady_ticks_per_second: f64,
     pub tick_time: TickTimes,
     pub messages: RadioCounters,
     pub rejected_actions: BTreeMap<String, u64>,
@@ -97,6 +100,10 @@ impl RunOutputs {
     ) -> std::io::Result<Summary> {
         self.rec.take().expect("open").finish()?;
         world.finish_radio();
+        let warmup = (timing.tick_ns.len() / 20).max(10).min(timing.tick_ns.len());
+        let steady_ns: u64 = timing.tick_ns[warmup..].iter().sum();
+        let steady_ticks_per_second =
+            if steady_ns > 0 { (timing.tick_ns.len() - warmup) as f64 / (steady_ns as f64 / 1e9) } else { 0.0 };
         let mut sorted = timing.tick_ns.clone();
         sorted.sort_unstable();
         let ticks = world.tick;
@@ -116,6 +123,7 @@ impl RunOutputs {
             } else {
                 0.0
             },
+            steady_ticks_per_second,
             tick_time: TickTimes {
                 p50_us: percentile(&sorted, 0.5) / 1e3,
                 p99_us: percentile(&sorted, 0.99) / 1e3,
