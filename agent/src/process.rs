@@ -101,11 +101,28 @@ fn run_loop<B: Behaviour>(args: &AgentArgs, mut rt: AgentRuntime<B>) -> Result<i
         failures: 0,
     };
     let debug = std::env::var_os("SWARM_DEBUG_TIMING").is_some();
+    let mut busy: Vec<std::time::Duration> = Vec::new();
+    let mut drain_t: Vec<std::time::Duration> = Vec::new();
+    let mut step_t: Vec<std::time::Duration> = Vec::new();
+    let mut link_t: Vec<std::time::Duration> = Vec::new();
     let mut done = barrier.acked_up_to(robot);
     barrier.mark_ready();
     loop {
         let k = match barrier.wait_release(done, poll) {
-            Wake::Shutdown => return Ok(EXIT_OK),
+            Wake::Shutdown => {
+                if debug {
+                    let n = busy.len().max(1) as u128;
+                    eprintln!(
+                        "agent {robot}: {} ticks, mean us: busy {} drain {} step {} link {}",
+                        busy.len(),
+                        busy.iter().map(|d| d.as_micros()).sum::<u128>() / n,
+                        drain_t.iter().map(|d| d.as_micros()).sum::<u128>() / n,
+                        step_t.iter().map(|d| d.as_micros()).sum::<u128>() / n,
+                        link_t.iter().map(|d| d.as_micros()).sum::<u128>() / n,
+                    );
+                }
+                return Ok(EXIT_OK);
+            }
             Wake::Timeout => {
                 if !world_alive(world_pid) {
                     return Ok(EXIT_WORLD_GONE);
@@ -114,6 +131,7 @@ fn run_loop<B: Behaviour>(args: &AgentArgs, mut rt: AgentRuntime<B>) -> Result<i
             }
             Wake::Tick(k) => k,
         };
+        let t_wake = std::time::Instant::now();
         // The world published Sense_k before releasing tick k: read it in place.
         let mut latest = None;
         while let Some(s) = sense_sub
@@ -132,14 +150,25 @@ fn run_loop<B: Behaviour>(args: &AgentArgs, mut rt: AgentRuntime<B>) -> Result<i
             continue;
         }
         rt.begin(&sense);
-        // Drain every link: messages sent at k-1 (and any at k from faster peers).
-        for link in links.values() {
-            while let Ok(Some(m)) = link.sub.receive() {
-                rt.ingest(m.user_header(), m.payload());
+        // Take off each link exactly the messages its sender sent at k-1 (FIFO per link; any of
+        // tick k that a faster sender already sent stay for the next tick, or are taken early
+        // in their place: the runtime orders and times delivery by header, not by arrival).
+        if k > 0 {
+            for (&s, link) in links.iter() {
+                for _ in 0..barrier.sent_count(s, k - 1) {
+                    match link.sub.receive() {
+                        Ok(Some(m)) => rt.ingest(m.user_header(), m.payload()),
+                        _ => break,
+                    }
+                }
             }
         }
         let t_step = std::time::Instant::now();
+        if debug {
+            drain_t.push(t_step - t_wake);
+        }
         let action = rt.step(&sense, &mut tx);
+        barrier.record_sent(robot, k, action.n_sent);
         let t_link = std::time::Instant::now();
         let (added, removed) = rt.update_links(&sense);
         let n_added = added.len();
@@ -176,6 +205,9 @@ fn run_loop<B: Behaviour>(args: &AgentArgs, mut rt: AgentRuntime<B>) -> Result<i
             .send()
             .map_err(|e| format!("act send: {e:?}"))?;
         drop(sense);
+        if debug {
+            busy.push(t_wake.elapsed());
+        }
         barrier.ack(robot, k);
         done = k + 1;
     }

@@ -11,7 +11,10 @@
 use std::sync::atomic::{AtomicU32, AtomicU64, Ordering};
 use std::time::{Duration, Instant};
 
-const MAGIC: u64 = 0x5357_4152_4d54_4b31; // "SWARMTK1"
+const MAGIC: u64 = 0x5357_4152_4d54_4b32; // "SWARMTK2"
+
+/// Bytes of one robot's slot: ack word and two sent-count words.
+const SLOT_BYTES: usize = 24;
 
 #[repr(C)]
 struct Header {
@@ -89,7 +92,7 @@ fn futex_wake(word: &AtomicU32, n: i32) {
 
 impl TickBarrier {
     fn size_for(robots: u32) -> usize {
-        std::mem::size_of::<Header>() + 8 * robots as usize
+        std::mem::size_of::<Header>() + SLOT_BYTES * robots as usize
     }
 
     /// Creates the segment (world side). Fails if it exists.
@@ -137,7 +140,7 @@ impl TickBarrier {
                 return Err(std::io::Error::other("barrier segment too small"));
             }
             let len = st.st_size as usize;
-            let robots = ((len - std::mem::size_of::<Header>()) / 8) as u32;
+            let robots = ((len - std::mem::size_of::<Header>()) / SLOT_BYTES) as u32;
             let b = Self::map(fd, len, robots)?;
             if b.header().magic.load(Ordering::Acquire) != MAGIC {
                 return Err(std::io::Error::other("barrier segment not initialised"));
@@ -171,14 +174,34 @@ impl TickBarrier {
         unsafe { &*(self.base as *const Header) }
     }
 
-    fn slot(&self, robot: u32) -> &AtomicU64 {
+    /// Word `w` of robot `robot`'s slot: 0 = acknowledged tick + 1; 1, 2 = messages sent at
+    /// even / odd ticks, as (tick + 1) << 16 | count.
+    fn word(&self, robot: u32, w: usize) -> &AtomicU64 {
         assert!(robot < self.robots, "robot {robot} out of range");
+        let at = std::mem::size_of::<Header>() + SLOT_BYTES * robot as usize + 8 * w;
         // SAFETY: slots follow the header, 8-byte aligned, within len.
-        unsafe {
-            &*(self
-                .base
-                .add(std::mem::size_of::<Header>() + 8 * robot as usize)
-                as *const AtomicU64)
+        unsafe { &*(self.base.add(at) as *const AtomicU64) }
+    }
+
+    fn slot(&self, robot: u32) -> &AtomicU64 {
+        self.word(robot, 0)
+    }
+
+    /// Records that `robot` sent `count` radio messages at tick k (before it acknowledges k).
+    pub fn record_sent(&self, robot: u32, tick: u64, count: u32) {
+        self.word(robot, 1 + (tick % 2) as usize)
+            .store((tick + 1) << 16 | (count as u64 & 0xffff), Ordering::Release);
+    }
+
+    /// How many radio messages `robot` sent at tick k (0 if it has not recorded tick k). A
+    /// receiver takes exactly that many samples off the link: no empty receive calls, and a
+    /// silent link costs one atomic load.
+    pub fn sent_count(&self, robot: u32, tick: u64) -> u32 {
+        let v = self.word(robot, 1 + (tick % 2) as usize).load(Ordering::Acquire);
+        if v >> 16 == tick + 1 {
+            (v & 0xffff) as u32
+        } else {
+            0
         }
     }
 
