@@ -2,5 +2,6 @@
 
 pub mod behaviours;
 pub mod process;
+pub mod search;
 
 pub use behaviours::{dispatch, BehaviourVisitor};

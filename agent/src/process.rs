@@ -100,29 +100,11 @@ fn run_loop<B: Behaviour>(args: &AgentArgs, mut rt: AgentRuntime<B>) -> Result<i
         publisher: &radio_pub,
         failures: 0,
     };
-    let debug = std::env::var_os("SWARM_DEBUG_TIMING").is_some();
-    let mut busy: Vec<std::time::Duration> = Vec::new();
-    let mut drain_t: Vec<std::time::Duration> = Vec::new();
-    let mut step_t: Vec<std::time::Duration> = Vec::new();
-    let mut link_t: Vec<std::time::Duration> = Vec::new();
     let mut done = barrier.acked_up_to(robot);
     barrier.mark_ready();
     loop {
         let k = match barrier.wait_release(done, poll) {
-            Wake::Shutdown => {
-                if debug {
-                    let n = busy.len().max(1) as u128;
-                    eprintln!(
-                        "agent {robot}: {} ticks, mean us: busy {} drain {} step {} link {}",
-                        busy.len(),
-                        busy.iter().map(|d| d.as_micros()).sum::<u128>() / n,
-                        drain_t.iter().map(|d| d.as_micros()).sum::<u128>() / n,
-                        step_t.iter().map(|d| d.as_micros()).sum::<u128>() / n,
-                        link_t.iter().map(|d| d.as_micros()).sum::<u128>() / n,
-                    );
-                }
-                return Ok(EXIT_OK);
-            }
+            Wake::Shutdown => return Ok(EXIT_OK),
             Wake::Timeout => {
                 if !world_alive(world_pid) {
                     return Ok(EXIT_WORLD_GONE);
@@ -131,7 +113,6 @@ fn run_loop<B: Behaviour>(args: &AgentArgs, mut rt: AgentRuntime<B>) -> Result<i
             }
             Wake::Tick(k) => k,
         };
-        let t_wake = std::time::Instant::now();
         // The world published Sense_k before releasing tick k: read it in place.
         let mut latest = None;
         while let Some(s) = sense_sub
@@ -163,15 +144,9 @@ fn run_loop<B: Behaviour>(args: &AgentArgs, mut rt: AgentRuntime<B>) -> Result<i
                 }
             }
         }
-        let t_step = std::time::Instant::now();
-        if debug {
-            drain_t.push(t_step - t_wake);
-        }
         let action = rt.step(&sense, &mut tx);
         barrier.record_sent(robot, k, action.n_sent);
-        let t_link = std::time::Instant::now();
         let (added, removed) = rt.update_links(&sense);
-        let n_added = added.len();
         for r in removed {
             links.remove(r);
         }
@@ -190,13 +165,6 @@ fn run_loop<B: Behaviour>(args: &AgentArgs, mut rt: AgentRuntime<B>) -> Result<i
                 Err(e) => eprintln!("agent {robot}: no link to robot {r}: {e}"),
             }
         }
-        if debug && n_added > 0 {
-            eprintln!(
-                "agent {robot} tick {k}: step {:?} link {n_added} in {:?}",
-                t_link - t_step,
-                t_link.elapsed()
-            );
-        }
         let sample = act_pub
             .loan_uninit()
             .map_err(|e| format!("act loan: {e:?}"))?;
@@ -205,9 +173,6 @@ fn run_loop<B: Behaviour>(args: &AgentArgs, mut rt: AgentRuntime<B>) -> Result<i
             .send()
             .map_err(|e| format!("act send: {e:?}"))?;
         drop(sense);
-        if debug {
-            busy.push(t_wake.elapsed());
-        }
         barrier.ack(robot, k);
         done = k + 1;
     }

@@ -83,11 +83,17 @@ fn stats(mut ns: Vec<u64>) -> Stats {
 
 pub fn bench(a: BenchArgs) -> i32 {
     match a.what {
-        BenchWhat::Tick { robots, ticks, json } => match bench_tick(&robots, ticks) {
+        BenchWhat::Tick {
+            robots,
+            ticks,
+            json,
+        } => match bench_tick(&robots, ticks) {
             Ok(rows) => {
                 print_table(&rows, ticks);
                 if let Some(p) = json {
-                    if let Err(e) = std::fs::write(&p, serde_json::to_string_pretty(&rows).expect("json")) {
+                    if let Err(e) =
+                        std::fs::write(&p, serde_json::to_string_pretty(&rows).expect("json"))
+                    {
                         eprintln!("error: {}: {e}", p.display());
                         return 1;
                     }
@@ -106,7 +112,18 @@ fn print_table(rows: &[Row], ticks: u64) {
     println!("lock-step tick, {ticks} ticks per size (default scenario for the runtime; no work for the others)");
     println!(
         "{:>6} | {:>10} {:>8} {:>8} | {:>10} {:>8} {:>8} | {:>10} {:>8} {:>8} | {:>9} {:>9}",
-        "robots", "runtime/s", "p50 us", "p99 us", "iox2 rd/s", "p50 us", "p99 us", "futex rd/s", "p50 us", "p99 us", "rt/iox2", "rt/futex"
+        "robots",
+        "runtime/s",
+        "p50 us",
+        "p99 us",
+        "iox2 rd/s",
+        "p50 us",
+        "p99 us",
+        "futex rd/s",
+        "p50 us",
+        "p99 us",
+        "rt/iox2",
+        "rt/futex"
     );
     for r in rows {
         println!(
@@ -156,16 +173,23 @@ fn runtime(n: u32, ticks: u64) -> Result<Stats, String> {
     sc.run.robots = n;
     let warmup = (ticks / 20).max(10);
     sc.run.max_ticks = ticks + warmup;
-    sc.validate(&|_| "bench".into()).map_err(|e| e.to_string())?;
+    sc.validate(&|_| "bench".into())
+        .map_err(|e| e.to_string())?;
     let run_id = crate::runid::new_run_id();
     let dir = std::env::temp_dir().join(format!("swarm-bench-{run_id}"));
-    let out = processes::run(processes::ProcessRun { sc: &sc, run_id: &run_id, run_dir: &dir, on_status: &mut |_| {} })?;
+    let out = processes::run(processes::ProcessRun {
+        sc: &sc,
+        run_id: &run_id,
+        run_dir: &dir,
+        on_status: &mut |_| {},
+    })?;
     if out.world_exit != Ok(0) {
         return Err(format!("runtime run failed: {:?}", out.world_exit));
     }
-    let s: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).map_err(|e| e.to_string())?)
-            .map_err(|e| e.to_string())?;
+    let s: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(dir.join("summary.json")).map_err(|e| e.to_string())?,
+    )
+    .map_err(|e| e.to_string())?;
     let _ = std::fs::remove_dir_all(&dir);
     Ok(Stats {
         per_s: s["steady_ticks_per_second"].as_f64().unwrap_or(0.0),
@@ -179,7 +203,14 @@ fn spawn_children(kind: &str, prefix: &str, n: u32) -> Result<Vec<Child>, String
     (0..n)
         .map(|i| {
             Command::new(&exe)
-                .args(["__bench-child", kind, "--prefix", prefix, "--index", &i.to_string()])
+                .args([
+                    "__bench-child",
+                    kind,
+                    "--prefix",
+                    prefix,
+                    "--index",
+                    &i.to_string(),
+                ])
                 .stdin(Stdio::null())
                 .process_group(0)
                 .spawn()
@@ -245,8 +276,14 @@ fn raw_iox2(n: u32, rounds: u64) -> Result<Stats, String> {
         let config = transport::run_config(&prefix).map_err(|e| e.to_string())?;
         let node = transport::node(&config, "bench-parent").map_err(|e| e.to_string())?;
         let (down, up) = iox2_services(&node, n as usize)?;
-        let notifier = down.notifier_builder().create().map_err(|e| format!("{e:?}"))?;
-        let listener = up.listener_builder().create().map_err(|e| format!("{e:?}"))?;
+        let notifier = down
+            .notifier_builder()
+            .create()
+            .map_err(|e| format!("{e:?}"))?;
+        let listener = up
+            .listener_builder()
+            .create()
+            .map_err(|e| format!("{e:?}"))?;
         let children = spawn_children("iox2", &prefix, n)?;
         let t = Instant::now();
         while up.dynamic_config().number_of_notifiers() < n as usize {
@@ -263,7 +300,7 @@ fn raw_iox2(n: u32, rounds: u64) -> Result<Stats, String> {
             let mut got = 0u64;
             while got < n as u64 {
                 listener
-                    .timed_wait(|ev| got += ev.count as u64, Duration::from_secs(5))
+                    .timed_wait(|ev| got += ev.count, Duration::from_secs(5))
                     .map_err(|e| format!("{e:?}"))?;
             }
             if r >= warm {
@@ -320,7 +357,9 @@ pub fn child(a: ChildArgs) -> i32 {
     }
     match a.kind.as_str() {
         "futex" => {
-            let Ok(b) = TickBarrier::open(&a.prefix) else { return 1 };
+            let Ok(b) = TickBarrier::open(&a.prefix) else {
+                return 1;
+            };
             b.mark_ready();
             let mut done = 0;
             loop {
@@ -337,7 +376,8 @@ pub fn child(a: ChildArgs) -> i32 {
         "iox2" => {
             let run = || -> Result<(), String> {
                 let config = transport::run_config(&a.prefix).map_err(|e| e.to_string())?;
-                let node = transport::node(&config, &format!("bench-{}", a.index)).map_err(|e| e.to_string())?;
+                let node = transport::node(&config, &format!("bench-{}", a.index))
+                    .map_err(|e| e.to_string())?;
                 let down = node
                     .service_builder(&"bench/down".try_into().map_err(|e| format!("{e:?}"))?)
                     .event()
@@ -348,13 +388,19 @@ pub fn child(a: ChildArgs) -> i32 {
                     .event()
                     .open()
                     .map_err(|e| format!("{e:?}"))?;
-                let listener = down.listener_builder().create().map_err(|e| format!("{e:?}"))?;
+                let listener = down
+                    .listener_builder()
+                    .create()
+                    .map_err(|e| format!("{e:?}"))?;
                 // The reply notifier last: the parent counts notifiers to know we are ready.
-                let notifier = up.notifier_builder().create().map_err(|e| format!("{e:?}"))?;
+                let notifier = up
+                    .notifier_builder()
+                    .create()
+                    .map_err(|e| format!("{e:?}"))?;
                 loop {
                     let mut k = 0u64;
                     listener
-                        .timed_wait(|ev| k += ev.count as u64, Duration::from_millis(500))
+                        .timed_wait(|ev| k += ev.count, Duration::from_millis(500))
                         .map_err(|e| format!("{e:?}"))?;
                     if k == 0 {
                         // No round for a while: is the service still there (parent alive)?

@@ -189,15 +189,19 @@ impl TickBarrier {
 
     /// Records that `robot` sent `count` radio messages at tick k (before it acknowledges k).
     pub fn record_sent(&self, robot: u32, tick: u64, count: u32) {
-        self.word(robot, 1 + (tick % 2) as usize)
-            .store((tick + 1) << 16 | (count as u64 & 0xffff), Ordering::Release);
+        self.word(robot, 1 + (tick % 2) as usize).store(
+            (tick + 1) << 16 | (count as u64 & 0xffff),
+            Ordering::Release,
+        );
     }
 
     /// How many radio messages `robot` sent at tick k (0 if it has not recorded tick k). A
     /// receiver takes exactly that many samples off the link: no empty receive calls, and a
     /// silent link costs one atomic load.
     pub fn sent_count(&self, robot: u32, tick: u64) -> u32 {
-        let v = self.word(robot, 1 + (tick % 2) as usize).load(Ordering::Acquire);
+        let v = self
+            .word(robot, 1 + (tick % 2) as usize)
+            .load(Ordering::Acquire);
         if v >> 16 == tick + 1 {
             (v & 0xffff) as u32
         } else {

@@ -100,10 +100,15 @@ impl RunOutputs {
     ) -> std::io::Result<Summary> {
         self.rec.take().expect("open").finish()?;
         world.finish_radio();
-        let warmup = (timing.tick_ns.len() / 20).max(10).min(timing.tick_ns.len());
+        let warmup = (timing.tick_ns.len() / 20)
+            .max(10)
+            .min(timing.tick_ns.len());
         let steady_ns: u64 = timing.tick_ns[warmup..].iter().sum();
-        let steady_ticks_per_second =
-            if steady_ns > 0 { (timing.tick_ns.len() - warmup) as f64 / (steady_ns as f64 / 1e9) } else { 0.0 };
+        let steady_ticks_per_second = if steady_ns > 0 {
+            (timing.tick_ns.len() - warmup) as f64 / (steady_ns as f64 / 1e9)
+        } else {
+            0.0
+        };
         let mut sorted = timing.tick_ns.clone();
         sorted.sort_unstable();
         let ticks = world.tick;

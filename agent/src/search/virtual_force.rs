@@ -1,0 +1,166 @@
+//! Simplified virtual-force model, eq. (5), and the roaming rule of paper
+//! §3.1 / Fig. 2 (spec §2.3-2.4): a roaming robot is repelled by its two
+//! nearest robots and moves at V_max along the net force.
+
+use crate::search::geometry::Vec2;
+use serde::{Deserialize, Serialize};
+
+/// Tunables of the virtual-force model.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct Params {
+    /// Virtual-force coefficient c = 3.9 (Table 4, eq. 5).
+    pub c: f64,
+    /// Enhanced obstacle-avoidance distance l_1 = 10 (Table 4, eq. 5).
+    pub l1: f64,
+    /// Robot radius L_R; robots repel within d_0 = 2·L_R (eq. 5). The paper
+    /// never gives L_R: 50 so that d_0 = 100 = L_T and roaming robots spread
+    /// out. [chosen] spec §5 item 4.
+    pub l_r: f64,
+    /// Obstacle force cut-off d_0 = L_B = 100 (eq. 5, Table 4).
+    pub l_b: f64,
+    /// Maximum speed V_max = 10 (Table 4, eq. 4).
+    pub v_max: f64,
+}
+
+impl Default for Params {
+    fn default() -> Self {
+        Self {
+            c: 3.9,
+            l1: 10.0,
+            l_r: 50.0,
+            l_b: 100.0,
+            v_max: 10.0,
+        }
+    }
+}
+
+impl Params {
+    /// d_0 for robot–robot forces: 2·L_R (eq. 5).
+    pub fn d0_robot(&self) -> f64 {
+        2.0 * self.l_r
+    }
+    /// d_0 for obstacle / boundary-point forces: L_B (eq. 5).
+    pub fn d0_obstacle(&self) -> f64 {
+        self.l_b
+    }
+}
+
+/// ‖f_vr‖ = c (l_1 / d)² for 0 ≤ d ≤ d_0, else 0 — eq. (5).
+/// d = 0 gives +∞ (callers skip coincident points).
+pub fn magnitude(d: f64, d0: f64, p: &Params) -> f64 {
+    if (0.0..=d0).contains(&d) {
+        p.c * (p.l1 / d).powi(2)
+    } else {
+        0.0
+    }
+}
+
+/// Repulsive force of an object at `from` on a robot at `x` (points from
+/// the object to the robot). Zero beyond `d0` or when the points coincide.
+pub fn repulsion(x: &Vec2, from: &Vec2, d0: f64, p: &Params) -> Vec2 {
+    let r = x - from;
+    let d = r.norm();
+    if d <= 1e-9 {
+        return Vec2::zeros();
+    }
+    r / d * magnitude(d, d0, p)
+}
+
+/// Attractive force of an obstacle boundary point `to` on a robot at `x`
+/// (paper §3.1: "obstacle boundaries attract the robot"), cut-off L_B.
+pub fn attraction(x: &Vec2, to: &Vec2, p: &Params) -> Vec2 {
+    -repulsion(x, to, p.d0_obstacle(), p)
+}
+
+/// Indices of the two robots of `others` nearest to `x` (ties: lower
+/// index first; robots at exactly `x` are skipped).
+pub fn two_nearest(x: &Vec2, others: &[Vec2]) -> Vec<usize> {
+    let mut idx: Vec<(f64, usize)> = others
+        .iter()
+        .enumerate()
+        .map(|(i, o)| ((o - x).norm(), i))
+        .filter(|(d, _)| *d > 1e-9)
+        .collect();
+    idx.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+    idx.into_iter().take(2).map(|(_, i)| i).collect()
+}
+
+/// f_i = f_vr1 + f_vr2: repulsion of the two nearest robots (Fig. 2).
+pub fn roaming_force(x: &Vec2, others: &[Vec2], p: &Params) -> Vec2 {
+    two_nearest(x, others)
+        .into_iter()
+        .map(|i| repulsion(x, &others[i], p.d0_robot(), p))
+        .sum()
+}
+
+/// Roaming desired velocity V_if(t+1) = V_max·(cos∠f_i, sin∠f_i)
+/// (paper §3.1). When f_i = 0 (no robot within 2·L_R) the robot keeps the
+/// heading of `previous_velocity` at V_max, or stands still if that is zero.
+/// [chosen] spec §5 item 5.
+pub fn roaming_velocity(x: &Vec2, others: &[Vec2], previous_velocity: &Vec2, p: &Params) -> Vec2 {
+    let f = roaming_force(x, others, p);
+    let dir = if f.norm() > 1e-12 {
+        f
+    } else {
+        *previous_velocity
+    };
+    let n = dir.norm();
+    if n > 1e-12 {
+        dir * (p.v_max / n)
+    } else {
+        Vec2::zeros()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::search::geometry::v2;
+
+    #[test]
+    fn eq5_values_and_cutoff() {
+        let p = Params::default();
+        assert!((magnitude(10.0, 100.0, &p) - 3.9).abs() < 1e-12);
+        assert!((magnitude(5.0, 100.0, &p) - 15.6).abs() < 1e-12);
+        assert!((magnitude(100.0, 100.0, &p) - 0.039).abs() < 1e-12);
+        assert_eq!(magnitude(100.0001, 100.0, &p), 0.0);
+    }
+
+    #[test]
+    fn repulsion_and_attraction_directions() {
+        let p = Params::default();
+        let f = repulsion(&v2(0.0, 0.0), &v2(10.0, 0.0), 100.0, &p);
+        assert!(f.x < 0.0 && f.y.abs() < 1e-12);
+        let a = attraction(&v2(0.0, 0.0), &v2(10.0, 0.0), &p);
+        assert!(a.x > 0.0);
+        assert_eq!(
+            repulsion(&v2(1.0, 1.0), &v2(1.0, 1.0), 100.0, &p),
+            Vec2::zeros()
+        );
+    }
+
+    #[test]
+    fn roaming_uses_only_two_nearest() {
+        let p = Params::default();
+        let x = v2(0.0, 0.0);
+        // Two near robots to the east/north-east, a crowd far west ignored.
+        let others = [v2(-90.0, 0.0), v2(10.0, 0.0), v2(-95.0, 1.0), v2(0.0, 20.0)];
+        assert_eq!(two_nearest(&x, &others), vec![1, 3]);
+        let v = roaming_velocity(&x, &others, &Vec2::zeros(), &p);
+        assert!((v.norm() - 10.0).abs() < 1e-9);
+        assert!(v.x < 0.0 && v.y < 0.0, "{v:?}");
+        // stronger (nearer) east robot dominates: mostly westward
+        assert!(v.x.abs() > v.y.abs());
+    }
+
+    #[test]
+    fn roaming_without_neighbours_keeps_heading() {
+        let p = Params::default();
+        let others = [v2(500.0, 0.0)];
+        let v = roaming_velocity(&v2(0.0, 0.0), &others, &v2(0.0, 3.0), &p);
+        assert!((v - v2(0.0, 10.0)).norm() < 1e-12);
+        let v0 = roaming_velocity(&v2(0.0, 0.0), &[], &Vec2::zeros(), &p);
+        assert_eq!(v0, Vec2::zeros());
+    }
+}
