@@ -101,7 +101,7 @@ fn run_loop<B: Behaviour>(args: &AgentArgs, mut rt: AgentRuntime<B>) -> Result<i
         failures: 0,
     };
     let mut done = barrier.acked_up_to(robot);
-    barrier.mark_ready();
+    barrier.mark_ready(robot);
     loop {
         let k = match barrier.wait_release(done, poll) {
             Wake::Shutdown => return Ok(EXIT_OK),

@@ -360,7 +360,7 @@ pub fn child(a: ChildArgs) -> i32 {
             let Ok(b) = TickBarrier::open(&a.prefix) else {
                 return 1;
             };
-            b.mark_ready();
+            b.mark_ready(a.index);
             let mut done = 0;
             loop {
                 match b.wait_release(done, Duration::from_millis(500)) {

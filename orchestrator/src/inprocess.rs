@@ -59,8 +59,10 @@ impl BehaviourVisitor for InProcess<'_> {
         let mut tick_ns = Vec::with_capacity(sc.run.max_ticks.min(10_000_000) as usize);
         let startup_seconds = t0.elapsed().as_secs_f64();
         let t_loop = Instant::now();
+        let mut end = "completed";
         while world.tick < sc.run.max_ticks {
             let t_tick = Instant::now();
+            world.begin_tick();
             if world.tick + 1 == sc.run.max_ticks {
                 world.set_stopping();
             }
@@ -87,6 +89,10 @@ impl BehaviourVisitor for InProcess<'_> {
             cur.clear();
             tick_ns.push(t_tick.elapsed().as_nanos() as u64);
             (self.on_tick)(&world);
+            if world.alive_count() == 0 {
+                end = "all robots dead";
+                break;
+            }
         }
         let timing = Timing {
             wall_seconds: t0.elapsed().as_secs_f64(),
@@ -94,7 +100,7 @@ impl BehaviourVisitor for InProcess<'_> {
             startup_seconds,
             tick_ns,
         };
-        outputs.finish(&mut world, &timing, self.run_id, "inprocess", "completed")
+        outputs.finish(&mut world, &timing, self.run_id, "inprocess", end)
     }
 }
 

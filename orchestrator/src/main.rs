@@ -2,6 +2,7 @@
 
 mod bench;
 mod clean;
+mod control;
 mod inprocess;
 mod processes;
 mod registry;
@@ -31,6 +32,10 @@ enum Cmd {
     Bench(bench::BenchArgs),
     /// Remove everything dead runs left in /dev/shm and in the run registry.
     Clean,
+    /// List the running runs: id, tick, robots alive / dead / restarted, pids.
+    Status,
+    /// SIGKILL agent processes of a running run.
+    Kill(control::KillArgs),
     /// (internal) A benchmark child process.
     #[command(hide = true, name = "__bench-child")]
     BenchChild(bench::ChildArgs),
@@ -43,6 +48,8 @@ fn main() {
         Cmd::Up(a) => up::up(a),
         Cmd::Bench(a) => bench::bench(a),
         Cmd::BenchChild(a) => bench::child(a),
+        Cmd::Status => control::status(),
+        Cmd::Kill(a) => control::kill(a),
         Cmd::Clean => {
             let r = clean::clean_dead_runs();
             println!(

@@ -10,7 +10,7 @@ use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 use swarm::barrier::TickBarrier;
 use swarm::frames::{Control, WorldStatus, CONTROL_ROBOT_DIED, CONTROL_STOP};
-use swarm::scenario::Scenario;
+use swarm::scenario::{FaultPolicy, Scenario};
 use swarm::{cleanup, transport};
 
 /// How long the world gets to finish after a stop request before everything is killed.
@@ -19,6 +19,8 @@ const STOP_GRACE: Duration = Duration::from_secs(10);
 const AGENT_EXIT_GRACE: Duration = Duration::from_secs(3);
 /// How often the orchestrator reaps children and refreshes the progress bar.
 const SUPERVISE_PERIOD: Duration = Duration::from_millis(5);
+/// How often the run registry (read by `orchestrator status`) is refreshed.
+const REGISTRY_PERIOD: Duration = Duration::from_millis(50);
 
 pub struct ProcessRun<'a> {
     pub sc: &'a Scenario,
@@ -76,6 +78,10 @@ pub fn run(mut p: ProcessRun) -> Result<ProcessOutcome, String> {
         orchestrator_pid: std::process::id(),
         world_pid: 0,
         agent_pids: vec![],
+        tick: 0,
+        alive: 0,
+        dead: 0,
+        restarted: 0,
         run_dir: p.run_dir.display().to_string(),
     };
     registry::write(&entry).map_err(|e| format!("run registry: {e}"))?;
@@ -144,12 +150,11 @@ fn supervise(
         .create()
         .map_err(|e| format!("status subscriber: {e:?}"))?;
     let barrier = TickBarrier::open(prefix).map_err(|e| format!("tick barrier: {e}"))?;
-    let mut agents: BTreeMap<u32, u32> = BTreeMap::new(); // pid -> robot
-    for i in 0..n {
-        let child = Command::new(bin("agent"))
+    let spawn_agent = |robot: u32| -> Result<u32, String> {
+        Command::new(bin("agent"))
             .args([
                 "--robot",
-                &i.to_string(),
+                &robot.to_string(),
                 "--prefix",
                 prefix,
                 "--run-id",
@@ -161,18 +166,36 @@ fn supervise(
             .stdout(Stdio::null())
             .process_group(0)
             .spawn()
-            .map_err(|e| format!("cannot start {}: {e}", bin("agent").display()))?;
-        agents.insert(child.id(), i);
-        entry.agent_pids.push(child.id());
+            .map(|c| c.id())
+            .map_err(|e| format!("cannot start {}: {e}", bin("agent").display()))
+    };
+    let mut agents: BTreeMap<u32, u32> = BTreeMap::new(); // pid -> robot
+    for i in 0..n {
+        let pid = spawn_agent(i)?;
+        agents.insert(pid, i);
+        entry.agent_pids.push(pid);
     }
     registry::write(entry).map_err(|e| format!("run registry: {e}"))?;
-    let send_control = |kind: u32, robot: u32, value: u64| {
+    let send_control = |kind: u32, robot: u32, value: u64, tick: u64| {
         if let Ok(s) = control.loan_uninit() {
-            let _ = s.write_payload(Control { kind, robot, value }).send();
+            let _ = s
+                .write_payload(Control {
+                    kind,
+                    robot,
+                    value,
+                    tick,
+                })
+                .send();
         }
         barrier.nudge_world();
     };
+    let restart = sc.faults.on_fault == FaultPolicy::Restart;
+    let mut restarts = vec![0u32; n as usize];
+    // Scheduled kills, in tick order; each is sent when the world reaches its tick.
+    let kills = swarm::chaos::schedule(sc);
+    let mut next_kill = 0;
     let mut last = WorldStatus::default();
+    let mut last_registry = Instant::now();
     let mut stop_sent: Option<Instant> = None;
     let world_pid = entry.world_pid;
     let world_exit;
@@ -182,16 +205,47 @@ fn supervise(
                 world_exit = exit_of(st);
                 break 'outer;
             }
-            if let Some(robot) = agents.remove(&pid) {
-                send_control(CONTROL_ROBOT_DIED, robot, monotonic_us());
+            let Some(robot) = agents.remove(&pid) else {
+                continue;
+            };
+            if barrier.is_shutdown() || exit_of(st) == Ok(0) {
+                // Ended with the run (the world's shutdown word), not a fault.
+                continue;
+            }
+            send_control(CONTROL_ROBOT_DIED, robot, monotonic_us(), last.tick);
+            if restart && stop_sent.is_none() && restarts[robot as usize] < sc.faults.max_restarts {
+                // The dead agent's ports must go before the new one attaches to its services.
+                node.try_cleanup_dead_nodes();
+                let pid = spawn_agent(robot)?;
+                restarts[robot as usize] += 1;
+                agents.insert(pid, robot);
+                entry.agent_pids[robot as usize] = pid;
+                registry::write(entry).map_err(|e| format!("run registry: {e}"))?;
             }
         }
         while let Ok(Some(s)) = status.receive() {
             last = *s;
         }
+        // A scheduled kill's tick is reached: the world already treats the robot as dead from
+        // that tick on; now its process gets the SIGKILL.
+        while next_kill < kills.len() && kills[next_kill][0] <= last.tick {
+            let robot = kills[next_kill][1] as u32;
+            if let Some((&pid, _)) = agents.iter().find(|(_, &r)| r == robot) {
+                kill(pid);
+            }
+            next_kill += 1;
+        }
         (p.on_status)(&last);
+        if last_registry.elapsed() > REGISTRY_PERIOD {
+            entry.tick = last.tick;
+            entry.alive = last.alive;
+            entry.dead = last.dead;
+            entry.restarted = last.restarted;
+            let _ = registry::write(entry);
+            last_registry = Instant::now();
+        }
         if signals::interrupted() && stop_sent.is_none() {
-            send_control(CONTROL_STOP, 0, 0);
+            send_control(CONTROL_STOP, 0, 0, last.tick);
             stop_sent = Some(Instant::now());
         }
         if let Some(t) = stop_sent {

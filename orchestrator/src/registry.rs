@@ -12,8 +12,18 @@ pub struct RunEntry {
     pub prefix: String,
     pub orchestrator_pid: u32,
     pub world_pid: u32,
+    /// Current agent process of each robot (index = robot id).
     pub agent_pids: Vec<u32>,
     pub run_dir: String,
+    /// Progress, refreshed by the run's orchestrator a few times a second.
+    #[serde(default)]
+    pub tick: u64,
+    #[serde(default)]
+    pub alive: u32,
+    #[serde(default)]
+    pub dead: u32,
+    #[serde(default)]
+    pub restarted: u32,
 }
 
 fn path(run_id: &str) -> PathBuf {

@@ -42,9 +42,53 @@ pub struct UpArgs {
     pub out: Option<PathBuf>,
     #[arg(long, value_enum, default_value_t = Executor::Processes)]
     pub executor: Executor,
+    /// Random SIGKILLs of agents per 100 ticks, from the run's seed [scenario: faults.chaos_rate].
+    #[arg(long)]
+    pub chaos: Option<f64>,
+    /// SIGKILLs at given ticks: TICK:ROBOT,... e.g. 120:7,300:12 [scenario: faults.kill_at].
+    #[arg(long, value_parser = parse_kills)]
+    pub chaos_at: Option<KillList>,
+    /// What happens to a robot whose agent dies [scenario: faults.on_fault].
+    #[arg(long, value_enum)]
+    pub on_fault: Option<OnFault>,
+    /// Restarts allowed per robot under --on-fault restart [scenario: faults.max_restarts].
+    #[arg(long)]
+    pub max_restarts: Option<u32>,
     /// No progress bar.
     #[arg(long)]
     pub quiet: bool,
+}
+
+#[derive(Copy, Clone, Debug, PartialEq, Eq, ValueEnum)]
+pub enum OnFault {
+    /// The robot stands still as an obstacle; the swarm carries on.
+    Drop,
+    /// A new agent process takes the robot over, fresh from its Sense frame.
+    Restart,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct KillList(pub Vec<[u64; 2]>);
+
+fn parse_kills(s: &str) -> Result<KillList, String> {
+    s.split(',')
+        .filter(|x| !x.trim().is_empty())
+        .map(|item| {
+            let (t, r) = item
+                .split_once(':')
+                .ok_or_else(|| format!("{item:?} is not TICK:ROBOT (e.g. 120:7)"))?;
+            let t: u64 = t
+                .trim()
+                .parse()
+                .map_err(|_| format!("{item:?}: tick {t:?} is not a whole number"))?;
+            let r: u64 = r
+                .trim()
+                .parse()
+                .map_err(|_| format!("{item:?}: robot {r:?} is not a whole number"))?;
+            Ok([t, r])
+        })
+        .collect::<Result<Vec<_>, _>>()
+        .map(KillList)
 }
 
 /// Which flag set a scenario key, for error messages.
@@ -55,6 +99,9 @@ const FLAG_KEYS: &[(&str, &str)] = &[
     ("radio.comm_radius", "--comm-radius"),
     ("radio.loss", "--loss"),
     ("radio.delay_ticks", "--delay"),
+    ("faults.chaos_rate", "--chaos"),
+    ("faults.kill_at", "--chaos-at"),
+    ("faults.max_restarts", "--max-restarts"),
 ];
 
 /// The scenario with the flags applied and validated.
@@ -85,6 +132,21 @@ pub fn resolve(a: &UpArgs) -> Result<Scenario, ConfigError> {
     }
     if let Some(v) = a.delay {
         set("radio.delay_ticks", &mut || sc.radio.delay_ticks = v);
+    }
+    if let Some(v) = a.chaos {
+        set("faults.chaos_rate", &mut || sc.faults.chaos_rate = v);
+    }
+    if let Some(v) = &a.chaos_at {
+        set("faults.kill_at", &mut || sc.faults.kill_at = v.0.clone());
+    }
+    if let Some(v) = a.max_restarts {
+        set("faults.max_restarts", &mut || sc.faults.max_restarts = v);
+    }
+    if let Some(v) = a.on_fault {
+        sc.faults.on_fault = match v {
+            OnFault::Drop => swarm::scenario::FaultPolicy::Drop,
+            OnFault::Restart => swarm::scenario::FaultPolicy::Restart,
+        };
     }
     sc.validate(&|key: &str| {
         FLAG_KEYS

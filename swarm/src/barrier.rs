@@ -13,8 +13,8 @@ use std::time::{Duration, Instant};
 
 const MAGIC: u64 = 0x5357_4152_4d54_4b32; // "SWARMTK2"
 
-/// Bytes of one robot's slot: ack word and two sent-count words.
-const SLOT_BYTES: usize = 24;
+/// Bytes of one robot's slot: ack word, two sent-count words, attach counter.
+const SLOT_BYTES: usize = 32;
 
 #[repr(C)]
 struct Header {
@@ -175,7 +175,7 @@ impl TickBarrier {
     }
 
     /// Word `w` of robot `robot`'s slot: 0 = acknowledged tick + 1; 1, 2 = messages sent at
-    /// even / odd ticks, as (tick + 1) << 16 | count.
+    /// even / odd ticks, as (tick + 1) << 16 | count; 3 = agent processes that attached.
     fn word(&self, robot: u32, w: usize) -> &AtomicU64 {
         assert!(robot < self.robots, "robot {robot} out of range");
         let at = std::mem::size_of::<Header>() + SLOT_BYTES * robot as usize + 8 * w;
@@ -269,8 +269,15 @@ impl TickBarrier {
 
     // ---- agent side ----
 
-    pub fn mark_ready(&self) {
+    /// An agent process for `robot` is attached and ready for its next tick.
+    pub fn mark_ready(&self, robot: u32) {
+        self.word(robot, 3).fetch_add(1, Ordering::AcqRel);
         self.header().ready.fetch_add(1, Ordering::AcqRel);
+    }
+
+    /// How many agent processes have attached for `robot` (a restart makes it grow).
+    pub fn attach_count(&self, robot: u32) -> u64 {
+        self.word(robot, 3).load(Ordering::Acquire)
     }
 
     /// The last tick this robot acknowledged plus one (0 if none): where a (re)started agent
@@ -342,7 +349,7 @@ mod tests {
                 let p = prefix.clone();
                 std::thread::spawn(move || {
                     let b = TickBarrier::open(&p).unwrap();
-                    b.mark_ready();
+                    b.mark_ready(i);
                     let mut done = 0;
                     let mut seen = vec![];
                     loop {

@@ -146,7 +146,7 @@ pub struct WorldStatus {
     pub alive: u32,
     pub dead: u32,
     pub finished: u32,
-    pub _pad: u32,
+    pub restarted: u32,
     pub offered: u64,
     pub delivered: u64,
     pub dropped_range: u64,
@@ -161,7 +161,10 @@ pub struct WorldStatus {
 pub struct Control {
     pub kind: u32,
     pub robot: u32,
+    /// For ROBOT_DIED: CLOCK_MONOTONIC microseconds when the orchestrator reaped the process.
     pub value: u64,
+    /// For ROBOT_DIED: the last tick the orchestrator had seen when it reaped the process.
+    pub tick: u64,
 }
 
 pub const CONTROL_ROBOT_DIED: u32 = 1;

@@ -36,6 +36,8 @@ pub enum RejectReason {
 pub enum Event {
     /// The robot's process died (or went silent past the deadline); it stands still from now on.
     RobotDied { robot: u32, cause: String },
+    /// A new agent process drives the robot again (policy "restart").
+    RobotRestarted { robot: u32 },
     /// The robot's Action frame was rejected; it stood still this tick.
     ActionRejected { robot: u32, reason: RejectReason },
     /// The robot's step would have crossed an obstacle or left the arena; it stopped short.

@@ -16,6 +16,7 @@ pub struct Scenario {
     pub radio: RadioParams,
     pub runtime: RuntimeParams,
     pub roam: RoamParams,
+    pub faults: FaultParams,
 }
 
 #[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
@@ -79,8 +80,8 @@ pub struct RadioParams {
 #[derive(Serialize, Deserialize, Clone, Copy, Debug, PartialEq, Eq)]
 #[serde(rename_all = "kebab-case")]
 pub enum BarrierKind {
+    /// One futex word in shared memory wakes every agent; agents count themselves back.
     Futex,
-    Iox2Event,
 }
 
 #[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
@@ -90,6 +91,26 @@ pub struct RuntimeParams {
     pub ack_deadline_ms: u64,
     pub poll_ms: u64,
     pub startup_timeout_s: u64,
+}
+
+/// What happens to a robot whose agent process dies.
+#[derive(Serialize, Deserialize, Clone, Copy, Debug, PartialEq, Eq)]
+#[serde(rename_all = "kebab-case")]
+pub enum FaultPolicy {
+    /// The robot stands still as an obstacle; the swarm carries on.
+    Drop,
+    /// The orchestrator starts a new agent for the robot, which starts fresh from its Sense.
+    Restart,
+}
+
+#[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct FaultParams {
+    pub on_fault: FaultPolicy,
+    pub max_restarts: u32,
+    pub chaos_rate: f64,
+    /// Scheduled SIGKILLs as [tick, robot]; the resolved scenario lists the random ones too.
+    pub kill_at: Vec<[u64; 2]>,
 }
 
 #[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]

@@ -38,19 +38,20 @@ fn drain_control(
     sub: &Subscriber<ipc::Service, Control, ()>,
     world: &mut World,
     state: &mut ControlState,
-    t0: Instant,
 ) {
     while let Ok(Some(c)) = sub.receive() {
         match c.kind {
+            // A scheduled kill reaped before the world began its tick: begin_tick records it
+            // (same tick, same cause) so the run stays reproducible.
+            CONTROL_ROBOT_DIED if world.kill_scheduled_now(c.robot) => {}
             CONTROL_ROBOT_DIED => {
-                // value: microseconds since the orchestrator's epoch when it reaped the process;
-                // the world measures its own side from t0 (same clock: CLOCK_MONOTONIC).
-                let now_us = monotonic_us();
-                let detection_ms = (now_us.saturating_sub(c.value)) as f64 / 1e3;
-                let _ = t0;
+                // value: CLOCK_MONOTONIC microseconds when the orchestrator reaped the process
+                // (the same clock here: it is system-wide).
+                let detection_ms = monotonic_us().saturating_sub(c.value) as f64 / 1e3;
                 world.mark_dead(
                     c.robot,
                     "process died (reaped by orchestrator)",
+                    Some(c.tick),
                     Some(detection_ms),
                 );
             }
@@ -124,7 +125,7 @@ pub fn run(args: &WorldArgs) -> Result<i32> {
     // Wait for every agent (or its death) before the first tick.
     let startup_deadline = Instant::now() + Duration::from_secs(sc.runtime.startup_timeout_s);
     while barrier.ready_count() + (n - world.alive_count()) < n {
-        drain_control(&control, &mut world, &mut ctl, t_start);
+        drain_control(&control, &mut world, &mut ctl);
         if ctl.stop {
             break;
         }
@@ -139,6 +140,8 @@ pub fn run(args: &WorldArgs) -> Result<i32> {
         std::thread::sleep(Duration::from_millis(2));
     }
     let startup_seconds = t_start.elapsed().as_secs_f64();
+    let restart = sc.faults.on_fault == swarm::scenario::FaultPolicy::Restart;
+    let mut attached: Vec<u64> = (0..n).map(|i| barrier.attach_count(i)).collect();
     let t_loop = Instant::now();
     let mut tick_ns = Vec::with_capacity(sc.run.max_ticks.min(10_000_000) as usize);
     let mut actions: Vec<Option<Action>> = vec![None; n as usize];
@@ -147,6 +150,17 @@ pub fn run(args: &WorldArgs) -> Result<i32> {
     while world.tick < sc.run.max_ticks {
         let t_tick = Instant::now();
         let k = world.tick;
+        world.begin_tick();
+        if restart {
+            // A new agent process attached for a dead robot: it drives the robot from now on.
+            for i in 0..n {
+                let c = barrier.attach_count(i);
+                if c > attached[i as usize] {
+                    attached[i as usize] = c;
+                    world.revive(i);
+                }
+            }
+        }
         if ctl.stop || k + 1 == sc.run.max_ticks {
             world.set_stopping();
         }
@@ -178,14 +192,14 @@ pub fn run(args: &WorldArgs) -> Result<i32> {
                 break;
             }
             barrier.wait_acks(poll);
-            drain_control(&control, &mut world, &mut ctl, t_start);
+            drain_control(&control, &mut world, &mut ctl);
             if waited.elapsed() > deadline {
                 let silent: Vec<u32> = world
                     .live_robots()
                     .filter(|&i| !barrier.acked(i, k))
                     .collect();
                 for i in silent {
-                    world.mark_dead(i, "no action within runtime.ack_deadline_ms", None);
+                    world.mark_dead(i, "no action within runtime.ack_deadline_ms", None, None);
                 }
             }
         }
@@ -204,7 +218,7 @@ pub fn run(args: &WorldArgs) -> Result<i32> {
         if let Ok(s) = status_pub.loan_uninit() {
             let _ = s.write_payload(world.status(false)).send();
         }
-        drain_control(&control, &mut world, &mut ctl, t_start);
+        drain_control(&control, &mut world, &mut ctl);
         if ctl.stop {
             end = "interrupted".to_string();
             break;

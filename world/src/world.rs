@@ -19,11 +19,17 @@ const SPEED_TOLERANCE: f64 = 1e-9;
 #[derive(Debug, Clone, serde::Serialize)]
 pub struct Fault {
     pub robot: u32,
-    /// First tick at which the world treated the robot as dead.
+    /// The tick the fault happened at: the scheduled tick of a chaos kill, or the tick the
+    /// orchestrator had last seen when it reaped the process.
     pub tick: u64,
+    /// First tick at which the world treated the robot as dead (stopped waiting for it).
+    pub detected_tick: u64,
     pub cause: String,
-    /// Wall-clock milliseconds from the process's death to the world's knowing (if measured).
+    /// Wall-clock milliseconds from the orchestrator's reaping the process to the world's
+    /// handling it (None for faults the world decided itself).
     pub detection_ms: Option<f64>,
+    /// Tick from which a restarted agent drove the robot again (policy "restart").
+    pub restarted_tick: Option<u64>,
 }
 
 /// Messages sent at one tick whose outcome at the receivers is not in yet.
@@ -55,6 +61,9 @@ pub struct World {
     pub coverage: Coverage,
     pub start: Vec<[f64; 2]>,
     traj_every: u64,
+    /// The run's SIGKILL schedule (swarm::chaos) and the next entry due.
+    kills: Vec<[u64; 2]>,
+    next_kill: usize,
 }
 
 fn reason_index(r: RejectReason) -> usize {
@@ -113,6 +122,8 @@ impl World {
             trajectories: start.iter().map(|p| vec![*p]).collect(),
             start,
             traj_every,
+            kills: swarm::chaos::schedule(sc),
+            next_kill: 0,
         })
     }
 
@@ -170,7 +181,14 @@ impl World {
     }
 
     /// Marks a robot dead from the current tick on: it stands still as an obstacle.
-    pub fn mark_dead(&mut self, robot: u32, cause: &str, detection_ms: Option<f64>) {
+    /// `happened` is when the fault occurred, if known to be earlier than now.
+    pub fn mark_dead(
+        &mut self,
+        robot: u32,
+        cause: &str,
+        happened: Option<u64>,
+        detection_ms: Option<f64>,
+    ) {
         let i = robot as usize;
         if i >= self.n || !self.alive[i] {
             return;
@@ -180,14 +198,69 @@ impl World {
         self.dead_points.push([self.poses[i][0], self.poses[i][1]]);
         self.faults.push(Fault {
             robot,
-            tick: self.tick,
+            tick: happened.unwrap_or(self.tick).min(self.tick),
+            detected_tick: self.tick,
             cause: cause.to_string(),
             detection_ms,
+            restarted_tick: None,
         });
         self.pending_events.push(Event::RobotDied {
             robot,
             cause: cause.to_string(),
         });
+    }
+
+    /// Applies the scheduled kills of the current tick (faults.kill_at): the robot is dead from
+    /// exactly this tick, whenever its process receives the SIGKILL.
+    pub fn begin_tick(&mut self) {
+        let k = self.tick;
+        while let Some(&[t, r]) = self.kills.get(self.next_kill) {
+            if t > k {
+                break;
+            }
+            self.next_kill += 1;
+            if t == k {
+                self.mark_dead(r as u32, "scheduled SIGKILL (chaos)", Some(k), None);
+            }
+        }
+    }
+
+    /// Whether `robot` has a scheduled kill at the current tick that `begin_tick` has not
+    /// applied yet (its SIGKILL can be reaped before the world starts that tick).
+    pub fn kill_scheduled_now(&self, robot: u32) -> bool {
+        self.kills[self.next_kill..]
+            .iter()
+            .take_while(|e| e[0] <= self.tick)
+            .any(|e| e[0] == self.tick && e[1] == robot as u64)
+    }
+
+    /// A restarted agent drives the robot again from the current tick.
+    pub fn revive(&mut self, robot: u32) {
+        let i = robot as usize;
+        if i >= self.n || self.alive[i] {
+            return;
+        }
+        self.alive[i] = true;
+        let p = [self.poses[i][0], self.poses[i][1]];
+        if let Some(j) = self.dead_points.iter().position(|q| *q == p) {
+            self.dead_points.remove(j);
+        }
+        if let Some(f) = self
+            .faults
+            .iter_mut()
+            .rev()
+            .find(|f| f.robot == robot && f.restarted_tick.is_none())
+        {
+            f.restarted_tick = Some(self.tick);
+        }
+        self.pending_events.push(Event::RobotRestarted { robot });
+    }
+
+    pub fn restarts(&self) -> u64 {
+        self.faults
+            .iter()
+            .filter(|f| f.restarted_tick.is_some())
+            .count() as u64
     }
 
     fn validate(&self, i: usize, a: &Action) -> Result<(), RejectReason> {
@@ -373,7 +446,7 @@ impl World {
             alive,
             dead: self.n as u32 - alive,
             finished: finished as u32,
-            _pad: 0,
+            restarted: self.restarts() as u32,
             offered: self.radio.offered,
             delivered: self.radio.delivered,
             dropped_range: self.radio.dropped_range,
@@ -442,7 +515,7 @@ mod tests {
         let mut w = world();
         w.poses[1] = [50.0, 50.0, 0.0];
         w.poses[0] = [60.0, 50.0, 0.0];
-        w.mark_dead(1, "test", None);
+        w.mark_dead(1, "test", None, None);
         let acts: Vec<Option<Action>> = (0..5)
             .map(|i| {
                 let mut a = Action::idle(0, i);

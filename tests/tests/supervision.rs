@@ -1,0 +1,318 @@
+//! Fault injection and supervision with real processes and real SIGKILLs: restart, kill the
+//! world, kill the orchestrator, clean, reproducible chaos, live status / kill.
+
+use e2e::*;
+use std::path::Path;
+use std::process::{Child, Command, Stdio};
+use std::time::{Duration, Instant};
+
+fn spawn_up(args: &[&str], out: &Path) -> Child {
+    Command::new(orchestrator())
+        .arg("up")
+        .arg("--quiet")
+        .arg("--out")
+        .arg(out)
+        .args(args)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("spawn orchestrator")
+}
+
+fn registry(out: &Path) -> Option<serde_json::Value> {
+    for e in std::fs::read_dir("/tmp/swarm-runtime/runs")
+        .into_iter()
+        .flatten()
+        .flatten()
+    {
+        let Ok(s) = std::fs::read_to_string(e.path()) else {
+            continue;
+        };
+        let Ok(v) = serde_json::from_str::<serde_json::Value>(&s) else {
+            continue;
+        };
+        if v["run_dir"].as_str() == Some(&out.display().to_string()) {
+            return Some(v);
+        }
+    }
+    None
+}
+
+fn wait_for(what: &str, limit: Duration, mut f: impl FnMut() -> bool) {
+    let t = Instant::now();
+    while !f() {
+        assert!(t.elapsed() < limit, "timed out waiting for {what}");
+        std::thread::sleep(Duration::from_millis(5));
+    }
+}
+
+fn running(out: &Path, robots: usize) -> serde_json::Value {
+    let mut v = None;
+    wait_for("the run to tick", Duration::from_secs(30), || {
+        v = registry(out).filter(|r| {
+            r["agent_pids"].as_array().map(|a| a.len()) == Some(robots)
+                && r["tick"].as_u64().unwrap_or(0) > 10
+        });
+        v.is_some()
+    });
+    v.unwrap()
+}
+
+fn pid_alive(pid: i32) -> bool {
+    // A zombie still answers kill(0): look at its state too.
+    let st = std::fs::read_to_string(format!("/proc/{pid}/stat")).unwrap_or_default();
+    !st.is_empty() && !st.contains(") Z ")
+}
+
+fn finish(c: Child, limit: Duration) -> std::process::Output {
+    let mut c = c;
+    let t = Instant::now();
+    while c.try_wait().unwrap().is_none() {
+        if t.elapsed() > limit {
+            let _ = c.kill();
+            panic!("orchestrator did not finish within {limit:?}");
+        }
+        std::thread::sleep(Duration::from_millis(10));
+    }
+    c.wait_with_output().unwrap()
+}
+
+#[test]
+fn a_robot_restarts_100_times_in_a_row() {
+    let _g = serial();
+    let out = tmp_dir("restart100");
+    let child = spawn_up(
+        &[
+            "--robots",
+            "6",
+            "--max-ticks",
+            "100000000",
+            "--on-fault",
+            "restart",
+            "--max-restarts",
+            "1000",
+        ],
+        &out,
+    );
+    let entry = running(&out, 6);
+    let run_id = entry["run_id"].as_str().unwrap().to_string();
+    for i in 0..100u64 {
+        let old = registry(&out).unwrap()["agent_pids"][2].as_u64().unwrap();
+        let o = Command::new(orchestrator())
+            .args(["kill", "--run", &run_id, "--robot", "2"])
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "kill #{i}: {}", stderr(&o));
+        wait_for(
+            &format!("restart #{}", i + 1),
+            Duration::from_secs(20),
+            || {
+                registry(&out).is_some_and(|r| {
+                    r["agent_pids"][2].as_u64() != Some(old)
+                        && r["restarted"].as_u64().unwrap_or(0) > i
+                        && r["alive"] == 6
+                })
+            },
+        );
+    }
+    // SAFETY: Ctrl-C to our own child.
+    unsafe { libc::kill(child.id() as i32, libc::SIGINT) };
+    let o = finish(child, Duration::from_secs(30));
+    assert!(o.status.success(), "{}", stderr(&o));
+    let s = summary(&out);
+    let faults = s["faults"].as_array().unwrap();
+    assert_eq!(faults.len(), 100, "{faults:?}");
+    assert!(faults
+        .iter()
+        .all(|f| f["robot"] == 2 && f["restarted_tick"].is_u64()));
+    assert!(faults
+        .iter()
+        .all(|f| f["detected_tick"].as_u64() >= f["tick"].as_u64()));
+    assert_eq!(s["alive_at_end"], 6);
+    assert_left_nothing(&out);
+}
+
+#[test]
+fn killing_the_world_ends_the_run_with_an_error_and_agents_exit() {
+    let _g = serial();
+    let out = tmp_dir("killworld");
+    let child = spawn_up(&["--robots", "6", "--max-ticks", "100000000"], &out);
+    let entry = running(&out, 6);
+    let world = entry["world_pid"].as_i64().unwrap() as i32;
+    let agents: Vec<i32> = entry["agent_pids"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|p| p.as_i64().unwrap() as i32)
+        .collect();
+    // SAFETY: SIGKILL of this test run's world process.
+    unsafe { libc::kill(world, libc::SIGKILL) };
+    let t = Instant::now();
+    wait_for("agents to exit", Duration::from_secs(5), || {
+        agents.iter().all(|&p| !pid_alive(p))
+    });
+    let exit_time = t.elapsed();
+    let o = finish(child, Duration::from_secs(30));
+    assert!(
+        !o.status.success(),
+        "the orchestrator must report the failure"
+    );
+    assert!(stderr(&o).contains("world"), "{}", stderr(&o));
+    assert!(
+        exit_time < Duration::from_secs(1),
+        "agents took {exit_time:?}"
+    );
+    let prefix = swarm::transport::prefix_for(entry["run_id"].as_str().unwrap());
+    assert!(
+        run_shm_entries().iter().all(|n| !n.starts_with(&prefix)),
+        "shm left"
+    );
+    assert!(registry(&out).is_none(), "registry entry left");
+}
+
+#[test]
+fn killing_the_orchestrator_takes_the_run_down_and_clean_removes_its_leftovers() {
+    let _g = serial();
+    let out = tmp_dir("killorch");
+    let child = spawn_up(&["--robots", "6", "--max-ticks", "100000000"], &out);
+    let entry = running(&out, 6);
+    let pids: Vec<i32> = std::iter::once(&entry["world_pid"])
+        .chain(entry["agent_pids"].as_array().unwrap())
+        .map(|p| p.as_i64().unwrap() as i32)
+        .collect();
+    // SAFETY: SIGKILL of our own child.
+    unsafe { libc::kill(child.id() as i32, libc::SIGKILL) };
+    let _ = finish(child, Duration::from_secs(5));
+    let t = Instant::now();
+    wait_for("world and agents to exit", Duration::from_secs(5), || {
+        pids.iter().all(|&p| !pid_alive(p))
+    });
+    assert!(
+        t.elapsed() < Duration::from_secs(1),
+        "took {:?}",
+        t.elapsed()
+    );
+    let prefix = swarm::transport::prefix_for(entry["run_id"].as_str().unwrap());
+    assert!(
+        run_shm_entries().iter().any(|n| n.starts_with(&prefix)),
+        "a killed orchestrator leaves shm (else this test proves nothing)"
+    );
+    // A live run at the same time must survive the clean.
+    let live_out = tmp_dir("killorch-live");
+    let live = spawn_up(&["--robots", "4", "--max-ticks", "100000000"], &live_out);
+    let live_entry = running(&live_out, 4);
+    let o = Command::new(orchestrator()).arg("clean").output().unwrap();
+    assert!(o.status.success());
+    assert!(
+        run_shm_entries().iter().all(|n| !n.starts_with(&prefix)),
+        "clean left shm"
+    );
+    assert!(registry(&out).is_none(), "clean left the registry entry");
+    let live_prefix = swarm::transport::prefix_for(live_entry["run_id"].as_str().unwrap());
+    assert!(
+        run_shm_entries()
+            .iter()
+            .any(|n| n.starts_with(&live_prefix)),
+        "clean touched a live run"
+    );
+    let tick = registry(&live_out).unwrap()["tick"].as_u64().unwrap();
+    wait_for("the live run to go on", Duration::from_secs(10), || {
+        registry(&live_out).is_some_and(|r| r["tick"].as_u64().unwrap() > tick + 10)
+    });
+    // SAFETY: Ctrl-C to our own child.
+    unsafe { libc::kill(live.id() as i32, libc::SIGINT) };
+    let o = finish(live, Duration::from_secs(30));
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_left_nothing(&live_out);
+}
+
+#[test]
+fn chaos_under_drop_is_reproducible_byte_for_byte() {
+    let _g = serial();
+    let args = [
+        "--robots",
+        "10",
+        "--max-ticks",
+        "400",
+        "--seed",
+        "3",
+        "--chaos",
+        "0.5",
+        "--chaos-at",
+        "50:1,120:7",
+    ];
+    let dirs: Vec<_> = ["chaos-a", "chaos-b", "chaos-c"]
+        .iter()
+        .map(|n| tmp_dir(n))
+        .collect();
+    for (d, exec) in dirs.iter().zip(["processes", "processes", "inprocess"]) {
+        let o = up(&[&args[..], &["--executor", exec]].concat(), d);
+        assert!(o.status.success(), "{exec}: {}", stderr(&o));
+    }
+    let rec = |d: &Path| std::fs::read(d.join("recording.bin")).unwrap();
+    assert!(rec(&dirs[0]) == rec(&dirs[1]), "two chaos runs differ");
+    assert!(
+        rec(&dirs[0]) == rec(&dirs[2]),
+        "chaos run differs from the in-process executor"
+    );
+    let s = summary(&dirs[0]);
+    let faults = s["faults"].as_array().unwrap();
+    assert!(faults.len() >= 3, "random kills happened too: {faults:?}");
+    assert!(faults
+        .iter()
+        .any(|f| f["robot"] == 1 && f["tick"] == 50 && f["detected_tick"] == 50));
+    assert!(faults.iter().any(|f| f["robot"] == 7 && f["tick"] == 120));
+    assert_eq!(
+        s["alive_at_end"].as_u64().unwrap(),
+        10 - faults.len() as u64
+    );
+    for d in &dirs[..2] {
+        assert_left_nothing(d);
+    }
+}
+
+#[test]
+fn status_lists_the_run_and_kill_rejects_bad_input() {
+    let _g = serial();
+    let out = tmp_dir("status");
+    let child = spawn_up(&["--robots", "5", "--max-ticks", "100000000"], &out);
+    let entry = running(&out, 5);
+    let run_id = entry["run_id"].as_str().unwrap();
+    let o = Command::new(orchestrator()).arg("status").output().unwrap();
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(text.contains(run_id), "{text}");
+    let o = Command::new(orchestrator())
+        .args(["kill", "--run", run_id, "--robot", "9"])
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("0..=4"), "{}", stderr(&o));
+    let o = Command::new(orchestrator())
+        .args(["kill", "--run", "nope", "--robot", "1"])
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    let o = Command::new(orchestrator())
+        .args(["kill", "--run", run_id, "--robots", "1,3"])
+        .output()
+        .unwrap();
+    assert!(o.status.success());
+    wait_for("two robots dead", Duration::from_secs(10), || {
+        registry(&out).is_some_and(|r| r["dead"] == 2)
+    });
+    // SAFETY: Ctrl-C to our own child.
+    unsafe { libc::kill(child.id() as i32, libc::SIGINT) };
+    let o = finish(child, Duration::from_secs(30));
+    assert!(o.status.success(), "{}", stderr(&o));
+    let s = summary(&out);
+    let mut dead: Vec<u64> = s["faults"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|f| f["robot"].as_u64().unwrap())
+        .collect();
+    dead.sort();
+    assert_eq!(dead, vec![1, 3]);
+    assert!(s["faults"][0]["detection_ms"].as_f64().unwrap() < 1000.0);
+    assert_left_nothing(&out);
+}
