@@ -171,8 +171,8 @@ fn progress(sc: &Scenario, quiet: bool) -> ProgressBar {
     pb
 }
 
-fn bar_msg(alive: u32, n: u32, delivered: u64, lost: u64) -> String {
-    format!("robots alive {alive}/{n} | messages delivered {delivered} lost {lost}")
+fn bar_msg(alive: u32, n: u32, delivered: u64, range: u64, loss: u64) -> String {
+    format!("robots alive {alive}/{n} | messages delivered {delivered}, dropped: out of range {range}, lost {loss}")
 }
 
 pub fn up(a: UpArgs) -> i32 {
@@ -202,8 +202,14 @@ pub fn up(a: UpArgs) -> i32 {
         Executor::Inprocess => inprocess::run(&sc, &run_dir, &run_id, &mut |w| {
             pb.set_position(w.tick);
             if w.tick % 16 == 0 {
-                let lost = w.radio.dropped_loss + w.radio.dropped_range + w.radio.dropped_unlinked;
-                pb.set_message(bar_msg(w.alive_count(), n, w.radio.delivered, lost));
+                let r = &w.radio;
+                pb.set_message(bar_msg(
+                    w.alive_count(),
+                    n,
+                    r.delivered,
+                    r.dropped_range,
+                    r.dropped_loss,
+                ));
             }
         })
         .map(|_| ())
@@ -218,7 +224,8 @@ pub fn up(a: UpArgs) -> i32 {
                     s.alive,
                     n,
                     s.delivered,
-                    s.dropped_loss + s.dropped_range,
+                    s.dropped_range,
+                    s.dropped_loss,
                 ));
             },
         })

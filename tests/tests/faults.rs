@@ -86,8 +86,14 @@ fn sigkill_of_an_agent_is_survived_and_reported() {
     let tick = faults[0]["detected_tick"].as_u64().unwrap();
     assert!(tick > 0 && tick < 2500, "fault tick {tick}");
     // The world stops waiting within a bounded number of ticks of the death.
-    assert!(happened <= tick && tick - happened <= 5, "happened {happened}, detected {tick}");
-    assert!(faults[0]["detection_ms"].as_f64().unwrap() < 1000.0, "{faults:?}");
+    assert!(
+        happened <= tick && tick - happened <= 5,
+        "happened {happened}, detected {tick}"
+    );
+    assert!(
+        faults[0]["detection_ms"].as_f64().unwrap() < 1000.0,
+        "{faults:?}"
+    );
     // From that tick on robot 3 stands still and is recorded dead.
     let (_, ticks) =
         swarm::recording::read_recording(std::fs::File::open(out.join("recording.bin")).unwrap())
