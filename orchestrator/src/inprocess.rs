@@ -36,7 +36,8 @@ impl Air {
 
 pub struct InProcess<'a> {
     pub sc: &'a Scenario,
-    pub out_dir: &'a Path,
+    /// The run folder; None keeps only the returned Summary (sweeps).
+    pub out_dir: Option<&'a Path>,
     pub run_id: &'a str,
     pub on_tick: &'a mut dyn FnMut(&World),
 }
@@ -47,7 +48,10 @@ impl BehaviourVisitor for InProcess<'_> {
         let t0 = Instant::now();
         let sc = self.sc;
         let mut world = World::new(sc).map_err(std::io::Error::other)?;
-        let mut outputs = RunOutputs::create(self.out_dir, sc)?;
+        let mut outputs = match self.out_dir {
+            Some(d) => RunOutputs::create(d, sc)?,
+            None => RunOutputs::summary_only(),
+        };
         let n = world.n;
         let mut rts: Vec<AgentRuntime<B>> = (0..n as u32)
             .map(|i| AgentRuntime::new(sc, i, make(i)))
@@ -89,6 +93,10 @@ impl BehaviourVisitor for InProcess<'_> {
             cur.clear();
             tick_ns.push(t_tick.elapsed().as_nanos() as u64);
             (self.on_tick)(&world);
+            if world.mission_complete() {
+                end = "all targets found";
+                break;
+            }
             if world.alive_count() == 0 {
                 end = "all robots dead";
                 break;
@@ -106,7 +114,7 @@ impl BehaviourVisitor for InProcess<'_> {
 
 pub fn run(
     sc: &Scenario,
-    out_dir: &Path,
+    out_dir: Option<&Path>,
     run_id: &str,
     on_tick: &mut dyn FnMut(&World),
 ) -> std::io::Result<Summary> {

@@ -3,6 +3,7 @@
 mod bench;
 mod clean;
 mod control;
+mod experiment;
 mod inprocess;
 mod processes;
 mod registry;
@@ -28,6 +29,8 @@ enum Cmd {
     /// Run a scenario: one world process and one agent process per robot.
     #[command(allow_negative_numbers = true)]
     Up(up::UpArgs),
+    /// Run a grid of scenarios (modes x swarm sizes x seeds) and print the paper-style table.
+    Experiment(experiment::ExperimentArgs),
     /// Measure the runtime against raw iceoryx2 and the futex floor.
     Bench(bench::BenchArgs),
     /// Remove everything dead runs left in /dev/shm and in the run registry.
@@ -49,6 +52,7 @@ fn main() {
         Cmd::Bench(a) => bench::bench(a),
         Cmd::BenchChild(a) => bench::child(a),
         Cmd::Status => control::status(),
+        Cmd::Experiment(a) => experiment::experiment(a),
         Cmd::Kill(a) => control::kill(a),
         Cmd::Clean => {
             let r = clean::clean_dead_runs();

@@ -212,7 +212,12 @@ fn supervise(
                 // Ended with the run (the world's shutdown word), not a fault.
                 continue;
             }
-            send_control(CONTROL_ROBOT_DIED, robot, monotonic_us(), last.tick);
+            send_control(
+                CONTROL_ROBOT_DIED,
+                robot,
+                monotonic_us(),
+                barrier.current_tick(),
+            );
             if restart && stop_sent.is_none() && restarts[robot as usize] < sc.faults.max_restarts {
                 // The dead agent's ports must go before the new one attaches to its services.
                 node.try_cleanup_dead_nodes();

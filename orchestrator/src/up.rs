@@ -155,6 +155,11 @@ pub fn resolve(a: &UpArgs) -> Result<Scenario, ConfigError> {
             .map(|(_, f)| f.to_string())
             .unwrap_or_else(|| file.clone())
     })?;
+    agent::behaviours::validate(&sc).map_err(|message| ConfigError {
+        source: file.clone(),
+        key: String::new(),
+        message,
+    })?;
     Ok(sc)
 }
 
@@ -171,8 +176,20 @@ fn progress(sc: &Scenario, quiet: bool) -> ProgressBar {
     pb
 }
 
-fn bar_msg(alive: u32, n: u32, delivered: u64, range: u64, loss: u64) -> String {
-    format!("robots alive {alive}/{n} | messages delivered {delivered}, dropped: out of range {range}, lost {loss}")
+fn bar_msg(
+    alive: u32,
+    n: u32,
+    delivered: u64,
+    range: u64,
+    loss: u64,
+    targets: (u32, u32),
+) -> String {
+    let t = if targets.1 > 0 {
+        format!("targets found {}/{} | ", targets.0, targets.1)
+    } else {
+        String::new()
+    };
+    format!("{t}robots alive {alive}/{n} | messages delivered {delivered}, dropped: out of range {range}, lost {loss}")
 }
 
 pub fn up(a: UpArgs) -> i32 {
@@ -199,16 +216,21 @@ pub fn up(a: UpArgs) -> i32 {
     let pb = progress(&sc, a.quiet);
     let n = sc.run.robots;
     let result: Result<(), String> = match a.executor {
-        Executor::Inprocess => inprocess::run(&sc, &run_dir, &run_id, &mut |w| {
+        Executor::Inprocess => inprocess::run(&sc, Some(&run_dir), &run_id, &mut |w| {
             pb.set_position(w.tick);
             if w.tick % 16 == 0 {
                 let r = &w.radio;
+                let t = w
+                    .targets
+                    .as_ref()
+                    .map_or((0, 0), |t| (t.found_count(), t.pos.len() as u32));
                 pb.set_message(bar_msg(
                     w.alive_count(),
                     n,
                     r.delivered,
                     r.dropped_range,
                     r.dropped_loss,
+                    t,
                 ));
             }
         })
@@ -226,6 +248,7 @@ pub fn up(a: UpArgs) -> i32 {
                     s.delivered,
                     s.dropped_range,
                     s.dropped_loss,
+                    (s.found, s.targets),
                 ));
             },
         })
@@ -302,6 +325,18 @@ fn print_summary(v: &serde_json::Value, dir: &Path) {
                 fl["cause"].as_str().unwrap_or("")
             );
         }
+    }
+    if let Some(sm) = v.pointer("/mission/search") {
+        let steps = match sm["steps"].as_u64() {
+            Some(s) => s.to_string(),
+            None => format!("censored at {}", g("/ticks")),
+        };
+        println!(
+            "  search: targets found {}/{}  steps {steps}  energy {:.3} x 10^4",
+            sm["found"],
+            sm["targets"],
+            sm["energy"].as_f64().unwrap_or(0.0) / 1e4
+        );
     }
     println!(
         "  mission: coverage {:.1} %  spread {:.1}  mean nearest neighbour {:.1}",

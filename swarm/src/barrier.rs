@@ -213,6 +213,11 @@ impl TickBarrier {
         self.robots
     }
 
+    /// The tick the world released last (the tick the swarm is in).
+    pub fn current_tick(&self) -> u64 {
+        self.header().released_tick.load(Ordering::Acquire)
+    }
+
     pub fn world_pid(&self) -> u32 {
         self.header().world_pid.load(Ordering::Relaxed)
     }

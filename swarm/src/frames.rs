@@ -26,9 +26,13 @@ pub const RUN_STOPPING: u32 = 1;
 #[repr(C)]
 pub struct Signal {
     pub target: u32,
-    pub _pad: u32,
+    /// SIGNAL_FOUND_BY_YOU: this robot came within the found distance of the target last tick
+    /// (the target stops emitting; this entry is its arrival sensor, intensity 0).
+    pub flags: u32,
     pub intensity: f64,
 }
+
+pub const SIGNAL_FOUND_BY_YOU: u32 = 1;
 
 /// World -> agent i, once per tick: everything robot i may know from its own sensors.
 #[derive(Debug, Clone, Copy, ZeroCopySend)]
@@ -82,7 +86,9 @@ impl Sense {
 pub struct Action {
     pub tick: u64,
     pub robot: u32,
-    /// Behaviour-declared events (bit flags, scenario-specific).
+    /// Low 8 bits (STATE_MASK): the behaviour's display state (0 = roaming / default; the search
+    /// behaviour uses STATE_COOPERATIVE, STATE_DECLARED), recorded per tick and used to colour
+    /// trajectories. Higher bits: behaviour-declared event flags.
     pub events: u32,
     pub vel: [f64; 2],
     /// Messages sent this tick and their destinations (BROADCAST or a robot id).
@@ -109,6 +115,11 @@ impl Action {
         }
     }
 }
+
+pub const STATE_MASK: u32 = 0xff;
+pub const STATE_ROAMING: u32 = 0;
+pub const STATE_COOPERATIVE: u32 = 1;
+pub const STATE_DECLARED: u32 = 2;
 
 /// The fixed header in front of every radio message's bincode payload.
 #[derive(Debug, Clone, Copy, ZeroCopySend, PartialEq)]
@@ -147,6 +158,8 @@ pub struct WorldStatus {
     pub dead: u32,
     pub finished: u32,
     pub restarted: u32,
+    pub targets: u32,
+    pub found: u32,
     pub offered: u64,
     pub delivered: u64,
     pub dropped_range: u64,

@@ -42,6 +42,8 @@ pub enum Event {
     ActionRejected { robot: u32, reason: RejectReason },
     /// The robot's step would have crossed an obstacle or left the arena; it stopped short.
     MoveBlocked { robot: u32 },
+    /// A robot came within the found distance of a target (search scenario).
+    TargetFound { target: u32, robot: u32 },
     /// Behaviour-declared event flags.
     Declared { robot: u32, flags: u32 },
 }
@@ -53,6 +55,8 @@ pub struct TickRecord {
     pub poses: Vec<[f64; 3]>,
     /// 1 for a live robot, 0 for a dead one.
     pub alive: Vec<u8>,
+    /// Each robot's display state this tick (Action.events & STATE_MASK).
+    pub states: Vec<u8>,
     pub events: Vec<Event>,
     /// Radio outcome of the messages due at this tick, plus range drops of those sent at it.
     pub radio: RadioCounters,
@@ -120,6 +124,7 @@ mod tests {
             tick: 0,
             poses: vec![[1.0, 2.0, 0.5], [3.0, 4.0, 0.0]],
             alive: vec![1, 0],
+            states: vec![0, 1],
             events: vec![
                 Event::MoveBlocked { robot: 1 },
                 Event::RobotDied {

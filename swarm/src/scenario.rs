@@ -17,6 +17,7 @@ pub struct Scenario {
     pub runtime: RuntimeParams,
     pub roam: RoamParams,
     pub faults: FaultParams,
+    pub search: SearchParams,
 }
 
 #[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
@@ -93,6 +94,29 @@ pub struct RuntimeParams {
     pub startup_timeout_s: u64,
 }
 
+/// The multi-target search scenario (spec/search.md): targets, their signal, the mode.
+#[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct SearchParams {
+    /// Obstacle layer B (BSOA) or S (SVF), then search layer T (TPEPSO), E (EPSO), A (ARBA).
+    pub mode: String,
+    pub targets: u32,
+    pub target_region: [f64; 4],
+    pub target_clearance: f64,
+    pub signal_m: f64,
+    pub signal_q: f64,
+    pub noise_sigma: f64,
+    pub l_t: f64,
+    pub found_distance: f64,
+    pub end_when_all_found: bool,
+    /// The behaviour's own parameters (agent::search::Params), validated by the agent crate.
+    #[serde(default)]
+    pub kernels: toml::Table,
+}
+
+/// Search modes (Table 3).
+pub const SEARCH_MODES: &[&str] = &["BT", "BE", "BA", "ST", "SE", "SA"];
+
 /// What happens to a robot whose agent process dies.
 #[derive(Serialize, Deserialize, Clone, Copy, Debug, PartialEq, Eq)]
 #[serde(rename_all = "kebab-case")]
@@ -124,8 +148,9 @@ pub struct RoamParams {
 }
 
 /// Behaviours an agent can run.
-/// `faulty` roams but sends invalid commands on a schedule (fault-injection tests).
-pub const BEHAVIOURS: &[&str] = &["roam", "faulty"];
+/// `faulty` roams but sends invalid commands on a schedule (fault-injection tests); `search` is
+/// the multi-target search of spec/search.md.
+pub const BEHAVIOURS: &[&str] = &["roam", "faulty", "search"];
 /// Hard limits that come from the fixed-size frames.
 pub const MAX_ROBOTS: u32 = 4096;
 

@@ -9,6 +9,7 @@ pub mod placement;
 pub mod process;
 pub mod sensing;
 pub mod svg;
+pub mod targets;
 pub mod world;
 
 pub use output::{RunOutputs, Summary, Timing};

@@ -39,8 +39,25 @@ impl Coverage {
     }
 }
 
+/// The search scenario's measures (spec/search.md 4.3 and 5 item 30).
+#[derive(Debug, Clone, Serialize, PartialEq)]
+pub struct SearchMetrics {
+    pub targets: u32,
+    pub found: u32,
+    /// Iteration steps until the last target was found (tick of that find + 1); None when the
+    /// run ended first (censored at max_ticks).
+    pub steps: Option<u64>,
+    /// Total energy: sum over robots and ticks of the distance moved (P_th = sum ||V_i(t)||).
+    pub energy: f64,
+    /// Per target: (tick found, robot), or None.
+    pub found_at: Vec<Option<(u64, u32)>>,
+}
+
 #[derive(Debug, Clone, Serialize, PartialEq)]
 pub struct Mission {
+    /// Search scenario only.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub search: Option<SearchMetrics>,
     /// Fraction of 20 x 20 cells any robot visited.
     pub coverage: f64,
     /// Mean distance of live robots to their centroid at the end.
@@ -76,6 +93,7 @@ pub fn mission(coverage: &Coverage, poses: &[[f64; 3]], alive: &[bool]) -> Missi
             / n
     };
     Mission {
+        search: None,
         coverage: coverage.fraction(),
         spread,
         mean_nearest_neighbour: nn,

@@ -63,8 +63,10 @@ pub struct Summary {
     pub mission: Mission,
 }
 
+/// Where a run's outputs go: the run folder, or nowhere but the returned Summary (sweeps of
+/// thousands of runs keep only their summaries).
 pub struct RunOutputs {
-    pub dir: PathBuf,
+    pub dir: Option<PathBuf>,
     rec: Option<RecordingWriter<File>>,
 }
 
@@ -80,13 +82,24 @@ impl RunOutputs {
         };
         let rec = RecordingWriter::new(File::create(dir.join("recording.bin"))?, &header)?;
         Ok(RunOutputs {
-            dir: dir.to_path_buf(),
+            dir: Some(dir.to_path_buf()),
             rec: Some(rec),
         })
     }
 
+    /// No files: `finish` only returns the Summary.
+    pub fn summary_only() -> RunOutputs {
+        RunOutputs {
+            dir: None,
+            rec: None,
+        }
+    }
+
     pub fn push(&mut self, t: &TickRecord) -> std::io::Result<()> {
-        self.rec.as_mut().expect("open").push(t)
+        match self.rec.as_mut() {
+            Some(r) => r.push(t),
+            None => Ok(()),
+        }
     }
 
     /// Closes the recording and writes summary.json and run.svg.
@@ -98,7 +111,9 @@ impl RunOutputs {
         executor: &str,
         end: &str,
     ) -> std::io::Result<Summary> {
-        self.rec.take().expect("open").finish()?;
+        if let Some(r) = self.rec.take() {
+            r.finish()?;
+        }
         world.finish_radio();
         let warmup = (timing.tick_ns.len() / 20)
             .max(10)
@@ -144,13 +159,32 @@ impl RunOutputs {
             distance_travelled: world.distance_travelled,
             alive_at_end: world.alive_count(),
             faults: world.faults.clone(),
-            mission: mission(&world.coverage, &world.poses, &world.alive),
+            mission: {
+                let mut m = mission(&world.coverage, &world.poses, &world.alive);
+                m.search = world
+                    .targets
+                    .as_ref()
+                    .map(|t| crate::metrics::SearchMetrics {
+                        targets: t.pos.len() as u32,
+                        found: t.found_count(),
+                        steps: if t.all_found() {
+                            t.found.iter().filter_map(|f| f.map(|x| x.0 + 1)).max()
+                        } else {
+                            None
+                        },
+                        energy: world.distance_travelled,
+                        found_at: t.found.clone(),
+                    });
+                m
+            },
         };
-        std::fs::write(
-            self.dir.join("summary.json"),
-            serde_json::to_string_pretty(&summary).map_err(std::io::Error::other)?,
-        )?;
-        crate::svg::write_svg(world, &self.dir.join("run.svg")).map_err(std::io::Error::other)?;
+        if let Some(dir) = &self.dir {
+            std::fs::write(
+                dir.join("summary.json"),
+                serde_json::to_string_pretty(&summary).map_err(std::io::Error::other)?,
+            )?;
+            crate::svg::write_svg(world, &dir.join("run.svg")).map_err(std::io::Error::other)?;
+        }
         Ok(summary)
     }
 }

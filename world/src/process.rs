@@ -223,6 +223,10 @@ pub fn run(args: &WorldArgs) -> Result<i32> {
             end = "interrupted".to_string();
             break;
         }
+        if world.mission_complete() {
+            end = "all targets found".to_string();
+            break;
+        }
         if world.alive_count() == 0 {
             end = "all robots dead".to_string();
             break;

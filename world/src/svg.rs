@@ -30,6 +30,15 @@ fn robot_colour(i: usize, n: usize) -> RGBColor {
     )
 }
 
+/// Trajectory colour of a display state: roaming blue, cooperative orange, declared green.
+fn state_colour(state: u32) -> RGBColor {
+    match state {
+        swarm::frames::STATE_COOPERATIVE => RGBColor(230, 120, 0),
+        swarm::frames::STATE_DECLARED => RGBColor(0, 150, 60),
+        _ => RGBColor(60, 90, 200),
+    }
+}
+
 pub fn write_svg(world: &World, path: &Path) -> Result<(), String> {
     let sc = &world.sc;
     let (w, h) = (sc.arena.width, sc.arena.height);
@@ -66,13 +75,50 @@ pub fn write_svg(world: &World, path: &Path) -> Result<(), String> {
             .map_err(e)?;
     }
     let n = world.n;
+    let by_state = world.targets.is_some();
     for (i, traj) in world.trajectories.iter().enumerate() {
-        let col = robot_colour(i, n);
-        let mut pts: Vec<(f64, f64)> = traj.iter().map(|p| (p[0], p[1])).collect();
-        pts.push((world.poses[i][0], world.poses[i][1]));
-        chart
-            .draw_series(LineSeries::new(pts, col.mix(0.6).stroke_width(1)))
-            .map_err(e)?;
+        if !by_state {
+            let col = robot_colour(i, n);
+            let mut pts: Vec<(f64, f64)> = traj.iter().map(|p| (p[0], p[1])).collect();
+            pts.push((world.poses[i][0], world.poses[i][1]));
+            chart
+                .draw_series(LineSeries::new(pts, col.mix(0.6).stroke_width(1)))
+                .map_err(e)?;
+            continue;
+        }
+        // Search: each stretch coloured by the robot's state (as in the paper's Fig. 6).
+        let mut j = 0;
+        while j + 1 < traj.len() {
+            let st = traj[j + 1][2] as u32;
+            let mut pts = vec![(traj[j][0], traj[j][1])];
+            while j + 1 < traj.len() && traj[j + 1][2] as u32 == st {
+                j += 1;
+                pts.push((traj[j][0], traj[j][1]));
+            }
+            chart
+                .draw_series(LineSeries::new(
+                    pts,
+                    state_colour(st).mix(0.7).stroke_width(1),
+                ))
+                .map_err(e)?;
+        }
+    }
+    if let Some(t) = &world.targets {
+        for (k, p) in t.pos.iter().enumerate() {
+            let c = (p[0], p[1]);
+            if t.found[k].is_some() {
+                chart
+                    .draw_series(std::iter::once(Circle::new(c, 7, GREEN.filled())))
+                    .map_err(e)?;
+                chart
+                    .draw_series(std::iter::once(Circle::new(c, 7, BLACK.stroke_width(1))))
+                    .map_err(e)?;
+            } else {
+                chart
+                    .draw_series(std::iter::once(Circle::new(c, 7, RED.stroke_width(3))))
+                    .map_err(e)?;
+            }
+        }
     }
     for (i, s) in world.start.iter().enumerate() {
         let col = robot_colour(i, n);

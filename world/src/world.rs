@@ -4,7 +4,9 @@ use crate::metrics::Coverage;
 use crate::placement::place_robots;
 use crate::sensing::{fill_neighbours, fill_obstacles, static_points, PointGrid, SenseScratch};
 use std::collections::VecDeque;
-use swarm::frames::{Action, Sense, WorldStatus, BROADCAST, MAX_SENT, RUN_RUNNING, RUN_STOPPING};
+use swarm::frames::{
+    Action, Sense, WorldStatus, BROADCAST, MAX_SENT, RUN_RUNNING, RUN_STOPPING, STATE_MASK,
+};
 use swarm::geometry::{polygon_hit, v2, Vec2};
 use swarm::radio::{distance, RadioCounters};
 use swarm::recording::{Event, RejectReason, TickRecord};
@@ -57,13 +59,18 @@ pub struct World {
     pending_events: Vec<Event>,
     stopping: bool,
     /// Trajectories for the picture, sampled every `traj_every` ticks.
-    pub trajectories: Vec<Vec<[f64; 2]>>,
+    /// Sampled (x, y, display state) of each robot.
+    pub trajectories: Vec<Vec<[f64; 3]>>,
+    /// Each robot's display state from its last action.
+    pub states: Vec<u8>,
     pub coverage: Coverage,
     pub start: Vec<[f64; 2]>,
     traj_every: u64,
     /// The run's SIGKILL schedule (swarm::chaos) and the next entry due.
     kills: Vec<[u64; 2]>,
     next_kill: usize,
+    /// The search scenario's targets (None for other behaviours).
+    pub targets: Option<crate::targets::Targets>,
 }
 
 fn reason_index(r: RejectReason) -> usize {
@@ -119,11 +126,17 @@ impl World {
                 start.iter().for_each(|p| c.visit(*p));
                 c
             },
-            trajectories: start.iter().map(|p| vec![*p]).collect(),
+            trajectories: start.iter().map(|p| vec![[p[0], p[1], 0.0]]).collect(),
+            states: vec![0; n],
             start,
             traj_every,
             kills: swarm::chaos::schedule(sc),
             next_kill: 0,
+            targets: if sc.run.behaviour == "search" {
+                Some(crate::targets::Targets::new(sc)?)
+            } else {
+                None
+            },
         })
     }
 
@@ -160,6 +173,9 @@ impl World {
         out.vel = self.vel[i];
         out.alive_robots = self.alive_count();
         out.n_signals = 0;
+        if let Some(t) = self.targets.as_mut() {
+            t.sense(&self.sc, i as u32, [p[0], p[1]], out);
+        }
         let link_range = self.sc.radio.comm_radius + self.sc.radio.link_margin;
         fill_neighbours(
             i,
@@ -386,10 +402,11 @@ impl World {
                 self.vel[i] = [0.0; 2];
                 continue;
             }
-            if a.events != 0 {
+            self.states[i] = (a.events & STATE_MASK) as u8;
+            if a.events & !STATE_MASK != 0 {
                 events.push(Event::Declared {
                     robot: i as u32,
-                    flags: a.events,
+                    flags: a.events & !STATE_MASK,
                 });
             }
             let p = Vec2::new(self.poses[i][0], self.poses[i][1]);
@@ -409,10 +426,19 @@ impl World {
             self.coverage.visit([q.x, q.y]);
             self.vel[i] = [moved.x, moved.y];
         }
+        if let Some(t) = self.targets.as_mut() {
+            for (target, robot) in t.update(&self.sc, k, &self.poses, &self.alive) {
+                events.push(Event::TargetFound { target, robot });
+            }
+        }
         self.radio.add(&radio);
         if (k + 1).is_multiple_of(self.traj_every) {
             for i in 0..self.n {
-                self.trajectories[i].push([self.poses[i][0], self.poses[i][1]]);
+                self.trajectories[i].push([
+                    self.poses[i][0],
+                    self.poses[i][1],
+                    self.states[i] as f64,
+                ]);
             }
         }
         self.tick += 1;
@@ -420,6 +446,7 @@ impl World {
             tick: k,
             poses: self.poses.clone(),
             alive: self.alive.iter().map(|&a| a as u8).collect(),
+            states: self.states.clone(),
             events,
             radio,
         }
@@ -438,6 +465,11 @@ impl World {
         self.radio.in_flight = self.in_flight.drain(..).map(|f| f.in_range).sum();
     }
 
+    /// The mission is complete (search: every target found and search.end_when_all_found).
+    pub fn mission_complete(&self) -> bool {
+        self.sc.search.end_when_all_found && self.targets.as_ref().is_some_and(|t| t.all_found())
+    }
+
     pub fn status(&self, finished: bool) -> WorldStatus {
         let alive = self.alive_count();
         WorldStatus {
@@ -447,6 +479,8 @@ impl World {
             dead: self.n as u32 - alive,
             finished: finished as u32,
             restarted: self.restarts() as u32,
+            targets: self.targets.as_ref().map_or(0, |t| t.pos.len() as u32),
+            found: self.targets.as_ref().map_or(0, |t| t.found_count()),
             offered: self.radio.offered,
             delivered: self.radio.delivered,
             dropped_range: self.radio.dropped_range,

@@ -12,6 +12,14 @@ pub trait BehaviourVisitor {
     fn visit<B: Behaviour + 'static>(self, make: &dyn Fn(u32) -> B) -> Self::Out;
 }
 
+/// Checks the behaviour's own parameters (beyond what swarm::scenario validates).
+pub fn validate(sc: &Scenario) -> Result<(), String> {
+    match sc.run.behaviour.as_str() {
+        "search" => search_validate(sc),
+        _ => Ok(()),
+    }
+}
+
 /// Calls `v` with the constructor of the scenario's behaviour (validated beforehand).
 pub fn dispatch<V: BehaviourVisitor>(sc: &Scenario, v: V) -> V::Out {
     match sc.run.behaviour.as_str() {
@@ -19,4 +27,9 @@ pub fn dispatch<V: BehaviourVisitor>(sc: &Scenario, v: V) -> V::Out {
         "faulty" => v.visit(&|i| faulty::Faulty::new(sc, i)),
         other => panic!("unknown behaviour {other:?} (the scenario was not validated)"),
     }
+}
+
+/// The search behaviour's parameters (`search.kernels`) and mode.
+fn search_validate(_sc: &Scenario) -> Result<(), String> {
+    Err("run.behaviour = \"search\" is not built yet".into())
 }
