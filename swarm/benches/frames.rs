@@ -1,1 +1,164 @@
-fn main() {}
+//! Criterion benches of the frame encode / decode on the runtime's hot path: a radio message
+//! through `AgentRuntime::step` (bincode sized, then encoded into the transmit buffer) and
+//! `AgentRuntime::ingest` (range, loss and decode), and a whole Sense frame written in place.
+//!
+//! `cargo bench -p swarm --bench frames`
+
+use criterion::{black_box, criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
+use serde::{Deserialize, Serialize};
+use swarm::behaviour::RadioTx;
+use swarm::frames::{MAX_NEIGHBOURS, MAX_OBSTACLE_POINTS, MAX_SIGNALS};
+use swarm::{AgentRuntime, Behaviour, Command, Outbox, RadioHeader, Received, Scenario, Sense};
+
+#[derive(Serialize, Deserialize, Clone)]
+struct Beacon {
+    pos: [f64; 2],
+}
+
+#[derive(Serialize, Deserialize, Clone)]
+struct Blob(Vec<u8>);
+
+/// Broadcasts a clone of `msg` every tick.
+struct Talker<M> {
+    msg: M,
+}
+
+impl<M: Serialize + for<'de> Deserialize<'de> + Clone> Behaviour for Talker<M> {
+    type Msg = M;
+    fn step(&mut self, _s: &Sense, _i: &[Received<M>], out: &mut Outbox<M>) -> Command {
+        out.broadcast(self.msg.clone());
+        Command::default()
+    }
+}
+
+/// Says nothing; only receives.
+struct Quiet<M>(std::marker::PhantomData<M>);
+
+impl<M: Serialize + for<'de> Deserialize<'de>> Behaviour for Quiet<M> {
+    type Msg = M;
+    fn step(&mut self, _s: &Sense, _i: &[Received<M>], _out: &mut Outbox<M>) -> Command {
+        Command::default()
+    }
+}
+
+/// Encodes into one reused buffer, as a loaned shared-memory slot would be filled.
+struct Buf {
+    header: RadioHeader,
+    bytes: Vec<u8>,
+}
+
+impl RadioTx for Buf {
+    fn transmit(&mut self, h: &RadioHeader, fill: &mut dyn FnMut(&mut [u8])) {
+        self.header = *h;
+        self.bytes.clear();
+        self.bytes.resize(h.len as usize, 0);
+        fill(&mut self.bytes);
+    }
+}
+
+fn sense(robot: u32, other: u32, tick: u64, x: f64) -> Box<Sense> {
+    let mut s = Sense::zeroed();
+    s.robot = robot;
+    s.tick = tick;
+    s.pos = [x, 0.0];
+    s.neighbours[0] = other;
+    s.n_neighbours = 1;
+    s
+}
+
+fn bench_radio<M>(c: &mut Criterion, name: &str, msg: M, bytes: u64)
+where
+    M: Serialize + for<'de> Deserialize<'de> + Clone + 'static,
+{
+    let mut sc = Scenario::default();
+    sc.radio.max_message_bytes = 65_536;
+    let mut g = c.benchmark_group("radio");
+    g.throughput(Throughput::Bytes(bytes));
+    // Encode: one step of a talker (the message clone included).
+    let mut tx = AgentRuntime::new(&sc, 1, Talker { msg: msg.clone() });
+    let mut buf = Buf {
+        header: RadioHeader::default(),
+        bytes: Vec::new(),
+    };
+    let s1 = sense(1, 0, 1, 10.0);
+    tx.begin(&s1);
+    g.bench_function(BenchmarkId::new("step-encode", name), |b| {
+        b.iter(|| tx.step(black_box(&s1), &mut buf))
+    });
+    // Decode: ingest of the encoded message by a linked receiver, then its next step (which
+    // moves it to the inbox), so pending messages do not pile up.
+    drop(msg);
+    let mut rx = AgentRuntime::new(&sc, 0, Quiet::<M>(std::marker::PhantomData));
+    let s0 = sense(0, 1, 0, 0.0);
+    rx.begin(&s0);
+    rx.update_links(&s0);
+    let mut sink = Buf {
+        header: RadioHeader::default(),
+        bytes: Vec::new(),
+    };
+    let mut h = buf.header;
+    let payload = buf.bytes.clone();
+    let mut k = 1u64;
+    let mut s = sense(0, 1, 1, 0.0);
+    g.bench_function(BenchmarkId::new("ingest-decode", name), |b| {
+        b.iter(|| {
+            h.tick = k;
+            s.tick = k;
+            rx.begin(&s);
+            rx.ingest(black_box(&h), black_box(&payload));
+            k += 1;
+            s.tick = k;
+            rx.begin(&s);
+            rx.step(&s, &mut sink)
+        })
+    });
+    g.finish();
+}
+
+fn bench_radio_all(c: &mut Criterion) {
+    bench_radio(c, "beacon-16B", Beacon { pos: [1.5, -2.0] }, 16);
+    bench_radio(c, "blob-64B", Blob(vec![7; 62]), 64);
+    bench_radio(c, "blob-4KiB", Blob(vec![7; 4093]), 4096);
+}
+
+fn bench_sense(c: &mut Criterion) {
+    let mut g = c.benchmark_group("sense");
+    g.throughput(Throughput::Bytes(std::mem::size_of::<Sense>() as u64));
+    let mut frame = Sense::zeroed();
+    g.bench_function("write-in-place-full", |b| {
+        b.iter(|| {
+            let s = black_box(&mut *frame);
+            // As the world does: zero the fixed part, then write every list in full.
+            // SAFETY: Sense is plain old data; the first 72 bytes are its fixed fields.
+            unsafe { std::ptr::write_bytes(s as *mut Sense as *mut u8, 0, 72) };
+            s.tick = 7;
+            s.n_neighbours = MAX_NEIGHBOURS as u32;
+            s.n_obstacle_points = MAX_OBSTACLE_POINTS as u32;
+            s.n_signals = MAX_SIGNALS as u32;
+            for (i, n) in s.neighbours.iter_mut().enumerate() {
+                *n = i as u32;
+            }
+            for (i, q) in s.obstacle_points.iter_mut().enumerate() {
+                *q = [i as f64, 1.0];
+            }
+            for (i, g) in s.signals.iter_mut().enumerate() {
+                g.target = i as u32;
+                g.intensity = 0.5;
+            }
+        })
+    });
+    g.bench_function("read-in-place-lists", |b| {
+        b.iter(|| {
+            let s = black_box(&*frame);
+            let mut acc = 0.0;
+            for q in s.obstacle_points() {
+                acc += q[0] - q[1];
+            }
+            acc + s.neighbours().len() as f64
+        })
+    });
+    g.finish();
+}
+
+criterion_group!(benches, bench_radio_all, bench_sense);
+criterion_main!(benches);

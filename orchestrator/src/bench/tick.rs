@@ -7,49 +7,16 @@
 //! - futex floor: N child processes released by one futex word (one FUTEX_WAKE for all) and
 //!   counting themselves back through the same `TickBarrier` the runtime uses, no work.
 
+use super::ChildArgs;
 use crate::processes;
-use clap::{Args, Subcommand};
 use iceoryx2::prelude::*;
 use serde::Serialize;
-use std::path::PathBuf;
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 use swarm::barrier::{TickBarrier, Wake};
 use swarm::scenario::Scenario;
 use swarm::{cleanup, transport};
 use world::output::percentile;
-
-#[derive(Args, Debug)]
-pub struct BenchArgs {
-    #[command(subcommand)]
-    what: BenchWhat,
-}
-
-#[derive(Subcommand, Debug)]
-enum BenchWhat {
-    /// Lock-step tick rate: runtime vs raw iceoryx2 round vs futex floor.
-    Tick {
-        /// Swarm sizes, comma separated.
-        #[arg(long, value_delimiter = ',', default_value = "10,50,100")]
-        robots: Vec<u32>,
-        /// Ticks (rounds) measured per size.
-        #[arg(long, default_value_t = 2000)]
-        ticks: u64,
-        /// Also write the table as JSON.
-        #[arg(long)]
-        json: Option<PathBuf>,
-    },
-}
-
-#[derive(Args, Debug)]
-pub struct ChildArgs {
-    /// iox2 or futex
-    kind: String,
-    #[arg(long)]
-    prefix: String,
-    #[arg(long)]
-    index: u32,
-}
 
 #[derive(Debug, Clone, Serialize)]
 pub struct Row {
@@ -81,34 +48,7 @@ fn stats(mut ns: Vec<u64>) -> Stats {
     }
 }
 
-pub fn bench(a: BenchArgs) -> i32 {
-    match a.what {
-        BenchWhat::Tick {
-            robots,
-            ticks,
-            json,
-        } => match bench_tick(&robots, ticks) {
-            Ok(rows) => {
-                print_table(&rows, ticks);
-                if let Some(p) = json {
-                    if let Err(e) =
-                        std::fs::write(&p, serde_json::to_string_pretty(&rows).expect("json"))
-                    {
-                        eprintln!("error: {}: {e}", p.display());
-                        return 1;
-                    }
-                }
-                0
-            }
-            Err(e) => {
-                eprintln!("error: bench tick: {e}");
-                1
-            }
-        },
-    }
-}
-
-fn print_table(rows: &[Row], ticks: u64) {
+pub fn print_table(rows: &[Row], ticks: u64) {
     println!("lock-step tick, {ticks} ticks per size (default scenario for the runtime; no work for the others)");
     println!(
         "{:>6} | {:>10} {:>8} {:>8} | {:>10} {:>8} {:>8} | {:>10} {:>8} {:>8} | {:>9} {:>9}",
@@ -145,7 +85,7 @@ fn print_table(rows: &[Row], ticks: u64) {
     println!("rt/iox2 = runtime tick time / raw iceoryx2 round time (mean); below 1 means faster than the raw round.");
 }
 
-fn bench_tick(sizes: &[u32], ticks: u64) -> Result<Vec<Row>, String> {
+pub fn bench_tick(sizes: &[u32], ticks: u64) -> Result<Vec<Row>, String> {
     let mut rows = Vec::new();
     for &n in sizes {
         let rt = runtime(n, ticks)?;
@@ -221,7 +161,7 @@ fn spawn_children(kind: &str, prefix: &str, n: u32) -> Result<Vec<Child>, String
 
 use std::os::unix::process::CommandExt;
 
-fn reap_children(children: Vec<Child>) {
+pub(super) fn reap_children(children: Vec<Child>) {
     for mut c in children {
         let t = Instant::now();
         while c.try_wait().ok().flatten().is_none() {
@@ -235,7 +175,7 @@ fn reap_children(children: Vec<Child>) {
     }
 }
 
-fn bench_prefix(kind: &str) -> String {
+pub(super) fn bench_prefix(kind: &str) -> String {
     transport::prefix_for(&format!("bench-{kind}-{}", crate::runid::new_run_id()))
 }
 
@@ -349,12 +289,8 @@ fn futex_floor(n: u32, rounds: u64) -> Result<Stats, String> {
     result
 }
 
-/// A benchmark child: does no work, only takes part in the rounds.
-pub fn child(a: ChildArgs) -> i32 {
-    // SAFETY: prctl with constant arguments: die with the bench parent.
-    unsafe {
-        libc::prctl(libc::PR_SET_PDEATHSIG, libc::SIGKILL);
-    }
+/// A benchmark child of `bench tick`: does no work, only takes part in the rounds.
+pub fn child(a: &ChildArgs) -> i32 {
     match a.kind.as_str() {
         "futex" => {
             let Ok(b) = TickBarrier::open(&a.prefix) else {

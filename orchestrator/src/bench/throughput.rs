@@ -1,0 +1,393 @@
+//! `orchestrator bench throughput`: radio messages and bytes delivered per second with N robots
+//! all broadcasting every tick.
+//!
+//! N child processes (`__bench-child tput`) each run the agent's radio loop: wait for the tick
+//! on the runtime's futex barrier, take off each link exactly the messages its sender recorded
+//! for the last tick, `AgentRuntime::ingest` them, `AgentRuntime::step` a behaviour that
+//! broadcasts one payload-sized message, encode it into a slot of its own radio service, record
+//! the count and acknowledge. Every robot is within range of every other one and linked to it,
+//! so a tick delivers N (N - 1) messages. The parent only releases ticks (no physics, no Sense
+//! frames): the numbers are the radio's.
+
+use super::{check_no_leftovers, spawn_child, tick, ByteBuf, ChildArgs};
+use iceoryx2::port::publisher::Publisher;
+use iceoryx2::port::subscriber::Subscriber;
+use iceoryx2::prelude::*;
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+use std::io::Read;
+use std::time::{Duration, Instant};
+use swarm::barrier::{TickBarrier, Wake};
+use swarm::behaviour::RadioTx;
+use swarm::frames::{RadioHeader, MAX_NEIGHBOURS};
+use swarm::scenario::Scenario;
+use swarm::{cleanup, transport, AgentRuntime, Behaviour, Command, Outbox, Received, Sense};
+use world::output::percentile;
+
+/// (payload bytes, encoding): `seq` is a `Vec<u8>` as serde encodes it (element by element),
+/// `bytes` the same bytes as one byte string.
+pub const CASES: [(usize, &str); 4] = [(64, "seq"), (4096, "seq"), (64, "bytes"), (4096, "bytes")];
+
+#[derive(Debug, Clone, Serialize)]
+pub struct Row {
+    pub robots: u32,
+    pub payload_bytes: usize,
+    pub encoding: String,
+    pub ticks: u64,
+    pub seconds: f64,
+    pub ticks_per_s: f64,
+    pub tick_p50_us: f64,
+    pub tick_p99_us: f64,
+    pub delivered: u64,
+    pub expected: u64,
+    pub messages_per_s: f64,
+    pub mib_per_s: f64,
+}
+
+fn warm_for(ticks: u64) -> u64 {
+    (ticks / 10).max(10)
+}
+
+fn scenario(robots: u32, size: usize) -> Scenario {
+    let mut sc = Scenario::default();
+    sc.run.robots = robots;
+    sc.radio.max_message_bytes = size.max(64) as u32;
+    sc.radio.max_messages_per_tick = 1;
+    sc.radio.loss = 0.0;
+    sc.radio.delay_ticks = 0;
+    sc
+}
+
+pub fn run(robots: u32, quick: bool) -> Result<Vec<Row>, String> {
+    if !(2..=MAX_NEIGHBOURS as u32 + 1).contains(&robots) {
+        return Err(format!(
+            "--robots {robots} is out of range: allowed 2..={}",
+            MAX_NEIGHBOURS + 1
+        ));
+    }
+    CASES
+        .iter()
+        .map(|&(size, enc)| {
+            let ticks = match (quick, size > 1024 && enc == "seq") {
+                (true, true) => 100,
+                (true, false) => 300,
+                (false, true) => 500,
+                (false, false) => 2000,
+            };
+            one(robots, size, enc, ticks)
+        })
+        .collect()
+}
+
+pub fn print(rows: &[Row]) {
+    println!("radio throughput: every robot broadcasts one message every tick, all robots in range and linked");
+    println!(
+        "{:>6} {:>8} {:>6} {:>6} | {:>8} {:>8} {:>8} | {:>12} {:>10} | {:>9} {:>9}",
+        "robots",
+        "payload",
+        "enc",
+        "ticks",
+        "ticks/s",
+        "p50 us",
+        "p99 us",
+        "messages/s",
+        "MiB/s",
+        "delivered",
+        "of sent"
+    );
+    for r in rows {
+        println!(
+            "{:>6} {:>8} {:>6} {:>6} | {:>8.0} {:>8.0} {:>8.0} | {:>12.0} {:>10.1} | {:>9} {:>8.2}%",
+            r.robots,
+            format!("{} B", r.payload_bytes),
+            r.encoding,
+            r.ticks,
+            r.ticks_per_s,
+            r.tick_p50_us,
+            r.tick_p99_us,
+            r.messages_per_s,
+            r.mib_per_s,
+            r.delivered,
+            100.0 * r.delivered as f64 / r.expected.max(1) as f64
+        );
+    }
+    println!("messages/s counts (message, receiver) pairs decoded by the receivers' runtimes; MiB/s = messages/s x payload.");
+    println!("enc: seq = the payload is a Vec<u8> (serde encodes it byte by byte), bytes = the same bytes as one byte string.");
+}
+
+fn one(n: u32, size: usize, enc: &str, ticks: u64) -> Result<Row, String> {
+    let prefix = tick::bench_prefix(&format!("tput-{n}-{size}-{enc}"));
+    let r = (|| -> Result<Row, String> {
+        let sc = scenario(n, size);
+        let barrier = TickBarrier::create(&prefix, n).map_err(|e| format!("barrier: {e}"))?;
+        let config = transport::run_config(&prefix).map_err(|e| e.to_string())?;
+        let node = transport::node(&config, "bench-tput").map_err(|e| e.to_string())?;
+        let _services = (0..n)
+            .map(|i| transport::radio_service(&node, i, &sc, true))
+            .collect::<Result<Vec<_>, _>>()
+            .map_err(|e| e.to_string())?;
+        let extra = [
+            "--size".to_string(),
+            size.to_string(),
+            "--rounds".to_string(),
+            ticks.to_string(),
+            "--robots".to_string(),
+            n.to_string(),
+            "--mode".to_string(),
+            enc.to_string(),
+        ];
+        let mut children = Vec::new();
+        for i in 0..n {
+            children.push(spawn_child("tput", &prefix, i, &extra, true)?);
+        }
+        let result = (|| -> Result<Row, String> {
+            let t = Instant::now();
+            while barrier.ready_count() < n {
+                if children
+                    .iter_mut()
+                    .any(|c| matches!(c.try_wait(), Ok(Some(_))))
+                {
+                    return Err("a bench child exited early".into());
+                }
+                if t.elapsed() > Duration::from_secs(120) {
+                    return Err("bench children did not get ready".into());
+                }
+                std::thread::sleep(Duration::from_millis(5));
+            }
+            let warm = warm_for(ticks);
+            let mut ns = Vec::with_capacity(ticks as usize);
+            let mut start = Instant::now();
+            for k in 0..ticks + warm {
+                if k == warm {
+                    start = Instant::now();
+                }
+                let t = Instant::now();
+                barrier.release(k, n);
+                while !(0..n).all(|i| barrier.acked(i, k)) {
+                    barrier.wait_acks(Duration::from_millis(500));
+                    if t.elapsed() > Duration::from_secs(10) {
+                        return Err(format!("tick {k}: a child did not acknowledge"));
+                    }
+                }
+                if k >= warm {
+                    ns.push(t.elapsed().as_nanos() as u64);
+                }
+            }
+            let seconds = start.elapsed().as_secs_f64();
+            barrier.shutdown();
+            let mut delivered = 0u64;
+            for c in children.iter_mut() {
+                let mut s = String::new();
+                if let Some(o) = c.stdout.as_mut() {
+                    let _ = o.read_to_string(&mut s);
+                }
+                let mut it = s.split_whitespace();
+                if it.next() != Some("delivered") {
+                    return Err(format!("bench child said {s:?}"));
+                }
+                delivered += it.next().and_then(|v| v.parse::<u64>().ok()).unwrap_or(0);
+            }
+            ns.sort_unstable();
+            let msgs = delivered as f64 / seconds;
+            Ok(Row {
+                robots: n,
+                payload_bytes: size,
+                encoding: enc.to_string(),
+                ticks,
+                seconds,
+                ticks_per_s: ticks as f64 / seconds,
+                tick_p50_us: percentile(&ns, 0.5) / 1e3,
+                tick_p99_us: percentile(&ns, 0.99) / 1e3,
+                delivered,
+                expected: n as u64 * (n as u64 - 1) * ticks,
+                messages_per_s: msgs,
+                mib_per_s: msgs * size as f64 / (1024.0 * 1024.0),
+            })
+        })();
+        barrier.shutdown();
+        tick::reap_children(children);
+        result
+    })();
+    swarm::barrier::unlink(&prefix);
+    cleanup::remove_run(&prefix);
+    check_no_leftovers(&prefix)?;
+    r
+}
+
+/// A radio link: the sender's service and our subscription to it.
+type Link = (
+    transport::RadioService,
+    Subscriber<ipc::Service, [u8], RadioHeader>,
+);
+
+/// The broadcast payload, element by element.
+#[derive(Serialize, Deserialize)]
+struct Blob(Vec<u8>);
+
+/// The broadcast payload as one byte string.
+#[derive(Serialize, Deserialize)]
+struct BytesBlob(ByteBuf);
+
+trait Make: Serialize + serde::de::DeserializeOwned + 'static {
+    fn make(data: Vec<u8>) -> Self;
+}
+
+impl Make for Blob {
+    fn make(data: Vec<u8>) -> Self {
+        Blob(data)
+    }
+}
+
+impl Make for BytesBlob {
+    fn make(data: Vec<u8>) -> Self {
+        BytesBlob(ByteBuf(data))
+    }
+}
+
+/// Broadcasts one message every tick.
+struct Flood<M> {
+    data: Vec<u8>,
+    _m: std::marker::PhantomData<M>,
+}
+
+impl<M: Make> Behaviour for Flood<M> {
+    type Msg = M;
+    fn step(&mut self, _s: &Sense, _inbox: &[Received<M>], out: &mut Outbox<M>) -> Command {
+        out.broadcast(M::make(self.data.clone()));
+        Command::default()
+    }
+}
+
+/// As agent/src/process.rs sends: loan in the robot's radio service, encode in place, send.
+struct ShmTx<'a> {
+    publisher: &'a Publisher<ipc::Service, [u8], RadioHeader>,
+    failures: u64,
+}
+
+impl RadioTx for ShmTx<'_> {
+    fn transmit(&mut self, h: &RadioHeader, fill: &mut dyn FnMut(&mut [u8])) {
+        let len = (h.len as usize).max(1);
+        match self.publisher.loan_slice_uninit(len) {
+            Ok(sample) => {
+                let mut sample = sample.write_from_fn(|_| 0u8);
+                *sample.user_header_mut() = *h;
+                fill(&mut sample.payload_mut()[..h.len as usize]);
+                if sample.send().is_err() {
+                    self.failures += 1;
+                }
+            }
+            Err(_) => self.failures += 1,
+        }
+    }
+}
+
+fn data_len<M: Make>(size: usize) -> usize {
+    let lo = size.saturating_sub(8);
+    (lo..=size)
+        .rev()
+        .find(|&l| {
+            let mut w = bincode::enc::write::SizeWriter::default();
+            bincode::serde::encode_into_writer(
+                M::make(vec![0; l]),
+                &mut w,
+                bincode::config::standard(),
+            )
+            .is_ok()
+                && w.bytes_written <= size
+        })
+        .unwrap_or(lo)
+}
+
+pub fn child(a: &ChildArgs) -> i32 {
+    let r = if a.mode == "bytes" {
+        child_run::<BytesBlob>(a)
+    } else {
+        child_run::<Blob>(a)
+    };
+    match r {
+        Ok(()) => 0,
+        Err(e) => {
+            eprintln!("bench child tput {}: {e}", a.index);
+            1
+        }
+    }
+}
+
+fn child_run<M: Make>(a: &ChildArgs) -> Result<(), String> {
+    let (n, me) = (a.robots, a.index);
+    let sc = scenario(n, a.size);
+    let barrier = TickBarrier::open(&a.prefix).map_err(|e| e.to_string())?;
+    let config = transport::run_config(&a.prefix).map_err(|e| e.to_string())?;
+    let node = transport::node(&config, &format!("bench-tput-{me}")).map_err(|e| e.to_string())?;
+    let own = transport::radio_service(&node, me, &sc, false).map_err(|e| e.to_string())?;
+    let publisher = transport::radio_publisher(&own, &sc).map_err(|e| e.to_string())?;
+    let mut links: BTreeMap<u32, Link> = BTreeMap::new();
+    for j in (0..n).filter(|&j| j != me) {
+        let svc = transport::radio_service(&node, j, &sc, false).map_err(|e| e.to_string())?;
+        let sub = svc
+            .subscriber_builder()
+            .buffer_size(transport::radio_buffer(&sc))
+            .create()
+            .map_err(|e| format!("radio subscriber: {e:?}"))?;
+        links.insert(j, (svc, sub));
+    }
+    let mut rt = AgentRuntime::new(
+        &sc,
+        me,
+        Flood::<M> {
+            data: vec![0xa5; data_len::<M>(a.size)],
+            _m: std::marker::PhantomData,
+        },
+    );
+    let mut tx = ShmTx {
+        publisher: &publisher,
+        failures: 0,
+    };
+    let mut sense = Sense::zeroed();
+    sense.robot = me;
+    let angle = std::f64::consts::TAU * me as f64 / n as f64;
+    sense.pos = [500.0 + 100.0 * angle.cos(), 500.0 + 100.0 * angle.sin()];
+    sense.alive_robots = n;
+    for (slot, j) in (0..n).filter(|&j| j != me).take(MAX_NEIGHBOURS).enumerate() {
+        sense.neighbours[slot] = j;
+        sense.n_neighbours = slot as u32 + 1;
+    }
+    let warm = warm_for(a.rounds);
+    let (mut delivered, mut lost, mut malformed) = (0u64, 0u64, 0u64);
+    let mut done = 0;
+    barrier.mark_ready(me);
+    loop {
+        let k = match barrier.wait_release(done, Duration::from_millis(200)) {
+            Wake::Shutdown => break,
+            Wake::Timeout => continue,
+            Wake::Tick(k) => k,
+        };
+        sense.tick = k;
+        rt.begin(&sense);
+        if k > 0 {
+            for (&s, (_, sub)) in links.iter() {
+                for _ in 0..barrier.sent_count(s, k - 1) {
+                    match sub.receive() {
+                        Ok(Some(m)) => rt.ingest(m.user_header(), m.payload()),
+                        _ => break,
+                    }
+                }
+            }
+        }
+        let action = rt.step(&sense, &mut tx);
+        barrier.record_sent(me, k, action.n_sent);
+        rt.update_links(&sense);
+        if k >= warm {
+            delivered += action.radio_delivered as u64;
+            lost += action.radio_dropped_loss as u64;
+            malformed += action.radio_malformed as u64;
+        }
+        barrier.ack(me, k);
+        done = k + 1;
+    }
+    println!(
+        "delivered {delivered} lost {lost} malformed {malformed} failed_sends {}",
+        tx.failures
+    );
+    Ok(())
+}
