@@ -2,14 +2,74 @@
 //! nothing behind (no process, nothing in /dev/shm).
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::{Child, Command, Output, Stdio};
 use std::sync::{Mutex, MutexGuard};
+use std::time::{Duration, Instant};
 
 static SERIAL: Mutex<()> = Mutex::new(());
 
-/// Tests of one binary run one at a time: they share /dev/shm and 2 cores.
-pub fn serial() -> MutexGuard<'static, ()> {
-    SERIAL.lock().unwrap_or_else(|e| e.into_inner())
+/// Orchestrators started in the background by the test that holds [`Serial`].
+static SPAWNED: Mutex<Vec<u32>> = Mutex::new(Vec::new());
+
+/// Held by a test for its whole length: tests of one binary run one at a time (they share
+/// /dev/shm and 2 cores). If the test fails, dropping it stops every orchestrator the test
+/// started in the background with Ctrl-C (SIGINT, the orchestrator's clean shutdown), so a
+/// failed test leaves no run behind to disturb the next one.
+pub struct Serial {
+    _guard: MutexGuard<'static, ()>,
+}
+
+pub fn serial() -> Serial {
+    let guard = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+    SPAWNED.lock().unwrap_or_else(|e| e.into_inner()).clear();
+    Serial { _guard: guard }
+}
+
+impl Drop for Serial {
+    fn drop(&mut self) {
+        let pids = std::mem::take(&mut *SPAWNED.lock().unwrap_or_else(|e| e.into_inner()));
+        for pid in pids {
+            if !pid_alive(pid as i32) {
+                continue;
+            }
+            // SAFETY: signals to an orchestrator this test spawned and has not reaped.
+            unsafe { libc::kill(pid as i32, libc::SIGINT) };
+            let t = Instant::now();
+            while pid_alive(pid as i32) && t.elapsed() < Duration::from_secs(15) {
+                std::thread::sleep(Duration::from_millis(20));
+            }
+            if pid_alive(pid as i32) {
+                // SAFETY: as above.
+                unsafe { libc::kill(pid as i32, libc::SIGKILL) };
+            }
+        }
+    }
+}
+
+/// Whether `pid` is a live process (a zombie still answers kill(0): look at its state).
+pub fn pid_alive(pid: i32) -> bool {
+    let st = std::fs::read_to_string(format!("/proc/{pid}/stat")).unwrap_or_default();
+    !st.is_empty() && !st.contains(") Z ")
+}
+
+/// Starts `orchestrator up --quiet --out OUT ARGS` in the background; stopped with Ctrl-C if
+/// the test fails before it ends.
+pub fn spawn_up(args: &[&str], out: &Path) -> Child {
+    let c = Command::new(orchestrator())
+        .arg("up")
+        .arg("--quiet")
+        .arg("--out")
+        .arg(out)
+        .args(args)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("spawn orchestrator");
+    SPAWNED
+        .lock()
+        .unwrap_or_else(|e| e.into_inner())
+        .push(c.id());
+    c
 }
 
 /// target/<profile>/ of the binaries (the test executable lives in target/<profile>/deps/).

@@ -3,21 +3,8 @@
 
 use e2e::*;
 use std::path::Path;
-use std::process::{Child, Command, Stdio};
+use std::process::Child;
 use std::time::{Duration, Instant};
-
-fn spawn_up(args: &[&str], out: &Path) -> Child {
-    Command::new(orchestrator())
-        .arg("up")
-        .arg("--quiet")
-        .arg("--out")
-        .arg(out)
-        .args(args)
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("spawn orchestrator")
-}
 
 /// The registry entry of the run writing to `out`, once all its agents are started.
 fn registry_entry(out: &Path, robots: usize) -> serde_json::Value {

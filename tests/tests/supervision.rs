@@ -3,21 +3,8 @@
 
 use e2e::*;
 use std::path::Path;
-use std::process::{Child, Command, Stdio};
+use std::process::{Child, Command};
 use std::time::{Duration, Instant};
-
-fn spawn_up(args: &[&str], out: &Path) -> Child {
-    Command::new(orchestrator())
-        .arg("up")
-        .arg("--quiet")
-        .arg("--out")
-        .arg(out)
-        .args(args)
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("spawn orchestrator")
-}
 
 fn registry(out: &Path) -> Option<serde_json::Value> {
     for e in std::fs::read_dir("/tmp/swarm-runtime/runs")
@@ -56,12 +43,6 @@ fn running(out: &Path, robots: usize) -> serde_json::Value {
         v.is_some()
     });
     v.unwrap()
-}
-
-fn pid_alive(pid: i32) -> bool {
-    // A zombie still answers kill(0): look at its state too.
-    let st = std::fs::read_to_string(format!("/proc/{pid}/stat")).unwrap_or_default();
-    !st.is_empty() && !st.contains(") Z ")
 }
 
 fn finish(c: Child, limit: Duration) -> std::process::Output {

@@ -153,11 +153,13 @@ pub fn run(args: &WorldArgs) -> Result<i32> {
         world.begin_tick();
         if restart {
             // A new agent process attached for a dead robot: it drives the robot from now on.
+            // The new process can attach before the world hears of the old one's death (the
+            // orchestrator reaps and respawns faster than its fault report is drained): the
+            // attach is then kept pending until the robot is dead, never consumed early.
             for i in 0..n {
                 let c = barrier.attach_count(i);
-                if c > attached[i as usize] {
+                if c > attached[i as usize] && world.revive(i) {
                     attached[i as usize] = c;
-                    world.revive(i);
                 }
             }
         }

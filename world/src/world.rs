@@ -250,11 +250,13 @@ impl World {
             .any(|e| e[0] == self.tick && e[1] == robot as u64)
     }
 
-    /// A restarted agent drives the robot again from the current tick.
-    pub fn revive(&mut self, robot: u32) {
+    /// A restarted agent drives the robot again from the current tick. Returns false (and
+    /// changes nothing) if the robot is not dead: the world has not yet learnt of the death
+    /// that the restart answers, so the caller must try again on a later tick.
+    pub fn revive(&mut self, robot: u32) -> bool {
         let i = robot as usize;
         if i >= self.n || self.alive[i] {
-            return;
+            return false;
         }
         self.alive[i] = true;
         let p = [self.poses[i][0], self.poses[i][1]];
@@ -270,6 +272,7 @@ impl World {
             f.restarted_tick = Some(self.tick);
         }
         self.pending_events.push(Event::RobotRestarted { robot });
+        true
     }
 
     pub fn restarts(&self) -> u64 {

@@ -2,6 +2,7 @@
 
 pub mod faulty;
 pub mod roam;
+pub mod search;
 
 use swarm::scenario::Scenario;
 use swarm::Behaviour;
@@ -25,11 +26,12 @@ pub fn dispatch<V: BehaviourVisitor>(sc: &Scenario, v: V) -> V::Out {
     match sc.run.behaviour.as_str() {
         "roam" => v.visit(&|i| roam::Roam::new(sc, i)),
         "faulty" => v.visit(&|i| faulty::Faulty::new(sc, i)),
+        "search" => v.visit(&|i| search::Search::new(sc, i)),
         other => panic!("unknown behaviour {other:?} (the scenario was not validated)"),
     }
 }
 
 /// The search behaviour's parameters (`search.kernels`) and mode.
-fn search_validate(_sc: &Scenario) -> Result<(), String> {
-    Err("run.behaviour = \"search\" is not built yet".into())
+fn search_validate(sc: &Scenario) -> Result<(), String> {
+    search::validate_search(sc)
 }

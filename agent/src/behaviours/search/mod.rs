@@ -1,0 +1,537 @@
+//! The multi-target search behaviour of spec/search.md (BSOA + TPEPSO and the SVF / EPSO
+//! baselines): the per-robot loop of spec 2.9 for one robot, from its Sense frame and its radio
+//! inbox only.
+//!
+//! Per tick (messages heard were sent at the previous tick):
+//! 1. A robot whose arrival sensor fired (SIGNAL_FOUND_BY_YOU) declares: it broadcasts the find
+//!    for `declare_ticks` ticks and stands still for good (spec 5 item 8).
+//! 2. Found targets (own find, `Found` messages, and the gossiped found lists) are excluded.
+//! 3. Type I: own signals above I_min, roulette of eqs. (2)-(3) keeping the previous choice.
+//!    Otherwise Type II: the subgroup of the nearest Type I robot heard within R_cm.
+//! 4. Closed-loop adjustment (Table 1) over itself and the candidates of the same target it
+//!    heard: kept -> cooperative, dropped -> roaming.
+//! 5. Cooperative: pb_i and sgb (fitness = own I_ij; sgb from the members' pbs heard), T_est
+//!    from >= 3 detections (own and heard) via the calibration inverse (mode *T), eq. (11).
+//!    Roaming: eq. (5) repulsion of the two nearest robots heard, heading kept without force.
+//! 6. Obstacle layer (BSOA or SVF) on the desired velocity, every tick, in every state.
+//! 7. Broadcast the status (position, detections, candidacy, pb, found list).
+//!
+//! Choices where the paper is silent (each is a field of [`Params`] or noted here):
+//! * Messages: one `Status` per tick per active robot (8 + ~20 bytes per detection / found id);
+//!   a finder sends `Found` for `declare_ticks` ticks, then nothing; every status gossips the
+//!   found targets the sender knows, so a lost declaration is made up for.
+//! * Candidacy vs membership: a robot announces its *candidacy* (Type I with its signal, or
+//!   Type II with its communicating robot and distance) and ranks itself by Table 1 against the
+//!   candidacies of the same target heard last tick; dropped candidates roam but stay
+//!   candidates, so they move in when a member leaves (the dynamic adjustment of paper 5.1).
+//!   Type II robots attach to any Type I candidate heard (not only kept ones).
+//! * sgb = best pb announced by members of the same target heard, running maximum; pb / sgb
+//!   survive short gaps (`keep_memory_across_gaps`). Type II pb fitness = own I_ij, 0 outside L_T.
+//! * T_est uses every detection of the target above I_min heard last tick plus the own one
+//!   (members or not); fewer than `estimator.min_detectors` (3): no c3 term (spec 5 item 14).
+//! * Initial velocity: random heading at V_max (stream 20); roaming keeps the heading of the
+//!   last commanded (post-avoidance) velocity when no robot is within 2 L_R.
+//! * Cooperative robots ignore obstacle points beyond their estimated target distance
+//!   (`goal_horizon_margin`) and keep apart by eq. (5) within `subgroup_separation`.
+//! * The finder stands still for good and falls silent (spec 5 item 8).
+//! * ARBA (modes BA, SA) is not implemented: `validate_search` refuses those modes.
+
+pub mod messages;
+pub mod params;
+
+pub use messages::{Candidacy, Msg, Status, WireRole};
+pub use params::{parse_mode, parse_params, validate_search, ObstacleLayer, Params, SearchLayer};
+
+use crate::search::calibration::Calibration;
+use crate::search::estimator::{self, Detection};
+use crate::search::geometry::{clamp_norm, v2, Vec2};
+use crate::search::subgroup::{self, Member, Role};
+use crate::search::{bsoa, svf, tpepso, virtual_force};
+use messages::{pack, unpack};
+use rand::Rng;
+use rand_chacha::ChaCha8Rng;
+use std::collections::BTreeSet;
+use swarm::behaviour::robot_rng;
+use swarm::frames::{SIGNAL_FOUND_BY_YOU, STATE_COOPERATIVE, STATE_DECLARED, STATE_ROAMING};
+use swarm::scenario::Scenario;
+use swarm::{Behaviour, Command, Outbox, Received, Sense};
+
+/// Event flag (above the display-state byte) set on the tick a robot declares a find.
+pub const EVENT_TARGET_DECLARED: u32 = 1 << 8;
+
+/// Random streams of `robot_rng` used by this behaviour.
+const STREAM_HEADING: u64 = 20;
+const STREAM_CALIBRATION: u64 = 21;
+const STREAM_ROULETTE: u64 = 22;
+const STREAM_PSO: u64 = 23;
+
+/// The robot's state (paper 2.3, Fig. 1).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Mode {
+    /// Roaming search by virtual force.
+    Roaming,
+    /// Member of the subgroup of `target` after the closed-loop adjustment.
+    Cooperative { target: u32, role: Role },
+    /// Found `target`; stands still for good.
+    Declared { target: u32 },
+}
+
+/// What a robot remembers about its subgroup's target.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Memory {
+    target: u32,
+    pb: Option<(Vec2, f64)>,
+    sgb: Option<(Vec2, f64)>,
+}
+
+/// One robot of the search.
+pub struct Search {
+    robot: u32,
+    p: Params,
+    v_max: f64,
+    obstacle: ObstacleLayer,
+    layer: SearchLayer,
+    cal: Calibration,
+    rng_roulette: ChaCha8Rng,
+    rng_pso: ChaCha8Rng,
+    mode: Mode,
+    /// Targets known to be found.
+    found: BTreeSet<u32>,
+    /// The Type I choice of the previous tick (eqs. 2-3 keep it while it is a candidate).
+    choice: Option<u32>,
+    memory: Option<Memory>,
+    /// V_i(t) as commanded last tick (after obstacle avoidance); roaming keeps its heading.
+    last_vel: Vec2,
+    sf: bsoa::Sense,
+    follow: svf::Follow,
+    declare_left: u32,
+    /// Last T_est (for inspection and tests).
+    last_estimate: Option<Vec2>,
+    /// Last status broadcast (for inspection and tests).
+    last_status: Option<Status>,
+}
+
+impl Search {
+    /// The behaviour for `robot`, with the scenario's (validated) mode and kernels.
+    pub fn new(sc: &Scenario, robot: u32) -> Search {
+        let p = parse_params(sc).unwrap_or_else(|e| panic!("{e} (the scenario was not validated)"));
+        Search::with_params(sc, robot, p)
+    }
+
+    /// The behaviour with explicit parameters (the mode still comes from the scenario).
+    pub fn with_params(sc: &Scenario, robot: u32, p: Params) -> Search {
+        let (obstacle, layer) = parse_mode(&sc.search.mode)
+            .unwrap_or_else(|e| panic!("{e} (the scenario was not validated)"));
+        let seed = sc.run.seed;
+        // Initial velocity: a random heading at V_max. [chosen] spec 5 item 3.
+        let a = robot_rng(seed, robot, STREAM_HEADING)
+            .gen_range(-std::f64::consts::PI..std::f64::consts::PI);
+        let v_max = sc.robot.v_max;
+        // Offline calibration (paper 3.2), each robot with its own measurements.
+        let cal = Calibration::build(
+            &p.calibration,
+            &mut robot_rng(seed, robot, STREAM_CALIBRATION),
+        );
+        Search {
+            robot,
+            v_max,
+            obstacle,
+            layer,
+            cal,
+            rng_roulette: robot_rng(seed, robot, STREAM_ROULETTE),
+            rng_pso: robot_rng(seed, robot, STREAM_PSO),
+            mode: Mode::Roaming,
+            found: BTreeSet::new(),
+            choice: None,
+            memory: None,
+            last_vel: v2(a.cos(), a.sin()) * v_max,
+            sf: bsoa::Sense::None,
+            follow: svf::Follow::None,
+            declare_left: 0,
+            last_estimate: None,
+            last_status: None,
+            p,
+        }
+    }
+
+    pub fn mode(&self) -> Mode {
+        self.mode
+    }
+    pub fn found_targets(&self) -> &BTreeSet<u32> {
+        &self.found
+    }
+    pub fn last_estimate(&self) -> Option<Vec2> {
+        self.last_estimate
+    }
+    pub fn last_status(&self) -> Option<&Status> {
+        self.last_status.as_ref()
+    }
+    pub fn personal_best(&self) -> Option<(Vec2, f64)> {
+        self.memory.and_then(|m| m.pb)
+    }
+    pub fn subgroup_best(&self) -> Option<(Vec2, f64)> {
+        self.memory.and_then(|m| m.sgb)
+    }
+
+    fn found_list(&self) -> Vec<u32> {
+        self.found.iter().copied().collect()
+    }
+
+    /// Step of a robot that has declared: silent after `declare_ticks` broadcasts, still.
+    fn declared_step(&mut self, target: u32, out: &mut Outbox<Msg>, events: u32) -> Command {
+        if self.declare_left > 0 {
+            self.declare_left -= 1;
+            out.broadcast(Msg::Found {
+                target,
+                found: self.found_list(),
+            });
+        }
+        self.last_vel = Vec2::zeros();
+        Command {
+            vel: [0.0, 0.0],
+            events: STATE_DECLARED | events,
+        }
+    }
+
+    /// The candidacy of this tick: Type I for the chosen target, else Type II of the nearest
+    /// Type I robot heard within R_cm.
+    fn candidacy(
+        &mut self,
+        me: &Vec2,
+        signals: &[(usize, f64)],
+        heard: &[(u32, &Status)],
+    ) -> Option<(u32, Role, Option<u32>)> {
+        let prev = self
+            .choice
+            .filter(|t| !self.found.contains(t))
+            .map(|t| t as usize);
+        self.choice =
+            subgroup::choose_target(signals, prev, &self.p.subgroup, &mut self.rng_roulette)
+                .map(|t| t as u32);
+        if let Some(t) = self.choice {
+            let signal = signals
+                .iter()
+                .find(|(id, _)| *id as u32 == t)
+                .map(|s| s.1)
+                .unwrap_or(0.0);
+            return Some((t, Role::TypeI { signal }, None));
+        }
+        let type_i: Vec<(usize, Vec2, u32)> = heard
+            .iter()
+            .filter_map(|(from, st)| match &st.candidacy {
+                Some(Candidacy {
+                    target,
+                    role: WireRole::TypeI { .. },
+                    ..
+                }) if !self.found.contains(target) => {
+                    let q = unpack(st.pos);
+                    Some((*from as usize, v2(q[0], q[1]), *target))
+                }
+                _ => None,
+            })
+            .collect();
+        let list: Vec<(usize, Vec2)> = type_i.iter().map(|(i, x, _)| (*i, *x)).collect();
+        let (comm, d) = subgroup::communicating_robot(me, &list, &self.p.subgroup)?;
+        let target = type_i.iter().find(|(i, _, _)| *i == comm)?.2;
+        Some((
+            target,
+            Role::TypeII {
+                distance_to_communicator: d,
+            },
+            Some(comm as u32),
+        ))
+    }
+}
+
+/// Positions of the robots heard (sent last tick), in sender order.
+fn heard_positions(heard: &[(u32, &Status)]) -> Vec<Vec2> {
+    heard
+        .iter()
+        .map(|(_, st)| {
+            let q = unpack(st.pos);
+            v2(q[0], q[1])
+        })
+        .collect()
+}
+
+fn wire_role(role: Role, communicator: Option<u32>) -> WireRole {
+    match role {
+        Role::TypeI { signal } => WireRole::TypeI {
+            signal: signal as f32,
+        },
+        Role::TypeII {
+            distance_to_communicator,
+        } => WireRole::TypeII {
+            communicator: communicator.unwrap_or(u32::MAX),
+            distance: distance_to_communicator as f32,
+        },
+    }
+}
+
+fn role_of(w: WireRole) -> Role {
+    match w {
+        WireRole::TypeI { signal } => Role::TypeI {
+            signal: signal as f64,
+        },
+        WireRole::TypeII { distance, .. } => Role::TypeII {
+            distance_to_communicator: distance as f64,
+        },
+    }
+}
+
+impl Behaviour for Search {
+    type Msg = Msg;
+
+    fn step(&mut self, s: &Sense, inbox: &[Received<Msg>], out: &mut Outbox<Msg>) -> Command {
+        if let Mode::Declared { target } = self.mode {
+            return self.declared_step(target, out, 0);
+        }
+        // 1. Arrival sensor: this robot found a target at the last move.
+        if let Some(t) = s
+            .signals()
+            .iter()
+            .filter(|g| g.flags & SIGNAL_FOUND_BY_YOU != 0)
+            .map(|g| g.target)
+            .min()
+        {
+            for g in s.signals() {
+                if g.flags & SIGNAL_FOUND_BY_YOU != 0 {
+                    self.found.insert(g.target);
+                }
+            }
+            self.mode = Mode::Declared { target: t };
+            self.memory = None;
+            self.declare_left = self.p.declare_ticks;
+            return self.declared_step(t, out, EVENT_TARGET_DECLARED);
+        }
+        // 2. What the radio says (the inbox is ordered by sender, then sequence).
+        let mut heard: Vec<(u32, &Status)> = Vec::new();
+        for r in inbox {
+            match &r.msg {
+                Msg::Found { target, found } => {
+                    self.found.insert(*target);
+                    self.found.extend(found.iter().copied());
+                }
+                Msg::Status(st) => {
+                    self.found.extend(st.found.iter().copied());
+                    if r.from != self.robot {
+                        heard.push((r.from, st));
+                    }
+                }
+            }
+        }
+        // One status per sender: keep the last (highest sequence).
+        heard.reverse();
+        heard.dedup_by_key(|(from, _)| *from);
+        heard.reverse();
+
+        let me = v2(s.pos[0], s.pos[1]);
+        let i_min = self.p.subgroup.i_min;
+        // 3. Own signals of targets not known to be found.
+        let signals: Vec<(usize, f64)> = s
+            .signals()
+            .iter()
+            .filter(|g| g.flags == 0 && !self.found.contains(&g.target))
+            .map(|g| (g.target as usize, g.intensity))
+            .collect();
+        let cand = self.candidacy(&me, &signals, &heard);
+
+        // 4. Closed-loop adjustment over what this robot heard.
+        let mut member = false;
+        if let Some((t, role, _)) = cand {
+            let mut members = vec![Member {
+                robot: self.robot as usize,
+                role,
+            }];
+            members.extend(heard.iter().filter_map(|(from, st)| {
+                st.candidacy
+                    .as_ref()
+                    .filter(|c| c.target == t)
+                    .map(|c| Member {
+                        robot: *from as usize,
+                        role: role_of(c.role),
+                    })
+            }));
+            let adj = subgroup::closed_loop_adjust(&members, &self.p.subgroup);
+            member = adj.kept.contains(&(self.robot as usize));
+        }
+        // Subgroup memory (pb_i, sgb).
+        let was_member_of = match self.mode {
+            Mode::Cooperative { target, .. } => Some(target),
+            _ => None,
+        };
+        if let Some(m) = self.memory {
+            if self.found.contains(&m.target) {
+                self.memory = None;
+            }
+        }
+        self.last_estimate = None;
+        // Own calibrated distance to the subgroup's target, if sensed (obstacle horizon).
+        let mut horizon: Option<f64> = None;
+        let v_if = match (cand, member) {
+            (Some((t, role, _)), true) => {
+                let fresh = match self.memory {
+                    Some(m) if m.target == t => {
+                        !self.p.keep_memory_across_gaps && was_member_of != Some(t)
+                    }
+                    _ => true,
+                };
+                if fresh {
+                    self.memory = Some(Memory {
+                        target: t,
+                        pb: None,
+                        sgb: None,
+                    });
+                }
+                let own = signals.iter().find(|(id, _)| *id as u32 == t).map(|x| x.1);
+                horizon = own.filter(|i| *i > i_min).map(|i| self.cal.inverse(i));
+                let fitness = own.unwrap_or(self.p.type2_initial_fitness);
+                let mem = self.memory.as_mut().expect("set above");
+                tpepso::update_best(&mut mem.pb, me, fitness);
+                let pb = mem.pb.expect("set above");
+                tpepso::update_best(&mut mem.sgb, pb.0, pb.1);
+                for (_, st) in &heard {
+                    if let Some(c) = &st.candidacy {
+                        if c.target == t && c.member {
+                            if let Some((q, f)) = c.pb {
+                                let q = unpack(q);
+                                tpepso::update_best(&mut mem.sgb, v2(q[0], q[1]), f as f64);
+                            }
+                        }
+                    }
+                }
+                let sgb = mem.sgb.expect("set above");
+                // T_est (eqs. 6-10) from own and heard detections of t above I_min.
+                let estimate = if self.layer == SearchLayer::Tpepso {
+                    let mut dets: Vec<Detection> = Vec::new();
+                    if let Some(i) = own.filter(|i| *i > i_min) {
+                        dets.push(Detection {
+                            position: me,
+                            distance: self.cal.inverse(i),
+                            signal: i,
+                        });
+                    }
+                    for (_, st) in &heard {
+                        for &(tt, i) in &st.detections {
+                            let i = i as f64;
+                            if tt == t && i > i_min {
+                                let q = unpack(st.pos);
+                                dets.push(Detection {
+                                    position: v2(q[0], q[1]),
+                                    distance: self.cal.inverse(i),
+                                    signal: i,
+                                });
+                            }
+                        }
+                    }
+                    estimator::estimate(&dets, &self.p.estimator).map(|e| e.position)
+                } else {
+                    None
+                };
+                self.last_estimate = estimate;
+                let state = tpepso::State {
+                    position: me,
+                    velocity: v2(s.vel[0], s.vel[1]),
+                    personal_best: pb.0,
+                    subgroup_best: sgb.0,
+                    target_estimate: estimate,
+                };
+                let variant = match self.layer {
+                    SearchLayer::Tpepso => tpepso::Variant::Tpepso,
+                    SearchLayer::Epso => tpepso::Variant::Epso,
+                };
+                self.mode = Mode::Cooperative { target: t, role };
+                let v =
+                    tpepso::desired_velocity(&state, variant, &self.p.tpepso, &mut self.rng_pso);
+                if self.p.subgroup_separation > 0.0 {
+                    let others = heard_positions(&heard);
+                    let f = virtual_force::Params {
+                        l_r: self.p.subgroup_separation / 2.0,
+                        ..self.p.virtual_force.clone()
+                    };
+                    clamp_norm(
+                        v + virtual_force::roaming_force(&me, &others, &f),
+                        self.v_max,
+                    )
+                } else {
+                    v
+                }
+            }
+            _ => {
+                if !self.p.keep_memory_across_gaps {
+                    self.memory = None;
+                }
+                self.mode = Mode::Roaming;
+                let others = heard_positions(&heard);
+                virtual_force::roaming_velocity(&me, &others, &self.last_vel, &self.p.virtual_force)
+            }
+        };
+        // 6. Obstacle layer, every tick, every state.
+        let horizon = match (self.mode, horizon) {
+            (Mode::Cooperative { .. }, Some(d)) if self.p.goal_horizon_margin >= 0.0 => {
+                d + self.p.goal_horizon_margin
+            }
+            _ => f64::INFINITY,
+        };
+        let pts: Vec<Vec2> = s
+            .obstacle_points()
+            .iter()
+            .map(|q| v2(q[0], q[1]))
+            .filter(|q| (q - me).norm() < horizon)
+            .collect();
+        let v = match self.obstacle {
+            ObstacleLayer::Bsoa => {
+                let o = bsoa::avoid(&me, &v_if, &pts, self.sf, &self.p.bsoa);
+                self.sf = o.sense;
+                o.velocity
+            }
+            ObstacleLayer::Svf => {
+                let o = svf::avoid(&me, &v_if, &pts, self.follow, &self.p.svf);
+                self.follow = o.follow;
+                o.velocity
+            }
+        };
+        let mut v = clamp_norm(v, self.v_max);
+        if !(v.x.is_finite() && v.y.is_finite()) {
+            v = Vec2::zeros();
+        }
+        self.last_vel = v;
+        // 7. Status broadcast.
+        let mut detections: Vec<(u32, f32)> = signals
+            .iter()
+            .filter(|(_, i)| *i > i_min)
+            .map(|(t, i)| (*t as u32, *i as f32))
+            .collect();
+        detections.truncate(swarm::frames::MAX_SIGNALS);
+        let status = Status {
+            pos: pack(s.pos),
+            detections,
+            candidacy: cand.map(|(t, role, comm)| Candidacy {
+                target: t,
+                role: wire_role(role, comm),
+                member,
+                pb: if member {
+                    self.memory
+                        .and_then(|m| m.pb)
+                        .map(|(q, f)| (pack([q.x, q.y]), f as f32))
+                } else {
+                    None
+                },
+            }),
+            found: self.found_list(),
+        };
+        out.broadcast(Msg::Status(status.clone()));
+        self.last_status = Some(status);
+        Command {
+            vel: [v.x, v.y],
+            events: if member {
+                STATE_COOPERATIVE
+            } else {
+                STATE_ROAMING
+            },
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests;

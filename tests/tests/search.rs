@@ -1,0 +1,96 @@
+//! The search scenario end to end: real processes over real iceoryx2, and the experiment grid.
+
+use e2e::*;
+use std::path::PathBuf;
+use std::process::Command;
+
+fn configs() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../configs")
+}
+
+#[test]
+fn twenty_robots_in_processes_find_all_targets() {
+    let _g = serial();
+    let out = tmp_dir("search20");
+    let sc = configs().join("search.toml");
+    let o = up(
+        &[
+            "--scenario",
+            sc.to_str().unwrap(),
+            "--robots",
+            "20",
+            "--seed",
+            "1",
+        ],
+        &out,
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let s = summary(&out);
+    let m = &s["mission"]["search"];
+    assert_eq!(m["targets"], 10, "{s}");
+    assert_eq!(m["found"], 10, "all targets found: {m}");
+    assert_eq!(s["end"], "all targets found");
+    let steps = m["steps"].as_u64().unwrap();
+    assert_eq!(steps, s["ticks"].as_u64().unwrap());
+    // Energy is path length: at most v_max per robot-step.
+    assert!(m["energy"].as_f64().unwrap() <= 10.0 * 20.0 * steps as f64 + 1e-6);
+    assert!(s["blocked_moves"].as_u64().is_some());
+    let svg = std::fs::read_to_string(out.join("run.svg")).unwrap();
+    assert!(svg.contains("<svg"));
+    assert_left_nothing(&out);
+}
+
+#[test]
+fn the_experiment_grid_writes_the_paper_style_table() {
+    let _g = serial();
+    let dir = tmp_dir("experiment");
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("small.toml");
+    std::fs::write(
+        &file,
+        format!(
+            "scenario = {:?}\nmodes = [\"BT\", \"BE\"]\nrobots = [20]\nseeds = 2\nfirst_seed = 1\nmax_ticks = 3000\n\
+             paper = [{{ robots = 20, mode = \"BT\", steps = [272, 463, 935], energy = [3.979, 5.982, 10.72] }}]\n",
+            configs().join("search.toml").display().to_string()
+        ),
+    )
+    .unwrap();
+    let out = dir.join("results");
+    let o = Command::new(orchestrator())
+        .args([
+            "experiment",
+            file.to_str().unwrap(),
+            "--quiet",
+            "--out",
+            out.to_str().unwrap(),
+        ])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", stderr(&o));
+    let md = std::fs::read_to_string(out.join("results.md")).unwrap();
+    assert!(
+        md.contains("| 20 | BT | 2 |") && md.contains("| 20 | BE | 2 |"),
+        "{md}"
+    );
+    assert!(
+        md.contains("272 / 463 / 935"),
+        "paper values beside ours: {md}"
+    );
+    let j: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("results.json")).unwrap()).unwrap();
+    let runs = j["runs"].as_array().unwrap();
+    assert_eq!(runs.len(), 4);
+    // Same seeds for every mode.
+    let seeds = |m: &str| -> Vec<u64> {
+        runs.iter()
+            .filter(|r| r["mode"] == m)
+            .map(|r| r["seed"].as_u64().unwrap())
+            .collect()
+    };
+    assert_eq!(seeds("BT"), seeds("BE"));
+    for c in j["cells"].as_array().unwrap() {
+        if let Some(e) = c["energy_per_robot_step"].as_f64() {
+            assert!(e <= 10.0, "energy per robot-step above v_max: {c}");
+        }
+    }
+}
