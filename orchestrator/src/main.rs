@@ -47,6 +47,13 @@ enum Cmd {
 fn main() {
     swarm::transport::quiet_logs();
     let cli = Cli::parse();
+    if !matches!(cli.cmd, Cmd::Bench(_) | Cmd::BenchChild(_)) {
+        // `orchestrator up | head`: a closed stdout ends us quietly, as for any Unix tool,
+        // instead of a panic. These commands print only after their runs are cleaned up; the
+        // benchmarks print as they go, so they keep the default (a write error, then cleanup).
+        // SAFETY: setting a signal disposition before any thread or child exists.
+        unsafe { libc::signal(libc::SIGPIPE, libc::SIG_DFL) };
+    }
     let code = match cli.cmd {
         Cmd::Up(a) => up::up(a),
         Cmd::Bench(a) => bench::bench(a),

@@ -34,6 +34,10 @@ pub struct UpArgs {
     /// Message loss probability, 0..=1 [scenario: radio.loss].
     #[arg(long)]
     pub loss: Option<f64>,
+    /// Search mode (Table 3): obstacle layer B = BSOA / S = SVF, search layer T = TPEPSO /
+    /// E = EPSO / A = ARBA [scenario: search.mode].
+    #[arg(long, value_enum)]
+    pub mode: Option<SearchMode>,
     /// Radio delay in ticks [scenario: radio.delay_ticks].
     #[arg(long)]
     pub delay: Option<u32>,
@@ -65,6 +69,17 @@ pub enum OnFault {
     Drop,
     /// A new agent process takes the robot over, fresh from its Sense frame.
     Restart,
+}
+
+#[derive(Copy, Clone, Debug, PartialEq, Eq, ValueEnum)]
+#[value(rename_all = "UPPER")]
+pub enum SearchMode {
+    Bt,
+    Be,
+    Ba,
+    St,
+    Se,
+    Sa,
 }
 
 #[derive(Clone, Debug, PartialEq)]
@@ -99,6 +114,7 @@ const FLAG_KEYS: &[(&str, &str)] = &[
     ("radio.comm_radius", "--comm-radius"),
     ("radio.loss", "--loss"),
     ("radio.delay_ticks", "--delay"),
+    ("search.mode", "--mode"),
     ("faults.chaos_rate", "--chaos"),
     ("faults.kill_at", "--chaos-at"),
     ("faults.max_restarts", "--max-restarts"),
@@ -129,6 +145,20 @@ pub fn resolve(a: &UpArgs) -> Result<Scenario, ConfigError> {
     }
     if let Some(v) = a.loss {
         set("radio.loss", &mut || sc.radio.loss = v);
+    }
+    if let Some(m) = a.mode {
+        if sc.run.behaviour != "search" {
+            return Err(ConfigError {
+                source: "--mode".into(),
+                key: "search.mode".into(),
+                message: format!(
+                    "applies to run.behaviour = \"search\" only; {file} sets run.behaviour = {:?}",
+                    sc.run.behaviour
+                ),
+            });
+        }
+        let name = format!("{m:?}").to_uppercase();
+        set("search.mode", &mut || sc.search.mode = name.clone());
     }
     if let Some(v) = a.delay {
         set("radio.delay_ticks", &mut || sc.radio.delay_ticks = v);

@@ -70,7 +70,7 @@ fn bench_radio<M>(c: &mut Criterion, name: &str, msg: M, bytes: u64)
 where
     M: Serialize + for<'de> Deserialize<'de> + Clone + 'static,
 {
-    let mut sc = Scenario::default();
+    let mut sc = Scenario::roam();
     sc.radio.max_message_bytes = 65_536;
     let mut g = c.benchmark_group("radio");
     g.throughput(Throughput::Bytes(bytes));

@@ -6,6 +6,9 @@ use std::path::Path;
 
 /// The default scenario, embedded so that `orchestrator up` needs no file.
 pub const DEFAULT_SCENARIO: &str = include_str!("../../configs/default.toml");
+/// The roaming scenario (an overlay of the default): what the transport benchmarks and the
+/// long-running fault tests run, since a search run ends when every target is found.
+pub const ROAM_SCENARIO: &str = include_str!("../../configs/roam.toml");
 
 #[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
 #[serde(deny_unknown_fields)]
@@ -182,6 +185,12 @@ impl Default for Scenario {
 }
 
 impl Scenario {
+    /// The embedded roaming scenario (configs/roam.toml over the default).
+    pub fn roam() -> Scenario {
+        Scenario::parse(ROAM_SCENARIO, "embedded roam scenario")
+            .expect("the embedded roam scenario parses")
+    }
+
     /// Parses a scenario. Keys missing from `text` take the embedded default's values, so a
     /// file needs to hold only what it changes; unknown keys are errors.
     pub fn parse(text: &str, source: &str) -> Result<Scenario, ConfigError> {
@@ -412,7 +421,13 @@ mod tests {
         let sc = Scenario::default();
         sc.validate(&file).unwrap();
         assert_eq!(sc.run.robots, 50);
-        assert_eq!(sc.arena.obstacles.len(), 5);
+        assert_eq!(sc.run.behaviour, "search");
+        assert_eq!(sc.search.mode, "BT");
+        assert_eq!(sc.arena.obstacles.len(), 9);
+        let roam = Scenario::roam();
+        roam.validate(&file).unwrap();
+        assert_eq!(roam.run.behaviour, "roam");
+        assert_eq!(roam.arena.obstacles.len(), 5);
     }
 
     #[test]

@@ -97,6 +97,18 @@ pub fn tmp_dir(name: &str) -> PathBuf {
     d
 }
 
+/// configs/roam.toml: roaming only, no targets, so a run lasts its --max-ticks (the search
+/// scenario, the default, ends when every target is found).
+pub fn roam() -> &'static str {
+    static P: std::sync::OnceLock<String> = std::sync::OnceLock::new();
+    P.get_or_init(|| {
+        Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../configs/roam.toml")
+            .display()
+            .to_string()
+    })
+}
+
 /// Runs `orchestrator up` with the given flags (quiet) and waits.
 pub fn up(args: &[&str], out: &Path) -> Output {
     Command::new(orchestrator())

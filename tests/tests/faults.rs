@@ -51,7 +51,17 @@ fn wait_with_timeout(mut c: Child, limit: Duration) -> std::process::Output {
 fn sigkill_of_an_agent_is_survived_and_reported() {
     let _g = serial();
     let out = tmp_dir("kill9");
-    let child = spawn_up(&["--robots", "10", "--max-ticks", "2500"], &out);
+    let child = spawn_up(
+        &[
+            "--scenario",
+            roam(),
+            "--robots",
+            "10",
+            "--max-ticks",
+            "2500",
+        ],
+        &out,
+    );
     let entry = registry_entry(&out, 10);
     // Agents carry their robot id in argv.
     let pid = entry["agent_pids"][3].as_u64().unwrap() as i32;
@@ -98,7 +108,17 @@ fn sigkill_of_an_agent_is_survived_and_reported() {
 fn ctrl_c_ends_the_run_cleanly() {
     let _g = serial();
     let out = tmp_dir("sigint");
-    let child = spawn_up(&["--robots", "6", "--max-ticks", "1000000"], &out);
+    let child = spawn_up(
+        &[
+            "--scenario",
+            roam(),
+            "--robots",
+            "6",
+            "--max-ticks",
+            "1000000",
+        ],
+        &out,
+    );
     registry_entry(&out, 6);
     std::thread::sleep(Duration::from_millis(500));
     // SAFETY: SIGINT to our own child, as Ctrl-C in a terminal would.
@@ -149,7 +169,16 @@ fn two_concurrent_runs_do_not_see_each_other() {
     let a = tmp_dir("conc-a");
     let b = tmp_dir("conc-b");
     let solo = tmp_dir("conc-solo");
-    let args = ["--robots", "8", "--max-ticks", "300", "--seed", "5"];
+    let args = [
+        "--scenario",
+        roam(),
+        "--robots",
+        "8",
+        "--max-ticks",
+        "300",
+        "--seed",
+        "5",
+    ];
     let ca = spawn_up(&args, &a);
     let cb = spawn_up(&args, &b);
     let oa = wait_with_timeout(ca, Duration::from_secs(120));

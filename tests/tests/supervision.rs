@@ -64,6 +64,8 @@ fn a_robot_restarts_100_times_in_a_row() {
     let out = tmp_dir("restart100");
     let child = spawn_up(
         &[
+            "--scenario",
+            roam(),
             "--robots",
             "6",
             "--max-ticks",
@@ -117,7 +119,17 @@ fn a_robot_restarts_100_times_in_a_row() {
 fn killing_the_world_ends_the_run_with_an_error_and_agents_exit() {
     let _g = serial();
     let out = tmp_dir("killworld");
-    let child = spawn_up(&["--robots", "6", "--max-ticks", "100000000"], &out);
+    let child = spawn_up(
+        &[
+            "--scenario",
+            roam(),
+            "--robots",
+            "6",
+            "--max-ticks",
+            "100000000",
+        ],
+        &out,
+    );
     let entry = running(&out, 6);
     let world = entry["world_pid"].as_i64().unwrap() as i32;
     let agents: Vec<i32> = entry["agent_pids"]
@@ -155,7 +167,17 @@ fn killing_the_world_ends_the_run_with_an_error_and_agents_exit() {
 fn killing_the_orchestrator_takes_the_run_down_and_clean_removes_its_leftovers() {
     let _g = serial();
     let out = tmp_dir("killorch");
-    let child = spawn_up(&["--robots", "6", "--max-ticks", "100000000"], &out);
+    let child = spawn_up(
+        &[
+            "--scenario",
+            roam(),
+            "--robots",
+            "6",
+            "--max-ticks",
+            "100000000",
+        ],
+        &out,
+    );
     let entry = running(&out, 6);
     let pids: Vec<i32> = std::iter::once(&entry["world_pid"])
         .chain(entry["agent_pids"].as_array().unwrap())
@@ -180,7 +202,17 @@ fn killing_the_orchestrator_takes_the_run_down_and_clean_removes_its_leftovers()
     );
     // A live run at the same time must survive the clean.
     let live_out = tmp_dir("killorch-live");
-    let live = spawn_up(&["--robots", "4", "--max-ticks", "100000000"], &live_out);
+    let live = spawn_up(
+        &[
+            "--scenario",
+            roam(),
+            "--robots",
+            "4",
+            "--max-ticks",
+            "100000000",
+        ],
+        &live_out,
+    );
     let live_entry = running(&live_out, 4);
     let o = Command::new(orchestrator()).arg("clean").output().unwrap();
     assert!(o.status.success());
@@ -211,6 +243,8 @@ fn killing_the_orchestrator_takes_the_run_down_and_clean_removes_its_leftovers()
 fn chaos_under_drop_is_reproducible_byte_for_byte() {
     let _g = serial();
     let args = [
+        "--scenario",
+        roam(),
         "--robots",
         "10",
         "--max-ticks",
@@ -256,7 +290,17 @@ fn chaos_under_drop_is_reproducible_byte_for_byte() {
 fn status_lists_the_run_and_kill_rejects_bad_input() {
     let _g = serial();
     let out = tmp_dir("status");
-    let child = spawn_up(&["--robots", "5", "--max-ticks", "100000000"], &out);
+    let child = spawn_up(
+        &[
+            "--scenario",
+            roam(),
+            "--robots",
+            "5",
+            "--max-ticks",
+            "100000000",
+        ],
+        &out,
+    );
     let entry = running(&out, 5);
     let run_id = entry["run_id"].as_str().unwrap();
     let o = Command::new(orchestrator()).arg("status").output().unwrap();

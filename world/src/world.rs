@@ -498,7 +498,7 @@ mod tests {
     use super::*;
 
     fn world() -> World {
-        let mut sc = Scenario::default();
+        let mut sc = Scenario::roam();
         sc.run.robots = 5;
         World::new(&sc).unwrap()
     }

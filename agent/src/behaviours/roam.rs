@@ -98,7 +98,7 @@ mod tests {
 
     #[test]
     fn moves_away_from_the_two_nearest_heard_robots_at_full_speed() {
-        let sc = Scenario::default();
+        let sc = Scenario::roam();
         let mut r = Roam::new(&sc, 0);
         let mut s = Sense::zeroed();
         s.pos = [500.0, 500.0];
@@ -121,7 +121,7 @@ mod tests {
 
     #[test]
     fn keeps_heading_when_nothing_is_heard() {
-        let sc = Scenario::default();
+        let sc = Scenario::roam();
         let mut r = Roam::new(&sc, 4);
         let mut s = Sense::zeroed();
         s.pos = [500.0, 500.0];

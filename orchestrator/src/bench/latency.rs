@@ -402,7 +402,7 @@ fn data_len_for<M: Payload>(size: usize) -> usize {
 // ---- the runtime's radio path ----
 
 fn latency_scenario(size: usize) -> Scenario {
-    let mut sc = Scenario::default();
+    let mut sc = Scenario::roam();
     sc.run.robots = 2;
     // Above the validated 64 KiB limit for the 1 MiB cell: set here, never validated.
     sc.radio.max_message_bytes = size.max(64) as u32;

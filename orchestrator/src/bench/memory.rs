@@ -93,7 +93,7 @@ pub fn print(rows: &[Row]) {
 }
 
 fn one(n: u32, ticks: u64) -> Result<Row, String> {
-    let mut sc = Scenario::default();
+    let mut sc = Scenario::roam();
     sc.run.robots = n;
     sc.run.max_ticks = ticks;
     sc.arena.start_region = [0.0, 0.0, sc.arena.width, sc.arena.height];

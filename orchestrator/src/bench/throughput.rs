@@ -49,7 +49,7 @@ fn warm_for(ticks: u64) -> u64 {
 }
 
 fn scenario(robots: u32, size: usize) -> Scenario {
-    let mut sc = Scenario::default();
+    let mut sc = Scenario::roam();
     sc.run.robots = robots;
     sc.radio.max_message_bytes = size.max(64) as u32;
     sc.radio.max_messages_per_tick = 1;

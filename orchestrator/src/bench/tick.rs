@@ -109,7 +109,7 @@ pub fn bench_tick(sizes: &[u32], ticks: u64) -> Result<Vec<Row>, String> {
 
 /// The runtime itself: the default scenario with N robots for `ticks` ticks (+ warm-up).
 fn runtime(n: u32, ticks: u64) -> Result<Stats, String> {
-    let mut sc = Scenario::default();
+    let mut sc = Scenario::roam();
     sc.run.robots = n;
     let warmup = (ticks / 20).max(10);
     sc.run.max_ticks = ticks + warmup;
