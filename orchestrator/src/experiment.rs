@@ -10,7 +10,7 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Mutex;
-use swarm::scenario::Scenario;
+use swarm::scenario::{FaultPolicy, Scenario};
 
 #[derive(Args, Debug)]
 pub struct ExperimentArgs {
@@ -47,6 +47,44 @@ pub struct Experiment {
     /// min, mean, max (x 10^4)].
     #[serde(default)]
     pub paper: Vec<PaperRow>,
+    /// Conditions every (mode, N, seed) also runs under: radio loss, agents killed. The first
+    /// is the reference the others' slowdown is measured against, seed by seed. None: one
+    /// unnamed variant, the scenario as it is.
+    #[serde(default)]
+    pub variants: Vec<Variant>,
+}
+
+/// One condition of an experiment: what it changes in the scenario.
+#[derive(Debug, Clone, Default, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Variant {
+    pub name: String,
+    /// radio.loss
+    pub loss: Option<f64>,
+    /// faults.kill_fraction: this share of the robots killed once each (SIGKILL under the
+    /// processes executor).
+    pub kill_fraction: Option<f64>,
+    /// faults.kill_window
+    pub kill_window: Option<[u64; 2]>,
+    /// faults.on_fault: "drop" or "restart" (restart needs `--executor processes`).
+    pub on_fault: Option<FaultPolicy>,
+}
+
+impl Variant {
+    fn apply(&self, sc: &mut Scenario) {
+        if let Some(v) = self.loss {
+            sc.radio.loss = v;
+        }
+        if let Some(v) = self.kill_fraction {
+            sc.faults.kill_fraction = v;
+        }
+        if let Some(v) = self.kill_window {
+            sc.faults.kill_window = v;
+        }
+        if let Some(v) = self.on_fault {
+            sc.faults.on_fault = v;
+        }
+    }
 }
 
 #[derive(Debug, Clone, Deserialize, Serialize)]
@@ -61,6 +99,7 @@ pub struct PaperRow {
 #[derive(Debug, Clone, Serialize)]
 pub struct RunResult {
     pub mode: String,
+    pub variant: String,
     pub robots: u32,
     pub seed: u64,
     /// None: censored (max_ticks reached before every target was found).
@@ -69,11 +108,15 @@ pub struct RunResult {
     pub targets: u32,
     pub energy: f64,
     pub ticks: u64,
+    /// Robots killed (faults in the summary) and restarted.
+    pub faults: u64,
+    pub restarted: u64,
 }
 
 #[derive(Debug, Clone, Serialize)]
 pub struct Cell {
     pub mode: String,
+    pub variant: String,
     pub robots: u32,
     pub runs: usize,
     pub censored: usize,
@@ -106,6 +149,17 @@ fn load(path: &Path) -> Result<Experiment, String> {
         ));
     }
     x.scenario = path.parent().unwrap_or(Path::new(".")).join(&x.scenario);
+    if x.variants.is_empty() {
+        x.variants.push(Variant::default());
+    }
+    let mut names: Vec<&str> = x.variants.iter().map(|v| v.name.as_str()).collect();
+    names.sort_unstable();
+    if names.windows(2).any(|w| w[0] == w[1]) {
+        return Err(format!(
+            "{}: every [[variants]] needs its own `name`",
+            path.display()
+        ));
+    }
     Ok(x)
 }
 
@@ -124,17 +178,27 @@ fn run(a: ExperimentArgs) -> Result<i32, String> {
     let base = Scenario::load(&x.scenario).map_err(|e| e.to_string())?;
     let seeds = a.runs.unwrap_or(x.seeds);
     // Every cell's scenario, validated before anything runs.
-    let mut jobs: Vec<(String, u32, u64, Scenario)> = Vec::new();
+    let mut jobs: Vec<(String, String, u32, u64, Scenario)> = Vec::new();
     let mut unavailable: Vec<(String, String)> = Vec::new();
     for mode in &x.modes {
         let mut ok = true;
         for &n in &x.robots {
-            for s in 0..seeds as u64 {
+            for (s, v) in (0..seeds as u64).flat_map(|s| x.variants.iter().map(move |v| (s, v))) {
                 let mut sc = base.clone();
                 sc.search.mode = mode.clone();
                 sc.run.robots = n;
                 sc.run.seed = x.first_seed + s;
                 sc.run.max_ticks = x.max_ticks;
+                v.apply(&mut sc);
+                if sc.faults.on_fault == FaultPolicy::Restart
+                    && sc.faults.kill_fraction > 0.0
+                    && a.executor == Executor::Inprocess
+                {
+                    return Err(format!(
+                        "variant {:?}: on_fault = \"restart\" needs real agent processes: run with --executor processes",
+                        v.name
+                    ));
+                }
                 let file = a.file.display().to_string();
                 if let Err(e) = sc
                     .validate(&|_| file.clone())
@@ -147,7 +211,7 @@ fn run(a: ExperimentArgs) -> Result<i32, String> {
                     ok = false;
                     break;
                 }
-                jobs.push((mode.clone(), n, sc.run.seed, sc));
+                jobs.push((mode.clone(), v.name.clone(), n, sc.run.seed, sc));
             }
             if !ok {
                 break;
@@ -191,10 +255,10 @@ fn run(a: ExperimentArgs) -> Result<i32, String> {
         for _ in 0..threads.max(1) {
             scope.spawn(|| loop {
                 let i = next.fetch_add(1, Ordering::SeqCst);
-                let Some((mode, n, seed, sc)) = jobs.get(i) else {
+                let Some((mode, variant, n, seed, sc)) = jobs.get(i) else {
                     break;
                 };
-                let run_id = format!("{id}-{mode}-{n}-{seed}");
+                let run_id = format!("{id}-{mode}-{n}-{seed}-{i}");
                 let summary: Result<serde_json::Value, String> = match a.executor {
                     Executor::Inprocess => inprocess::run(sc, None, &run_id, &mut |_| {})
                         .map_err(|e| e.to_string())
@@ -219,8 +283,10 @@ fn run(a: ExperimentArgs) -> Result<i32, String> {
                 match summary {
                     Ok(s) => {
                         let m = &s["mission"]["search"];
+                        let faults = s["faults"].as_array().map_or(&[][..], |f| f.as_slice());
                         results.lock().expect("lock").push(RunResult {
                             mode: mode.clone(),
+                            variant: variant.clone(),
                             robots: *n,
                             seed: *seed,
                             steps: m["steps"].as_u64(),
@@ -228,15 +294,20 @@ fn run(a: ExperimentArgs) -> Result<i32, String> {
                             targets: m["targets"].as_u64().unwrap_or(0) as u32,
                             energy: m["energy"].as_f64().unwrap_or(0.0),
                             ticks: s["ticks"].as_u64().unwrap_or(0),
+                            faults: faults.len() as u64,
+                            restarted: faults
+                                .iter()
+                                .filter(|f| f["restarted_tick"].is_u64())
+                                .count() as u64,
                         });
                     }
                     Err(e) => failures
                         .lock()
                         .expect("lock")
-                        .push(format!("{mode} N={n} seed {seed}: {e}")),
+                        .push(format!("{mode} {variant} N={n} seed {seed}: {e}")),
                 }
                 pb.inc(1);
-                pb.set_message(format!("{mode} N={n} seed {seed}"));
+                pb.set_message(format!("{mode} {variant} N={n} seed {seed}"));
             });
         }
     });
@@ -246,9 +317,20 @@ fn run(a: ExperimentArgs) -> Result<i32, String> {
         eprintln!("run failed: {f}");
     }
     let mut results = results.into_inner().expect("lock");
-    results.sort_by(|a, b| (a.robots, &a.mode, a.seed).cmp(&(b.robots, &b.mode, b.seed)));
+    let order = |v: &str| x.variants.iter().position(|w| w.name == v);
+    results.sort_by(|a, b| {
+        (a.robots, &a.mode, order(&a.variant), a.seed).cmp(&(
+            b.robots,
+            &b.mode,
+            order(&b.variant),
+            b.seed,
+        ))
+    });
     let cells = tabulate(&x, &results);
-    let md = report(&x, &cells, seeds, &unavailable);
+    let mut md = report(&x, &cells, seeds, &unavailable);
+    if x.variants.len() > 1 {
+        md += &variants_report(&x, &results);
+    }
     print!("{md}");
     std::fs::write(out.join("results.md"), &md).map_err(|e| e.to_string())?;
     let json = serde_json::json!({ "experiment": x, "seeds": seeds, "runs": results, "cells": cells,
@@ -265,10 +347,14 @@ fn run(a: ExperimentArgs) -> Result<i32, String> {
 fn tabulate(x: &Experiment, results: &[RunResult]) -> Vec<Cell> {
     let mut cells = Vec::new();
     for &n in &x.robots {
-        for mode in &x.modes {
+        for (mode, variant) in x
+            .modes
+            .iter()
+            .flat_map(|m| x.variants.iter().map(move |v| (m, &v.name)))
+        {
             let rs: Vec<&RunResult> = results
                 .iter()
-                .filter(|r| r.robots == n && &r.mode == mode)
+                .filter(|r| r.robots == n && &r.mode == mode && &r.variant == variant)
                 .collect();
             if rs.is_empty() {
                 continue;
@@ -287,6 +373,7 @@ fn tabulate(x: &Experiment, results: &[RunResult]) -> Vec<Cell> {
             };
             cells.push(Cell {
                 mode: mode.clone(),
+                variant: variant.clone(),
                 robots: n,
                 runs: rs.len(),
                 censored: rs.len() - done.len(),
@@ -346,6 +433,12 @@ fn fmt3(v: Option<[f64; 3]>, prec: usize) -> String {
 }
 
 fn report(x: &Experiment, cells: &[Cell], seeds: u32, unavailable: &[(String, String)]) -> String {
+    // The headline comparisons are between modes under the reference (first) variant.
+    let head: Vec<Cell> = cells
+        .iter()
+        .filter(|c| c.variant == x.variants[0].name)
+        .cloned()
+        .collect();
     let mut s = String::new();
     let _ = writeln!(
         s,
@@ -359,7 +452,11 @@ fn report(x: &Experiment, cells: &[Cell], seeds: u32, unavailable: &[(String, St
             s,
             "| {} | {} | {} | {} | {} | {} | {} | {} | {} |",
             c.robots,
-            c.mode,
+            if c.variant.is_empty() {
+                c.mode.clone()
+            } else {
+                format!("{} ({})", c.mode, c.variant)
+            },
             c.runs,
             c.censored,
             fmt3(c.steps, 0),
@@ -376,6 +473,9 @@ fn report(x: &Experiment, cells: &[Cell], seeds: u32, unavailable: &[(String, St
     }
     for (m, e) in unavailable {
         let _ = writeln!(s, "\nMode {m} was not run: {e}");
+    }
+    if x.modes.len() < 2 {
+        return s;
     }
     let _ = writeln!(
         s,
@@ -407,16 +507,16 @@ fn report(x: &Experiment, cells: &[Cell], seeds: u32, unavailable: &[(String, St
         let _ = writeln!(
             s,
             "| {name} | {} | {} | {} | {} |",
-            pct(improvement(cells, &ours, &other, false, false)),
-            pct(improvement(cells, &ours, &other, false, true)),
-            pct(improvement(cells, &ours, &other, true, false)),
-            pct(improvement(cells, &ours, &other, true, true)),
+            pct(improvement(&head, &ours, &other, false, false)),
+            pct(improvement(&head, &ours, &other, false, true)),
+            pct(improvement(&head, &ours, &other, true, false)),
+            pct(improvement(&head, &ours, &other, true, true)),
         );
     }
     // Does BT have the fewest mean steps at every N?
     let mut verdicts = Vec::new();
     for &n in &x.robots {
-        let at: Vec<&Cell> = cells
+        let at: Vec<&Cell> = head
             .iter()
             .filter(|c| c.robots == n && c.steps.is_some())
             .collect();
@@ -428,5 +528,68 @@ fn report(x: &Experiment, cells: &[Cell], seeds: u32, unavailable: &[(String, St
         }
     }
     let _ = writeln!(s, "\n{}", verdicts.join("; "));
+    s
+}
+
+/// Per (N, mode): each variant's completed runs and its slowdown against the first variant,
+/// seed by seed (only seeds both completed), so layouts are compared with themselves.
+fn variants_report(x: &Experiment, results: &[RunResult]) -> String {
+    let mut s = String::new();
+    let reference = &x.variants[0].name;
+    let _ = writeln!(
+        s,
+        "\n## Variants against {reference:?} (same seeds)\n\n\
+         | N | mode | variant | all targets found | robots killed / restarted (mean) | mean steps | slowdown vs {reference:?} (paired seeds) |\n\
+         |---|---|---|---|---|---|---|"
+    );
+    for &n in &x.robots {
+        for mode in &x.modes {
+            let of = |v: &str| -> Vec<&RunResult> {
+                results
+                    .iter()
+                    .filter(|r| r.robots == n && &r.mode == mode && r.variant == v)
+                    .collect()
+            };
+            let base = of(reference);
+            for v in &x.variants {
+                let rs = of(&v.name);
+                if rs.is_empty() {
+                    continue;
+                }
+                let done: Vec<&&RunResult> = rs.iter().filter(|r| r.steps.is_some()).collect();
+                let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len().max(1) as f64;
+                let steps: Vec<f64> = done.iter().map(|r| r.steps.unwrap() as f64).collect();
+                let paired: Vec<(f64, f64)> = done
+                    .iter()
+                    .filter_map(|r| {
+                        let b = base.iter().find(|b| b.seed == r.seed)?.steps?;
+                        Some((b as f64, r.steps.unwrap() as f64))
+                    })
+                    .collect();
+                let slowdown = if paired.is_empty() {
+                    "n/a".to_string()
+                } else {
+                    let b: f64 = paired.iter().map(|p| p.0).sum();
+                    let o: f64 = paired.iter().map(|p| p.1).sum();
+                    format!(
+                        "{:+.1} % over {} seeds",
+                        (o / b - 1.0) * 100.0,
+                        paired.len()
+                    )
+                };
+                let killed = mean(&rs.iter().map(|r| r.faults as f64).collect::<Vec<_>>());
+                let restarted = mean(&rs.iter().map(|r| r.restarted as f64).collect::<Vec<_>>());
+                let _ = writeln!(
+                    s,
+                    "| {n} | {mode} | {} | {} / {} ({:.0} %) | {killed:.1} / {restarted:.1} | {} | {slowdown} |",
+                    v.name,
+                    done.len(),
+                    rs.len(),
+                    100.0 * done.len() as f64 / rs.len() as f64,
+                    if steps.is_empty() { "n/a".into() } else { format!("{:.0}", mean(&steps)) },
+                );
+            }
+        }
+    }
     s
 }

@@ -52,6 +52,10 @@ pub struct UpArgs {
     /// SIGKILLs at given ticks: TICK:ROBOT,... e.g. 120:7,300:12 [scenario: faults.kill_at].
     #[arg(long, value_parser = parse_kills)]
     pub chaos_at: Option<KillList>,
+    /// Kill this fraction of the robots once each, at seeded random ticks in
+    /// faults.kill_window [scenario: faults.kill_fraction].
+    #[arg(long)]
+    pub kill_fraction: Option<f64>,
     /// What happens to a robot whose agent dies [scenario: faults.on_fault].
     #[arg(long, value_enum)]
     pub on_fault: Option<OnFault>,
@@ -117,6 +121,7 @@ const FLAG_KEYS: &[(&str, &str)] = &[
     ("search.mode", "--mode"),
     ("faults.chaos_rate", "--chaos"),
     ("faults.kill_at", "--chaos-at"),
+    ("faults.kill_fraction", "--kill-fraction"),
     ("faults.max_restarts", "--max-restarts"),
 ];
 
@@ -168,6 +173,9 @@ pub fn resolve(a: &UpArgs) -> Result<Scenario, ConfigError> {
     }
     if let Some(v) = &a.chaos_at {
         set("faults.kill_at", &mut || sc.faults.kill_at = v.0.clone());
+    }
+    if let Some(v) = a.kill_fraction {
+        set("faults.kill_fraction", &mut || sc.faults.kill_fraction = v);
     }
     if let Some(v) = a.max_restarts {
         set("faults.max_restarts", &mut || sc.faults.max_restarts = v);

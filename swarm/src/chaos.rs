@@ -1,5 +1,6 @@
-//! The run's SIGKILL schedule: the scenario's explicit `faults.kill_at` plus the random kills of
-//! `faults.chaos_rate`, drawn from the run's seed. The world and the orchestrator both compute it
+//! The run's SIGKILL schedule: the scenario's explicit `faults.kill_at`, the random kills of
+//! `faults.chaos_rate`, and the `faults.kill_fraction` of the robots killed once each, all drawn
+//! from the run's seed. The world and the orchestrator both compute it
 //! with this function, so the world treats each robot as dead from exactly its tick.
 
 use crate::scenario::{FaultPolicy, Scenario};
@@ -39,6 +40,19 @@ pub fn schedule(sc: &Scenario) -> Vec<[u64; 2]> {
             out.push([tick, r]);
         }
     }
+    let k = (sc.faults.kill_fraction * sc.run.robots as f64).round() as usize;
+    if k > 0 {
+        // Distinct robots, each at a uniform tick of the window (its own stream: adding a
+        // fraction does not move the chaos_rate kills).
+        let mut rng = crate::behaviour::robot_rng(sc.run.seed, u32::MAX, 8);
+        let [t0, t1] = sc.faults.kill_window;
+        let mut robots: Vec<u64> = (0..sc.run.robots as u64).collect();
+        for j in 0..k.min(robots.len()) {
+            let pick = rng.gen_range(j..robots.len());
+            robots.swap(j, pick);
+            out.push([rng.gen_range(t0..=t1.max(t0)), robots[j]]);
+        }
+    }
     out.sort_unstable();
     out.dedup();
     out
@@ -63,6 +77,24 @@ mod tests {
         robots.dedup();
         assert_eq!(robots.len(), a.len());
         sc.run.seed = 2;
+        assert_ne!(a, schedule(&sc));
+    }
+
+    #[test]
+    fn a_fraction_kills_that_many_distinct_robots_within_the_window() {
+        let mut sc = Scenario::default();
+        sc.run.robots = 20;
+        sc.faults.kill_fraction = 0.2;
+        sc.faults.kill_window = [20, 200];
+        let a = schedule(&sc);
+        assert_eq!(a.len(), 4, "{a:?}");
+        let mut robots: Vec<u64> = a.iter().map(|k| k[1]).collect();
+        robots.sort_unstable();
+        robots.dedup();
+        assert_eq!(robots.len(), 4);
+        assert!(a.iter().all(|k| (20..=200).contains(&k[0]) && k[1] < 20));
+        assert_eq!(a, schedule(&sc));
+        sc.run.seed = 9;
         assert_ne!(a, schedule(&sc));
     }
 

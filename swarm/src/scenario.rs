@@ -138,6 +138,11 @@ pub struct FaultParams {
     pub chaos_rate: f64,
     /// Scheduled SIGKILLs as [tick, robot]; the resolved scenario lists the random ones too.
     pub kill_at: Vec<[u64; 2]>,
+    /// This fraction of the robots (rounded) is killed once each, at seeded random ticks
+    /// within `kill_window` (`--kill-fraction`).
+    pub kill_fraction: f64,
+    /// [first, last] tick of the `kill_fraction` kills.
+    pub kill_window: [u64; 2],
 }
 
 #[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
@@ -392,6 +397,42 @@ impl Scenario {
             1e7,
             false,
         )?;
+        self.validate_faults(&e)
+    }
+
+    fn validate_faults(&self, e: &dyn Fn(&str, String) -> ConfigError) -> Result<(), ConfigError> {
+        let f = &self.faults;
+        if !(f.chaos_rate.is_finite() && (0.0..=100.0).contains(&f.chaos_rate)) {
+            return Err(e(
+                "faults.chaos_rate",
+                format!(
+                    "= {} is out of range: allowed [0, 100] kills per 100 ticks",
+                    f.chaos_rate
+                ),
+            ));
+        }
+        if let Some([t, r]) = f.kill_at.iter().find(|k| k[1] >= self.run.robots as u64) {
+            return Err(e(
+                "faults.kill_at",
+                format!(
+                    "names robot {r} (at tick {t}), but the run has robots 0..={}",
+                    self.run.robots - 1
+                ),
+            ));
+        }
+        if !(f.kill_fraction.is_finite() && (0.0..=1.0).contains(&f.kill_fraction)) {
+            return Err(e(
+                "faults.kill_fraction",
+                format!("= {} is out of range: allowed [0, 1]", f.kill_fraction),
+            ));
+        }
+        let [t0, t1] = f.kill_window;
+        if t0 > t1 {
+            return Err(e(
+                "faults.kill_window",
+                format!("= [{t0}, {t1}]: the first tick must not be after the last"),
+            ));
+        }
         Ok(())
     }
 }

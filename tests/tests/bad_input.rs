@@ -30,6 +30,19 @@ fn bad_flags_are_rejected_with_the_allowed_range() {
     );
     expect_rejected(&["--executor", "threads"], &["processes", "inprocess"]);
     expect_rejected(&["--robots", "many"], &["--robots"]);
+    expect_rejected(
+        &["--chaos", "-3"],
+        &["--chaos", "faults.chaos_rate", "[0, 100]"],
+    );
+    expect_rejected(
+        &["--robots", "3", "--chaos-at", "10:99"],
+        &["--chaos-at", "robot 99", "0..=2"],
+    );
+    expect_rejected(
+        &["--kill-fraction", "2"],
+        &["--kill-fraction", "faults.kill_fraction", "[0, 1]"],
+    );
+    expect_rejected(&["--mode", "XT"], &["BT", "BE", "BA", "ST", "SE", "SA"]);
 }
 
 #[test]
