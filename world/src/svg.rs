@@ -39,18 +39,83 @@ fn state_colour(state: u32) -> RGBColor {
     }
 }
 
+/// Height of the legend strip under the arena, in pixels.
+const LEGEND: u32 = 30;
+
+/// The key under the arena: trajectory colours by state (search) and the markers.
+fn legend<DB: DrawingBackend>(
+    root: &DrawingArea<DB, plotters::coord::Shift>,
+    arena_height: u32,
+    search: bool,
+) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
+    let y = arena_height as i32 + 8;
+    let font = ("sans-serif", 13).into_font().color(&BLACK);
+    let mut x = 12;
+    let mut line = |root: &DrawingArea<DB, _>, col: RGBColor, label: &str| {
+        let r = root.draw(&PathElement::new(
+            vec![(x, y + 7), (x + 22, y + 7)],
+            col.stroke_width(3),
+        ));
+        let t = root.draw(&Text::new(label.to_string(), (x + 28, y), font.clone()));
+        x += 36 + 7 * label.len() as i32;
+        r.and(t)
+    };
+    if search {
+        line(root, state_colour(0), "roaming")?;
+        line(
+            root,
+            state_colour(swarm::frames::STATE_COOPERATIVE),
+            "cooperative",
+        )?;
+        line(
+            root,
+            state_colour(swarm::frames::STATE_DECLARED),
+            "declared",
+        )?;
+    } else {
+        line(
+            root,
+            robot_colour(0, 3),
+            "trajectory (one colour per robot)",
+        )?;
+    }
+    let mut marks: Vec<(&str, i32)> = vec![
+        ("start region", 0),
+        ("final position", 1),
+        ("dead robot", 2),
+    ];
+    if search {
+        marks.push(("target found", 3));
+        marks.push(("target missed", 4));
+    }
+    for (label, kind) in marks {
+        let c = (x + 6, y + 7);
+        match kind {
+            0 => root.draw(&Rectangle::new(
+                [(x, y + 1), (x + 12, y + 13)],
+                RGBColor(80, 80, 200).stroke_width(1),
+            ))?,
+            1 => root.draw(&Circle::new(c, 4, robot_colour(0, 3).filled()))?,
+            2 => root.draw(&Cross::new(c, 5, BLACK.stroke_width(2)))?,
+            3 => root.draw(&Circle::new(c, 6, GREEN.filled()))?,
+            _ => root.draw(&Circle::new(c, 6, RED.stroke_width(3)))?,
+        }
+        root.draw(&Text::new(label.to_string(), (x + 18, y), font.clone()))?;
+        x += 26 + 7 * label.len() as i32;
+    }
+    Ok(())
+}
+
 pub fn write_svg(world: &World, path: &Path) -> Result<(), String> {
     let sc = &world.sc;
     let (w, h) = (sc.arena.width, sc.arena.height);
     let aspect = h / w;
-    let root = SVGBackend::new(
-        path,
-        (SIZE, (SIZE as f64 * aspect).round().max(100.0) as u32),
-    )
-    .into_drawing_area();
+    let height = (SIZE as f64 * aspect).round().max(100.0) as u32;
+    let root = SVGBackend::new(path, (SIZE, height + LEGEND)).into_drawing_area();
     let e = |x: DrawingAreaErrorKind<std::io::Error>| format!("run.svg: {x:?}");
     root.fill(&WHITE).map_err(e)?;
-    let area = root.margin(10, 10, 10, 10);
+    legend(&root, height, world.targets.is_some()).map_err(e)?;
+    let area = root.margin(10, 10 + LEGEND, 10, 10);
     // Arena coordinates with y up.
     let mut chart = ChartBuilder::on(&area)
         .build_cartesian_2d(0f64..w, 0f64..h)
@@ -66,6 +131,12 @@ pub fn write_svg(world: &World, path: &Path) -> Result<(), String> {
         .draw_series(std::iter::once(Rectangle::new(
             [(x0, y0), (x1, y1)],
             RGBColor(120, 120, 255).mix(0.15).filled(),
+        )))
+        .map_err(e)?;
+    chart
+        .draw_series(std::iter::once(Rectangle::new(
+            [(x0, y0), (x1, y1)],
+            RGBColor(80, 80, 200).stroke_width(1),
         )))
         .map_err(e)?;
     for o in &sc.arena.obstacles {
