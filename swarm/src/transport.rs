@@ -45,6 +45,9 @@ fn err(what: &str, e: impl std::fmt::Debug) -> Error {
 }
 
 /// The iceoryx2 configuration of one run.
+/// Expired publisher connections a subscriber keeps readable (see `run_config`).
+pub const EXPIRED_CONNECTIONS: usize = 4;
+
 pub fn run_config(prefix: &str) -> Result<Config> {
     let mut c = Config::default();
     c.global.prefix = FileName::new(prefix.as_bytes()).map_err(|e| err("iceoryx2 prefix", e))?;
@@ -59,6 +62,11 @@ pub fn run_config(prefix: &str) -> Result<Config> {
     c.global.service.cleanup_dead_nodes_on_open = false;
     c.global.node.cleanup_dead_nodes_on_creation = false;
     c.global.node.cleanup_dead_nodes_on_destruction = false;
+    // Each subscriber preallocates room for this many expired connections (a publisher that
+    // left with samples unread) next to its live ones: iceoryx2's default of 128 costs ~464 KiB
+    // of private heap per subscriber, i.e. per radio link (measured in /proc/PID/smaps). A radio
+    // service has at most 1 + RESTART_SLACK publishers, so a few slots are plenty.
+    c.defaults.publish_subscribe.subscriber_expired_connection_buffer = EXPIRED_CONNECTIONS;
     Ok(c)
 }
 
