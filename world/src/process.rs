@@ -188,10 +188,20 @@ pub fn run(args: &WorldArgs) -> Result<i32> {
             sample.send().map_err(|e| format!("sense send: {e:?}"))?;
         }
         barrier.release(k, world.alive_count());
-        let waited = Instant::now();
+        // The deadline runs from the last ack of any robot, not from the release: when many
+        // agents are slow but working (1,000 agents making their first radio links on 2 cores
+        // take ~25 s), none is declared dead while acks still come in; a hung agent is
+        // declared dead at most ack_deadline_ms after the last progress.
+        let mut waited = Instant::now();
+        let mut acked = 0usize;
         loop {
-            if world.live_robots().all(|i| barrier.acked(i, k)) {
+            let now_acked = world.live_robots().filter(|&i| barrier.acked(i, k)).count();
+            if now_acked == world.alive_count() as usize {
                 break;
+            }
+            if now_acked > acked {
+                acked = now_acked;
+                waited = Instant::now();
             }
             barrier.wait_acks(poll);
             drain_control(&control, &mut world, &mut ctl);
