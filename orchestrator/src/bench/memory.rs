@@ -1,7 +1,7 @@
 //! `orchestrator bench memory`: what a run costs in memory, file descriptors and /dev/shm
 //! files, against N.
 //!
-//! Each size is a real `up` run (processes executor): the default scenario, except that the
+//! Each size is a real `up` run (processes executor): the roam scenario (configs/roam.toml), except that the
 //! robots start spread over the whole arena (in the default 100 x 100 start square every robot
 //! is within radio range of every other, which would make the neighbour count N - 1). At tick
 //! 50 of the run the agent and world processes (children of this process) are measured from

@@ -1,7 +1,8 @@
 //! `orchestrator bench tick`: the runtime's lock-step tick next to a raw iceoryx2 round and the
 //! futex floor, all measured in the same run on the same machine.
 //!
-//! - runtime: `up` with the default scenario (processes executor), N robots, T ticks;
+//! - runtime: `up` with the roam scenario (configs/roam.toml: every robot broadcasts its position
+//!   every tick, all within range at the start), processes executor, N robots, T ticks;
 //! - iox2 round: N child processes; per round 1 notify to N listeners, N notifications back,
 //!   no work (the spec's Appendix A harness);
 //! - futex floor: N child processes released by one futex word (one FUTEX_WAKE for all) and
@@ -49,7 +50,7 @@ fn stats(mut ns: Vec<u64>) -> Stats {
 }
 
 pub fn print_table(rows: &[Row], ticks: u64) {
-    println!("lock-step tick, {ticks} ticks per size (default scenario for the runtime; no work for the others)");
+    println!("lock-step tick, {ticks} ticks per size (roam scenario, configs/roam.toml, for the runtime; no work for the others)");
     println!(
         "{:>6} | {:>10} {:>8} {:>8} | {:>10} {:>8} {:>8} | {:>10} {:>8} {:>8} | {:>9} {:>9}",
         "robots",
@@ -107,7 +108,7 @@ pub fn bench_tick(sizes: &[u32], ticks: u64) -> Result<Vec<Row>, String> {
     Ok(rows)
 }
 
-/// The runtime itself: the default scenario with N robots for `ticks` ticks (+ warm-up).
+/// The runtime itself: the roam scenario with N robots for `ticks` ticks (+ warm-up).
 fn runtime(n: u32, ticks: u64) -> Result<Stats, String> {
     let mut sc = Scenario::roam();
     sc.run.robots = n;
