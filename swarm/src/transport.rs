@@ -66,7 +66,9 @@ pub fn run_config(prefix: &str) -> Result<Config> {
     // left with samples unread) next to its live ones: iceoryx2's default of 128 costs ~464 KiB
     // of private heap per subscriber, i.e. per radio link (measured in /proc/PID/smaps). A radio
     // service has at most 1 + RESTART_SLACK publishers, so a few slots are plenty.
-    c.defaults.publish_subscribe.subscriber_expired_connection_buffer = EXPIRED_CONNECTIONS;
+    c.defaults
+        .publish_subscribe
+        .subscriber_expired_connection_buffer = EXPIRED_CONNECTIONS;
     Ok(c)
 }
 
