@@ -204,6 +204,7 @@ fn run(a: ExperimentArgs) -> Result<i32, String> {
                     .validate(&|_| file.clone())
                     .map_err(|e| e.to_string())
                     .and_then(|_| agent::behaviours::validate(&sc))
+                    .and_then(|_| agent::behaviours::resolve_defaults(&mut sc))
                 {
                     if s == 0 && n == x.robots[0] {
                         unavailable.push((mode.clone(), e));

@@ -193,11 +193,13 @@ pub fn resolve(a: &UpArgs) -> Result<Scenario, ConfigError> {
             .map(|(_, f)| f.to_string())
             .unwrap_or_else(|| file.clone())
     })?;
-    agent::behaviours::validate(&sc).map_err(|message| ConfigError {
-        source: file.clone(),
-        key: String::new(),
-        message,
-    })?;
+    agent::behaviours::validate(&sc)
+        .and_then(|_| agent::behaviours::resolve_defaults(&mut sc))
+        .map_err(|message| ConfigError {
+            source: file.clone(),
+            key: String::new(),
+            message,
+        })?;
     Ok(sc)
 }
 

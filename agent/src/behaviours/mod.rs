@@ -21,6 +21,18 @@ pub fn validate(sc: &Scenario) -> Result<(), String> {
     }
 }
 
+/// Writes every parameter of the behaviour into the scenario, defaults included, so the run's
+/// resolved scenario.toml lists each value the algorithms use (the search kernels' defaults
+/// live in code, with their sources, in behaviours/search/params.rs and search/*.rs).
+pub fn resolve_defaults(sc: &mut Scenario) -> Result<(), String> {
+    if sc.run.behaviour == "search" {
+        let p = search::parse_params(sc)?;
+        sc.search.kernels =
+            toml::Table::try_from(&p).map_err(|e| format!("search.kernels: {e}"))?;
+    }
+    Ok(())
+}
+
 /// Calls `v` with the constructor of the scenario's behaviour (validated beforehand).
 pub fn dispatch<V: BehaviourVisitor>(sc: &Scenario, v: V) -> V::Out {
     match sc.run.behaviour.as_str() {

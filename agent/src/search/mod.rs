@@ -2,6 +2,7 @@
 //! with their unit tests. The search scenario (issue 3) wires them into a behaviour; see
 //! `NOTES.md` beside this file for every choice made where the paper is silent.
 
+pub mod arba;
 pub mod boundary;
 pub mod bsoa;
 pub mod calibration;

@@ -34,7 +34,10 @@
 //! * Cooperative robots ignore obstacle points beyond their estimated target distance
 //!   (`goal_horizon_margin`) and keep apart by eq. (5) within `subgroup_separation`.
 //! * The finder stands still for good and falls silent (spec 5 item 8).
-//! * ARBA (modes BA, SA) is not implemented: `validate_search` refuses those modes.
+//! * ARBA (modes BA, SA) replaces eq. (11) for cooperative robots by the bat rule of
+//!   search/arba.rs with X* = sgb and fitness = own I_ij; everything else (roaming, subgroups,
+//!   the obstacle layer) is as in the other modes. Its draws come from the PSO stream, which
+//!   the A modes do not otherwise use.
 
 pub mod messages;
 pub mod params;
@@ -46,7 +49,7 @@ use crate::search::calibration::Calibration;
 use crate::search::estimator::{self, Detection};
 use crate::search::geometry::{clamp_norm, v2, Vec2};
 use crate::search::subgroup::{self, Member, Role};
-use crate::search::{bsoa, svf, tpepso, virtual_force};
+use crate::search::{arba, bsoa, svf, tpepso, virtual_force};
 use messages::{pack, unpack};
 use rand::Rng;
 use rand_chacha::ChaCha8Rng;
@@ -104,6 +107,8 @@ pub struct Search {
     last_vel: Vec2,
     sf: bsoa::Sense,
     follow: svf::Follow,
+    /// ARBA's per-robot state (modes *A), fresh whenever the subgroup memory is.
+    bat: arba::Bat,
     declare_left: u32,
     /// Last T_est (for inspection and tests).
     last_estimate: Option<Vec2>,
@@ -147,6 +152,7 @@ impl Search {
             last_vel: v2(a.cos(), a.sin()) * v_max,
             sf: bsoa::Sense::None,
             follow: svf::Follow::None,
+            bat: arba::Bat::new(&p.arba),
             declare_left: 0,
             last_estimate: None,
             last_status: None,
@@ -382,6 +388,7 @@ impl Behaviour for Search {
                         pb: None,
                         sgb: None,
                     });
+                    self.bat = arba::Bat::new(&self.p.arba);
                 }
                 let own = signals.iter().find(|(id, _)| *id as u32 == t).map(|x| x.1);
                 horizon = own.filter(|i| *i > i_min).map(|i| self.cal.inverse(i));
@@ -436,13 +443,26 @@ impl Behaviour for Search {
                     subgroup_best: sgb.0,
                     target_estimate: estimate,
                 };
-                let variant = match self.layer {
-                    SearchLayer::Tpepso => tpepso::Variant::Tpepso,
-                    SearchLayer::Epso => tpepso::Variant::Epso,
-                };
                 self.mode = Mode::Cooperative { target: t, role };
-                let v =
-                    tpepso::desired_velocity(&state, variant, &self.p.tpepso, &mut self.rng_pso);
+                let v = match self.layer {
+                    SearchLayer::Arba => arba::desired_velocity(
+                        &mut self.bat,
+                        me,
+                        state.velocity,
+                        sgb.0,
+                        fitness,
+                        &self.p.arba,
+                        &mut self.rng_pso,
+                    ),
+                    layer => {
+                        let variant = if layer == SearchLayer::Tpepso {
+                            tpepso::Variant::Tpepso
+                        } else {
+                            tpepso::Variant::Epso
+                        };
+                        tpepso::desired_velocity(&state, variant, &self.p.tpepso, &mut self.rng_pso)
+                    }
+                };
                 if self.p.subgroup_separation > 0.0 {
                     let others = heard_positions(&heard);
                     let f = virtual_force::Params {

@@ -4,7 +4,8 @@
 //! (spec/search.md section 5); a key that is not a field is an error.
 
 use crate::search::{
-    bsoa, calibration, estimator, subgroup, svf, tpepso, virtual_force, Params as KernelParams,
+    arba, bsoa, calibration, estimator, subgroup, svf, tpepso, virtual_force,
+    Params as KernelParams,
 };
 use serde::{Deserialize, Serialize};
 use swarm::scenario::Scenario;
@@ -23,6 +24,8 @@ pub struct Params {
     pub estimator: estimator::Params,
     /// Eq. (11): TPEPSO (mode *T) / EPSO (mode *E, c3 term dropped).
     pub tpepso: tpepso::Params,
+    /// ARBA, the bat-algorithm baseline (modes *A); every value an assumption (arba.rs).
+    pub arba: arba::Params,
     /// BSOA, Table 2 and eqs. (12)-(22) (modes B*).
     pub bsoa: bsoa::Params,
     /// SVF obstacle following (modes S*; a reconstruction, spec 5 item 27).
@@ -70,6 +73,7 @@ impl Default for Params {
             calibration: calibration::Params::default(),
             estimator: estimator::Params::default(),
             tpepso: tpepso::Params::default(),
+            arba: arba::Params::default(),
             bsoa: bsoa::Params::default(),
             svf: svf::Params::default(),
             subgroup: subgroup::Params::default(),
@@ -98,14 +102,16 @@ pub enum SearchLayer {
     Tpepso,
     /// E: EPSO, eq. (11) with c3 = 0 (spec 5 item 28).
     Epso,
+    /// A: ARBA, the adaptive robotic bat algorithm (spec 5 item 29; search/arba.rs).
+    Arba,
 }
 
-/// Parses `search.mode`. The A modes (ARBA) are refused: not implemented yet.
+/// Parses `search.mode`: BT, BE, BA, ST, SE or SA.
 pub fn parse_mode(mode: &str) -> Result<(ObstacleLayer, SearchLayer), String> {
     let b = mode.as_bytes();
     if b.len() != 2 {
         return Err(format!(
-            "search.mode = {mode:?} is unknown: allowed BT, BE, ST, SE (BA, SA: ARBA is not implemented yet)"
+            "search.mode = {mode:?} is unknown: allowed BT, BE, BA, ST, SE, SA"
         ));
     }
     let obstacle = match b[0] {
@@ -120,13 +126,7 @@ pub fn parse_mode(mode: &str) -> Result<(ObstacleLayer, SearchLayer), String> {
     let search = match b[1] {
         b'T' => SearchLayer::Tpepso,
         b'E' => SearchLayer::Epso,
-        b'A' => {
-            return Err(format!(
-                "search.mode = {mode:?}: ARBA (adaptive robotic bat algorithm, Tang et al., ESWA \
-                 2020, 141:112945) is not implemented yet; modes BA and SA cannot run (use BT, BE, \
-                 ST or SE)"
-            ))
-        }
+        b'A' => SearchLayer::Arba,
         _ => {
             return Err(format!(
                 "search.mode = {mode:?}: the search layer must be T (TPEPSO), E (EPSO) or A (ARBA)"
@@ -165,6 +165,13 @@ pub fn validate_search(sc: &Scenario) -> Result<(), String> {
         .check_consistency()
         .map_err(|e| format!("search.kernels: {e}"))?;
     let v = sc.robot.v_max;
+    p.arba.check().map_err(|e| format!("search.kernels: {e}"))?;
+    if p.arba.v_max != v {
+        return Err(format!(
+            "search.kernels: arba.v_max = {} differs from robot.v_max = {v} (V_max, Table 4)",
+            p.arba.v_max
+        ));
+    }
     if p.tpepso.v_max != v {
         return Err(format!(
             "search.kernels: tpepso.v_max = {} differs from robot.v_max = {v} (V_max, Table 4)",

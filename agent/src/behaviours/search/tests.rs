@@ -378,15 +378,21 @@ fn obstacle_layer_applies_while_roaming() {
 }
 
 #[test]
-fn validation_accepts_the_search_config_and_refuses_arba_and_unknown_keys() {
-    for m in ["BT", "BE", "ST", "SE"] {
+fn validation_accepts_every_mode_and_refuses_unknown_ones_and_keys() {
+    for m in ["BT", "BE", "BA", "ST", "SE", "SA"] {
         validate_search(&scenario(m)).unwrap();
     }
-    for m in ["BA", "SA"] {
-        let e = validate_search(&scenario(m)).unwrap_err();
-        assert!(e.contains("ARBA") && e.contains("not implemented"), "{e}");
-    }
-    assert!(validate_search(&scenario("XT")).is_err());
+    let e = validate_search(&scenario("XT")).unwrap_err();
+    assert!(e.contains("B (BSOA) or S (SVF)"), "{e}");
+    let e = validate_search(&scenario("BX")).unwrap_err();
+    assert!(e.contains("T (TPEPSO), E (EPSO) or A (ARBA)"), "{e}");
+    let mut sc = scenario("BA");
+    sc.search.kernels = "[arba]
+loudness_decay = 1.5
+"
+    .parse()
+    .unwrap();
+    assert!(validate_search(&sc).unwrap_err().contains("loudness_decay"));
     let mut sc = scenario("BT");
     sc.search.kernels = "[tpepso]\nomega = 0.4\n".parse().unwrap();
     assert!(validate_search(&sc).unwrap_err().contains("omega"));
