@@ -8,13 +8,16 @@
 //!   (Unix domain socket + bincode), busy-poll and blocking-wake;
 //! - `throughput` (throughput.rs): radio messages and bytes delivered per second with N robots
 //!   all broadcasting every tick;
-//! - `memory` (memory.rs): RSS and open files per agent and /dev/shm files per run, against N.
+//! - `memory` (memory.rs): RSS and open files per agent and /dev/shm files per run, against N;
+//! - `search` (search.rs): robot-steps per second of the in-process executor on the search
+//!   scenario.
 //!
 //! Cross-process numbers come from real child processes (`orchestrator __bench-child KIND`),
 //! each in its own iceoryx2 prefix that is removed afterwards.
 
 mod latency;
 mod memory;
+mod search;
 mod throughput;
 mod tick;
 
@@ -77,6 +80,24 @@ enum BenchWhat {
         #[arg(long)]
         json: Option<PathBuf>,
         /// Fewer sizes and ticks.
+        #[arg(long)]
+        quick: bool,
+    },
+    /// Robot-steps per second of the in-process executor on the search scenario.
+    Search {
+        /// Robots.
+        #[arg(long, default_value_t = 100)]
+        robots: u32,
+        /// Search mode (BT, BE, BA, ST, SE, SA).
+        #[arg(long, default_value = "BT")]
+        mode: String,
+        /// Seeds 1..=S, one run each.
+        #[arg(long, default_value_t = 3)]
+        seeds: u64,
+        /// Also write the table as JSON.
+        #[arg(long)]
+        json: Option<PathBuf>,
+        /// One seed.
         #[arg(long)]
         quick: bool,
     },
@@ -246,6 +267,23 @@ pub fn bench(a: BenchArgs) -> i32 {
                     write_json(&json, &out)
                 }),
                 "memory",
+            )
+        }
+        BenchWhat::Search {
+            robots,
+            mode,
+            seeds,
+            json,
+            quick,
+        } => {
+            print_machine();
+            let seeds = if quick { 1 } else { seeds };
+            finish(
+                search::run(robots, &mode, seeds).and_then(|rows| {
+                    search::print(&rows);
+                    write_json(&json, &rows)
+                }),
+                "search",
             )
         }
         BenchWhat::All { json, quick } => {
