@@ -62,7 +62,10 @@ struct Run<'a>(&'a AgentArgs);
 
 impl BehaviourVisitor for Run<'_> {
     type Out = Result<i32>;
-    fn visit<B: Behaviour + 'static>(self, make: &dyn Fn(u32) -> B) -> Result<i32> {
+    fn visit<B: Behaviour + Send + 'static>(self, make: &dyn Fn(u32) -> B) -> Result<i32>
+    where
+        B::Msg: Send + Sync,
+    {
         run_loop(
             self.0,
             AgentRuntime::new(&self.0.scenario, self.0.robot, make(self.0.robot)),

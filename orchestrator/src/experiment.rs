@@ -261,7 +261,7 @@ fn run(a: ExperimentArgs) -> Result<i32, String> {
                 };
                 let run_id = format!("{id}-{mode}-{n}-{seed}-{i}");
                 let summary: Result<serde_json::Value, String> = match a.executor {
-                    Executor::Inprocess => inprocess::run(sc, None, &run_id, &mut |_| {})
+                    Executor::Inprocess => inprocess::run(sc, None, &run_id, 1, &mut |_| {})
                         .map_err(|e| e.to_string())
                         .and_then(|s| serde_json::to_value(&s).map_err(|e| e.to_string())),
                     Executor::Processes => {

@@ -32,6 +32,38 @@ impl Air {
         self.headers.clear();
         self.bytes.clear();
     }
+
+    /// Appends another buffer's messages after ours (in their order).
+    fn append(&mut self, other: &Air) {
+        let base = self.bytes.len();
+        self.bytes.extend_from_slice(&other.bytes);
+        self.headers
+            .extend(other.headers.iter().map(|(h, at)| (*h, at + base)));
+    }
+}
+
+/// Robots per worker thread below which a run stays on one thread (thread hand-offs cost more
+/// than small ticks).
+const MIN_ROBOTS_PER_THREAD: usize = 16;
+
+/// One robot's agent side of a tick: its inbox from last tick's messages, its step (messages
+/// into `air`), its links.
+fn agent_tick<B: Behaviour>(
+    rt: &mut AgentRuntime<B>,
+    s: &Sense,
+    prev: &Air,
+    decoded: &[Option<B::Msg>],
+    air: &mut Air,
+) -> Action {
+    rt.begin(s);
+    // What the robot's links carry: every message sent last tick (the runtime keeps only those
+    // from linked senders, exactly as its subscriptions would).
+    for ((h, _), msg) in prev.headers.iter().zip(decoded) {
+        rt.ingest_decoded(h, msg.as_ref());
+    }
+    let a = rt.step(s, air);
+    rt.update_links(s);
+    a
 }
 
 pub struct InProcess<'a> {
@@ -40,11 +72,18 @@ pub struct InProcess<'a> {
     pub out_dir: Option<&'a Path>,
     pub run_id: &'a str,
     pub on_tick: &'a mut dyn FnMut(&World),
+    /// Worker threads for the agents' side of each tick (1: all on the calling thread). The
+    /// robots are split into contiguous id ranges and their messages joined in id order, so
+    /// the result does not depend on it.
+    pub threads: usize,
 }
 
 impl BehaviourVisitor for InProcess<'_> {
     type Out = std::io::Result<Summary>;
-    fn visit<B: Behaviour + 'static>(self, make: &dyn Fn(u32) -> B) -> Self::Out {
+    fn visit<B: Behaviour + Send + 'static>(self, make: &dyn Fn(u32) -> B) -> Self::Out
+    where
+        B::Msg: Send + Sync,
+    {
         let t0 = Instant::now();
         let sc = self.sc;
         let mut world = World::new(sc).map_err(std::io::Error::other)?;
@@ -59,7 +98,13 @@ impl BehaviourVisitor for InProcess<'_> {
         let mut senses: Vec<Box<Sense>> = (0..n).map(|_| Sense::zeroed()).collect();
         let mut prev = Air::default();
         let mut cur = Air::default();
+        // Last tick's messages decoded once for all their receivers (what each receiver would
+        // decode from the same bytes; None: malformed).
+        let mut decoded: Vec<Option<B::Msg>> = Vec::new();
         let mut actions: Vec<Option<Action>> = vec![None; n];
+        let threads = self.threads.clamp(1, (n / MIN_ROBOTS_PER_THREAD).max(1));
+        let chunk = n.div_ceil(threads);
+        let mut airs: Vec<Air> = (0..threads).map(|_| Air::default()).collect();
         let mut tick_ns = Vec::with_capacity(sc.run.max_ticks.min(10_000_000) as usize);
         let startup_seconds = t0.elapsed().as_secs_f64();
         let t_loop = Instant::now();
@@ -70,27 +115,53 @@ impl BehaviourVisitor for InProcess<'_> {
             if world.tick + 1 == sc.run.max_ticks {
                 world.set_stopping();
             }
-            for i in 0..n {
-                actions[i] = None;
-                if !world.alive[i] {
-                    continue;
+            // Sensing first, in robot order (the world's noise draws follow it), then each
+            // robot's agent side, independent of the others'.
+            for (i, sense) in senses.iter_mut().enumerate() {
+                if world.alive[i] {
+                    world.sense(i, sense);
                 }
-                world.sense(i, &mut senses[i]);
-                let rt = &mut rts[i];
-                let s = &senses[i];
-                rt.begin(s);
-                // What robot i's links carry: every message sent last tick (the runtime keeps
-                // only those from linked senders, exactly as its subscriptions would).
-                for (h, at) in &prev.headers {
-                    rt.ingest(h, &prev.bytes[*at..*at + h.len as usize]);
+            }
+            let alive = &world.alive;
+            let (prev_r, decoded_r, senses_r) = (&prev, &decoded[..], &senses[..]);
+            let work = |first: usize,
+                        rts: &mut [AgentRuntime<B>],
+                        acts: &mut [Option<Action>],
+                        air: &mut Air| {
+                for (j, (rt, act)) in rts.iter_mut().zip(acts.iter_mut()).enumerate() {
+                    let i = first + j;
+                    *act = alive[i].then(|| agent_tick(rt, &senses_r[i], prev_r, decoded_r, air));
                 }
-                actions[i] = Some(rt.step(s, &mut cur));
-                rt.update_links(s);
+            };
+            if threads == 1 {
+                work(0, &mut rts, &mut actions, &mut cur);
+            } else {
+                std::thread::scope(|scope| {
+                    for (c, ((rts, acts), air)) in rts
+                        .chunks_mut(chunk)
+                        .zip(actions.chunks_mut(chunk))
+                        .zip(airs.iter_mut())
+                        .enumerate()
+                    {
+                        let work = &work;
+                        scope.spawn(move || work(c * chunk, rts, acts, air));
+                    }
+                });
+                for air in airs.iter_mut() {
+                    cur.append(air);
+                    air.clear();
+                }
             }
             let rec = world.apply(&actions);
             outputs.push(&rec)?;
             std::mem::swap(&mut prev, &mut cur);
             cur.clear();
+            decoded.clear();
+            decoded.extend(
+                prev.headers
+                    .iter()
+                    .map(|(h, at)| AgentRuntime::<B>::decode(h, &prev.bytes[*at..])),
+            );
             tick_ns.push(t_tick.elapsed().as_nanos() as u64);
             (self.on_tick)(&world);
             if world.mission_complete() {
@@ -116,6 +187,7 @@ pub fn run(
     sc: &Scenario,
     out_dir: Option<&Path>,
     run_id: &str,
+    threads: usize,
     on_tick: &mut dyn FnMut(&World),
 ) -> std::io::Result<Summary> {
     dispatch(
@@ -125,6 +197,7 @@ pub fn run(
             out_dir,
             run_id,
             on_tick,
+            threads,
         },
     )
 }

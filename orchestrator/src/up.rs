@@ -256,7 +256,7 @@ pub fn up(a: UpArgs) -> i32 {
     let pb = progress(&sc, a.quiet);
     let n = sc.run.robots;
     let result: Result<(), String> = match a.executor {
-        Executor::Inprocess => inprocess::run(&sc, Some(&run_dir), &run_id, &mut |w| {
+        Executor::Inprocess => inprocess::run(&sc, Some(&run_dir), &run_id, cores(), &mut |w| {
             pb.set_position(w.tick);
             if w.tick % 16 == 0 {
                 let r = &w.radio;
@@ -388,4 +388,9 @@ fn print_summary(v: &serde_json::Value, dir: &Path) {
         "  outputs: {}/{{scenario.toml, summary.json, recording.bin, run.svg}}",
         dir.display()
     );
+}
+
+/// Worker threads of a single in-process run: the machine's cores.
+fn cores() -> usize {
+    std::thread::available_parallelism().map_or(1, |n| n.get())
 }

@@ -34,7 +34,7 @@ impl<M: Serialize + for<'de> Deserialize<'de> + Clone> Behaviour for Talker<M> {
 /// Says nothing; only receives.
 struct Quiet<M>(std::marker::PhantomData<M>);
 
-impl<M: Serialize + for<'de> Deserialize<'de>> Behaviour for Quiet<M> {
+impl<M: Serialize + for<'de> Deserialize<'de> + Clone> Behaviour for Quiet<M> {
     type Msg = M;
     fn step(&mut self, _s: &Sense, _i: &[Received<M>], _out: &mut Outbox<M>) -> Command {
         Command::default()

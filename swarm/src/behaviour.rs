@@ -17,7 +17,7 @@ use std::collections::VecDeque;
 /// A robot's behaviour.
 pub trait Behaviour {
     /// What the robot says on the radio (encoded with bincode into shared memory).
-    type Msg: Serialize + DeserializeOwned;
+    type Msg: Serialize + DeserializeOwned + Clone;
     /// One tick: read the Sense frame and the inbox (messages sent at k - 1 - delay that the
     /// radio delivered, ordered by sender and sequence), queue messages, return a command.
     fn step(
@@ -130,6 +130,8 @@ pub struct AgentRuntime<B: Behaviour> {
     /// Own position at recent ticks (for the range test of messages sent at those ticks).
     positions: VecDeque<(u64, [f64; 2])>,
     pending: Vec<Pending<B::Msg>>,
+    /// The due messages of the current tick (kept to reuse its allocation).
+    due: Vec<Pending<B::Msg>>,
     inbox: Vec<Received<B::Msg>>,
     pub stats: RuntimeStats,
 }
@@ -152,6 +154,7 @@ impl<B: Behaviour> AgentRuntime<B> {
             seq: 0,
             positions: VecDeque::new(),
             pending: Vec::new(),
+            due: Vec::new(),
             inbox: Vec::new(),
             stats: RuntimeStats::default(),
         }
@@ -182,6 +185,30 @@ impl<B: Behaviour> AgentRuntime<B> {
     /// Takes one raw message off a link (straight from shared memory): decides range and loss
     /// now, decodes only if delivered, and holds it until its due tick.
     pub fn ingest(&mut self, h: &RadioHeader, payload: &[u8]) {
+        self.ingest_with(h, || Self::decode(h, payload));
+    }
+
+    /// The payload of a message as `ingest` decodes it: None if malformed (undecodable, or its
+    /// length does not match the header).
+    pub fn decode(h: &RadioHeader, payload: &[u8]) -> Option<B::Msg> {
+        let len = h.len as usize;
+        if len > payload.len() {
+            return None;
+        }
+        bincode::serde::decode_from_slice::<B::Msg, _>(&payload[..len], bincode_config())
+            .ok()
+            .filter(|(_, used)| *used == len)
+            .map(|(msg, _)| msg)
+    }
+
+    /// `ingest` for a message already decoded with [`AgentRuntime::decode`] (the in-process
+    /// executor decodes each broadcast once for all its receivers): the same decisions, the
+    /// same result.
+    pub fn ingest_decoded(&mut self, h: &RadioHeader, msg: Option<&B::Msg>) {
+        self.ingest_with(h, || msg.cloned());
+    }
+
+    fn ingest_with(&mut self, h: &RadioHeader, decode: impl FnOnce() -> Option<B::Msg>) {
         if h.sender == self.robot
             || (h.dest != BROADCAST && h.dest != self.robot)
             || !self.links.accepts(h.sender, h.tick)
@@ -206,30 +233,17 @@ impl<B: Behaviour> AgentRuntime<B> {
             // The world counts range drops from ground truth; the receiver ignores them.
             Verdict::OutOfRange => return,
             Verdict::Lost => Outcome::Lost,
-            Verdict::Deliver => {
-                let len = h.len as usize;
-                let decoded = if len <= payload.len() {
-                    bincode::serde::decode_from_slice::<B::Msg, _>(
-                        &payload[..len],
-                        bincode_config(),
-                    )
-                    .ok()
-                    .filter(|(_, used)| *used == len)
-                } else {
-                    None
-                };
-                match decoded {
-                    Some((msg, _)) => Outcome::Delivered(Received {
-                        from: h.sender,
-                        tick: h.tick,
-                        seq: h.seq,
-                        sender_pos: h.sender_pos,
-                        unicast: h.dest != BROADCAST,
-                        msg,
-                    }),
-                    None => Outcome::Malformed,
-                }
-            }
+            Verdict::Deliver => match decode() {
+                Some(msg) => Outcome::Delivered(Received {
+                    from: h.sender,
+                    tick: h.tick,
+                    seq: h.seq,
+                    sender_pos: h.sender_pos,
+                    unicast: h.dest != BROADCAST,
+                    msg,
+                }),
+                None => Outcome::Malformed,
+            },
         };
         self.pending.push(Pending {
             due: h.tick + 1 + self.radio.delay_ticks as u64,
@@ -245,18 +259,26 @@ impl<B: Behaviour> AgentRuntime<B> {
         let k = sense.tick;
         let mut action = Action::idle(k, self.robot);
         // Due messages in a fixed order: (sender, seq). Scheduling cannot change the inbox.
-        let mut due: Vec<Pending<B::Msg>> = Vec::new();
-        let mut i = 0;
-        while i < self.pending.len() {
-            if self.pending[i].due <= k {
-                due.push(self.pending.swap_remove(i));
-            } else {
-                i += 1;
+        // (sender, seq) is unique, so any sort gives the same order; messages usually arrive
+        // in it already (links are walked by robot id), and then nothing moves.
+        let mut due = std::mem::take(&mut self.due);
+        if self.pending.iter().all(|p| p.due <= k) {
+            std::mem::swap(&mut due, &mut self.pending);
+        } else {
+            let mut i = 0;
+            while i < self.pending.len() {
+                if self.pending[i].due <= k {
+                    due.push(self.pending.swap_remove(i));
+                } else {
+                    i += 1;
+                }
             }
         }
-        due.sort_by_key(|p| (p.from, p.seq));
+        if !due.is_sorted_by_key(|p| (p.from, p.seq)) {
+            due.sort_unstable_by_key(|p| (p.from, p.seq));
+        }
         self.inbox.clear();
-        for p in due {
+        for p in due.drain(..) {
             match p.outcome {
                 Outcome::Delivered(r) => {
                     action.radio_delivered += 1;
@@ -266,6 +288,7 @@ impl<B: Behaviour> AgentRuntime<B> {
                 Outcome::Malformed => action.radio_malformed += 1,
             }
         }
+        self.due = due;
         let mut out = Outbox::new(self.radio.max_messages_per_tick as usize);
         let cmd = self.behaviour.step(sense, &self.inbox, &mut out);
         self.stats.refused_sends += out.refused as u64;

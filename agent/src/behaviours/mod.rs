@@ -10,7 +10,9 @@ use swarm::Behaviour;
 /// Something to do with the scenario's behaviour type (run it in a process, or in-process).
 pub trait BehaviourVisitor {
     type Out;
-    fn visit<B: Behaviour + 'static>(self, make: &dyn Fn(u32) -> B) -> Self::Out;
+    fn visit<B: Behaviour + Send + 'static>(self, make: &dyn Fn(u32) -> B) -> Self::Out
+    where
+        B::Msg: Send + Sync;
 }
 
 /// Checks the behaviour's own parameters (beyond what swarm::scenario validates).

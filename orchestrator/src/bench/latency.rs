@@ -336,14 +336,14 @@ fn cell(path: Path, size: usize, mode: Mode, rounds: u64) -> Result<Vec<u64>, St
 // ---- messages ----
 
 /// A radio message of the latency bench: the sender's time stamp and the payload.
-trait Payload: Serialize + DeserializeOwned + 'static {
+trait Payload: Serialize + DeserializeOwned + Clone + 'static {
     fn make(stamp: u64, data: Vec<u8>) -> Self;
     fn stamp(&self) -> u64;
     fn data(&self) -> &[u8];
 }
 
 /// `data` as serde serialises a `Vec<u8>`: a sequence, one element at a time.
-#[derive(Serialize, Deserialize)]
+#[derive(Clone, Serialize, Deserialize)]
 struct SeqPing {
     stamp: u64,
     data: Vec<u8>,
@@ -362,7 +362,7 @@ impl Payload for SeqPing {
 }
 
 /// `data` as one byte string (what `serde_bytes` does): the same wire bytes, one copy.
-#[derive(Serialize, Deserialize)]
+#[derive(Clone, Serialize, Deserialize)]
 struct BytesPing {
     stamp: u64,
     data: ByteBuf,

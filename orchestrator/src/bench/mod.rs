@@ -279,10 +279,18 @@ pub fn bench(a: BenchArgs) -> i32 {
             print_machine();
             let seeds = if quick { 1 } else { seeds };
             finish(
-                search::run(robots, &mode, seeds).and_then(|rows| {
-                    search::print(&rows);
-                    write_json(&json, &rows)
-                }),
+                search::run(robots, &mode, seeds, 1)
+                    .and_then(|mut rows| {
+                        let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+                        if cores > 1 {
+                            rows.extend(search::run(robots, &mode, seeds, cores)?);
+                        }
+                        Ok(rows)
+                    })
+                    .and_then(|rows| {
+                        search::print(&rows);
+                        write_json(&json, &rows)
+                    }),
                 "search",
             )
         }
@@ -421,6 +429,7 @@ fn check_no_leftovers(prefix: &str) -> Result<(), String> {
 
 /// A byte string that serde encodes in one piece (what `serde_bytes` does), where a plain
 /// `Vec<u8>` is encoded element by element.
+#[derive(Clone)]
 pub(super) struct ByteBuf(pub(super) Vec<u8>);
 
 impl serde::Serialize for ByteBuf {

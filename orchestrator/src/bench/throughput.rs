@@ -221,14 +221,14 @@ type Link = (
 );
 
 /// The broadcast payload, element by element.
-#[derive(Serialize, Deserialize)]
+#[derive(Clone, Serialize, Deserialize)]
 struct Blob(Vec<u8>);
 
 /// The broadcast payload as one byte string.
-#[derive(Serialize, Deserialize)]
+#[derive(Clone, Serialize, Deserialize)]
 struct BytesBlob(ByteBuf);
 
-trait Make: Serialize + serde::de::DeserializeOwned + 'static {
+trait Make: Serialize + serde::de::DeserializeOwned + Clone + 'static {
     fn make(data: Vec<u8>) -> Self;
 }
 
