@@ -97,6 +97,13 @@ fn run_loop<B: Behaviour>(args: &AgentArgs, mut rt: AgentRuntime<B>) -> Result<i
     let radio_pub = transport::radio_publisher(&radio_svc, sc)?;
     let barrier = TickBarrier::open(&args.prefix)?;
     let world_pid = barrier.world_pid();
+    let bell = match sc.runtime.barrier {
+        swarm::scenario::BarrierKind::Futex => None,
+        swarm::scenario::BarrierKind::Iox2Event => {
+            Some(swarm::bell::EventBell::agent(&node, barrier.robots())?)
+        }
+    };
+    let bell = bell.as_ref();
     let poll = Duration::from_millis(sc.runtime.poll_ms);
     let mut links: BTreeMap<u32, Link> = BTreeMap::new();
     let mut tx = ShmTx {
@@ -106,7 +113,7 @@ fn run_loop<B: Behaviour>(args: &AgentArgs, mut rt: AgentRuntime<B>) -> Result<i
     let mut done = barrier.acked_up_to(robot);
     barrier.mark_ready(robot);
     loop {
-        let k = match barrier.wait_release(done, poll) {
+        let k = match barrier.wait_release_with(done, poll, bell) {
             Wake::Shutdown => return Ok(EXIT_OK),
             Wake::Timeout => {
                 if !world_alive(world_pid) {
@@ -176,7 +183,7 @@ fn run_loop<B: Behaviour>(args: &AgentArgs, mut rt: AgentRuntime<B>) -> Result<i
             .send()
             .map_err(|e| format!("act send: {e:?}"))?;
         drop(sense);
-        barrier.ack(robot, k);
+        barrier.ack_with(robot, k, bell);
         done = k + 1;
     }
 }

@@ -8,6 +8,7 @@
 //!
 //! The segment is `/dev/shm/<run prefix>tick`, removed with the rest of the run.
 
+use crate::bell::EventBell;
 use std::sync::atomic::{AtomicU32, AtomicU64, Ordering};
 use std::time::{Duration, Instant};
 
@@ -230,12 +231,23 @@ impl TickBarrier {
 
     /// Releases tick k to the agents; `expected` acknowledgements will wake the world.
     pub fn release(&self, tick: u64, expected: u32) {
+        self.release_with(tick, expected, None);
+    }
+
+    /// `release`, waking the agents through `bell` instead of the futex if given
+    /// (`runtime.barrier = "iox2-event"`).
+    pub fn release_with(&self, tick: u64, expected: u32, bell: Option<&EventBell>) {
         let h = self.header();
         h.acks.store(0, Ordering::Relaxed);
         h.expected.store(expected, Ordering::Relaxed);
         h.released_tick.store(tick, Ordering::Relaxed);
         h.release.store((tick + 1) as u32, Ordering::Release);
-        futex_wake(&h.release, i32::MAX);
+        match bell {
+            Some(b) => b.ring(),
+            None => {
+                futex_wake(&h.release, i32::MAX);
+            }
+        }
     }
 
     /// Whether robot `robot` acknowledged tick k.
@@ -245,12 +257,20 @@ impl TickBarrier {
 
     /// Sleeps until the ack counter moves or `timeout` passes (spurious wake-ups allowed).
     pub fn wait_acks(&self, timeout: Duration) {
+        self.wait_acks_with(timeout, None);
+    }
+
+    /// `wait_acks`, sleeping on `bell` instead of the futex if given.
+    pub fn wait_acks_with(&self, timeout: Duration, bell: Option<&EventBell>) {
         let h = self.header();
         let seen = h.acks.load(Ordering::Acquire);
         if seen >= h.expected.load(Ordering::Relaxed) {
             return;
         }
-        futex_wait(&h.acks, seen, timeout);
+        match bell {
+            Some(b) => b.wait(timeout),
+            None => futex_wait(&h.acks, seen, timeout),
+        }
     }
 
     /// Wakes the world from `wait_acks` (the orchestrator does this after reporting a fault).
@@ -262,10 +282,18 @@ impl TickBarrier {
 
     /// Tells every agent to exit.
     pub fn shutdown(&self) {
+        self.shutdown_with(None);
+    }
+
+    /// `shutdown`, also ringing `bell` if given.
+    pub fn shutdown_with(&self, bell: Option<&EventBell>) {
         let h = self.header();
         h.shutdown.store(1, Ordering::Release);
         h.release.fetch_add(1, Ordering::AcqRel);
         futex_wake(&h.release, i32::MAX);
+        if let Some(b) = bell {
+            b.ring();
+        }
     }
 
     pub fn is_shutdown(&self) -> bool {
@@ -293,6 +321,16 @@ impl TickBarrier {
 
     /// Waits for a tick after `done` (ticks < done are finished), for at most `timeout`.
     pub fn wait_release(&self, done: u64, timeout: Duration) -> Wake {
+        self.wait_release_with(done, timeout, None)
+    }
+
+    /// `wait_release`, sleeping on `bell` instead of the futex if given.
+    pub fn wait_release_with(
+        &self,
+        done: u64,
+        timeout: Duration,
+        bell: Option<&EventBell>,
+    ) -> Wake {
         let h = self.header();
         let deadline = Instant::now() + timeout;
         loop {
@@ -308,17 +346,30 @@ impl TickBarrier {
             if now >= deadline {
                 return Wake::Timeout;
             }
-            futex_wait(&h.release, word, deadline - now);
+            match bell {
+                Some(b) => b.wait(deadline - now),
+                None => futex_wait(&h.release, word, deadline - now),
+            }
         }
     }
 
     /// Acknowledges tick k for `robot` (after its Action frame is published).
     pub fn ack(&self, robot: u32, tick: u64) {
+        self.ack_with(robot, tick, None);
+    }
+
+    /// `ack`, ringing `bell` instead of the futex if given.
+    pub fn ack_with(&self, robot: u32, tick: u64, bell: Option<&EventBell>) {
         let h = self.header();
         self.slot(robot).store(tick + 1, Ordering::Release);
         let n = h.acks.fetch_add(1, Ordering::AcqRel) + 1;
         if n >= h.expected.load(Ordering::Acquire) {
-            futex_wake(&h.acks, 1);
+            match bell {
+                Some(b) => b.ring(),
+                None => {
+                    futex_wake(&h.acks, 1);
+                }
+            }
         }
     }
 }

@@ -7,6 +7,7 @@
 
 pub mod barrier;
 pub mod behaviour;
+pub mod bell;
 pub mod chaos;
 pub mod cleanup;
 pub mod frames;

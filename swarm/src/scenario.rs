@@ -86,6 +86,9 @@ pub struct RadioParams {
 pub enum BarrierKind {
     /// One futex word in shared memory wakes every agent; agents count themselves back.
     Futex,
+    /// The same barrier, woken through iceoryx2 events (one notify to N listeners, N
+    /// notifiers back): slower, kept for comparison.
+    Iox2Event,
 }
 
 #[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]

@@ -40,7 +40,7 @@ pub fn root_for(prefix: &str) -> PathBuf {
     PathBuf::from(IOX2_ROOT).join(format!("{prefix}iox2"))
 }
 
-fn err(what: &str, e: impl std::fmt::Debug) -> Error {
+pub(crate) fn err(what: &str, e: impl std::fmt::Debug) -> Error {
     format!("{what}: {e:?}").into()
 }
 

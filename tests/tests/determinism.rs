@@ -122,3 +122,46 @@ fn run_folder_holds_every_output() {
     assert_eq!(ticks.len(), 60);
     assert_left_nothing(&out);
 }
+
+/// The iceoryx2-event tick barrier (kept for comparison) runs the same ticks as the default
+/// futex barrier: same trajectories, same radio, also across a restart.
+#[test]
+fn the_iox2_event_barrier_gives_the_same_run_as_the_futex_one() {
+    let _g = serial();
+    let dir = tmp_dir("barriers");
+    std::fs::create_dir_all(&dir).unwrap();
+    let mut runs = Vec::new();
+    for kind in ["futex", "iox2-event"] {
+        let sc = dir.join(format!("{kind}.toml"));
+        std::fs::write(
+            &sc,
+            format!("[run]\nbehaviour = \"roam\"\n[runtime]\nbarrier = \"{kind}\"\n"),
+        )
+        .unwrap();
+        let out = dir.join(kind);
+        let o = up(
+            &[
+                "--scenario",
+                sc.to_str().unwrap(),
+                "--robots",
+                "10",
+                "--max-ticks",
+                "300",
+                "--loss",
+                "0.2",
+                "--chaos-at",
+                "100:3",
+            ],
+            &out,
+        );
+        assert!(o.status.success(), "{kind}: {}", stderr(&o));
+        assert_left_nothing(&out);
+        runs.push(out);
+    }
+    let svg = |d: &std::path::Path| std::fs::read(d.join("run.svg")).unwrap();
+    assert!(svg(&runs[0]) == svg(&runs[1]), "trajectories differ");
+    let (a, b) = (summary(&runs[0]), summary(&runs[1]));
+    assert_eq!(a["messages"], b["messages"]);
+    assert_eq!(a["distance_travelled"], b["distance_travelled"]);
+    assert_eq!(a["faults"].as_array().unwrap().len(), 1);
+}

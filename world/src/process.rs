@@ -115,6 +115,12 @@ pub fn run(args: &WorldArgs) -> Result<i32> {
         .create()
         .map_err(|e| format!("control subscriber: {e:?}"))?;
     let barrier = TickBarrier::create(&args.prefix, n)?;
+    // runtime.barrier = "iox2-event": the barrier's wake-ups go through iceoryx2 events.
+    let bell = match sc.runtime.barrier {
+        swarm::scenario::BarrierKind::Futex => None,
+        swarm::scenario::BarrierKind::Iox2Event => Some(swarm::bell::EventBell::world(&node, n)?),
+    };
+    let bell = bell.as_ref();
     let mut outputs = RunOutputs::create(&args.run_dir, sc)?;
     // Tell the orchestrator every service exists: agents may start.
     println!("READY");
@@ -187,7 +193,7 @@ pub fn run(args: &WorldArgs) -> Result<i32> {
             let sample = unsafe { sample.assume_init() };
             sample.send().map_err(|e| format!("sense send: {e:?}"))?;
         }
-        barrier.release(k, world.alive_count());
+        barrier.release_with(k, world.alive_count(), bell);
         // The deadline runs from the last ack of any robot, not from the release: when many
         // agents are slow but working (1,000 agents making their first radio links on 2 cores
         // take ~25 s), none is declared dead while acks still come in; a hung agent is
@@ -203,7 +209,7 @@ pub fn run(args: &WorldArgs) -> Result<i32> {
                 acked = now_acked;
                 waited = Instant::now();
             }
-            barrier.wait_acks(poll);
+            barrier.wait_acks_with(poll, bell);
             drain_control(&control, &mut world, &mut ctl);
             if waited.elapsed() > deadline {
                 let silent: Vec<u32> = world
@@ -245,7 +251,7 @@ pub fn run(args: &WorldArgs) -> Result<i32> {
         }
     }
     let loop_seconds = t_loop.elapsed().as_secs_f64();
-    barrier.shutdown();
+    barrier.shutdown_with(bell);
     let timing = Timing {
         wall_seconds: t_start.elapsed().as_secs_f64(),
         loop_seconds,

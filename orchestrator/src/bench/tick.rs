@@ -15,7 +15,7 @@ use serde::Serialize;
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 use swarm::barrier::{TickBarrier, Wake};
-use swarm::scenario::Scenario;
+use swarm::scenario::{BarrierKind, Scenario};
 use swarm::{cleanup, transport};
 use world::output::percentile;
 
@@ -25,6 +25,9 @@ pub struct Row {
     pub runtime_ticks_per_s: f64,
     pub runtime_p50_us: f64,
     pub runtime_p99_us: f64,
+    /// The runtime with `runtime.barrier = "iox2-event"`.
+    pub runtime_ev_ticks_per_s: f64,
+    pub runtime_ev_p50_us: f64,
     pub iox2_rounds_per_s: f64,
     pub iox2_p50_us: f64,
     pub iox2_p99_us: f64,
@@ -52,11 +55,13 @@ fn stats(mut ns: Vec<u64>) -> Stats {
 pub fn print_table(rows: &[Row], ticks: u64) {
     println!("lock-step tick, {ticks} ticks per size (roam scenario, configs/roam.toml, for the runtime; no work for the others)");
     println!(
-        "{:>6} | {:>10} {:>8} {:>8} | {:>10} {:>8} {:>8} | {:>10} {:>8} {:>8} | {:>9} {:>9}",
+        "{:>6} | {:>10} {:>8} {:>8} | {:>10} {:>8} | {:>10} {:>8} {:>8} | {:>10} {:>8} {:>8} | {:>9} {:>9}",
         "robots",
         "runtime/s",
         "p50 us",
         "p99 us",
+        "rt-ev/s",
+        "p50 us",
         "iox2 rd/s",
         "p50 us",
         "p99 us",
@@ -68,11 +73,13 @@ pub fn print_table(rows: &[Row], ticks: u64) {
     );
     for r in rows {
         println!(
-            "{:>6} | {:>10.0} {:>8.0} {:>8.0} | {:>10.0} {:>8.0} {:>8.0} | {:>10.0} {:>8.0} {:>8.0} | {:>8.2}x {:>8.2}x",
+            "{:>6} | {:>10.0} {:>8.0} {:>8.0} | {:>10.0} {:>8.0} | {:>10.0} {:>8.0} {:>8.0} | {:>10.0} {:>8.0} {:>8.0} | {:>8.2}x {:>8.2}x",
             r.robots,
             r.runtime_ticks_per_s,
             r.runtime_p50_us,
             r.runtime_p99_us,
+            r.runtime_ev_ticks_per_s,
+            r.runtime_ev_p50_us,
             r.iox2_rounds_per_s,
             r.iox2_p50_us,
             r.iox2_p99_us,
@@ -83,13 +90,15 @@ pub fn print_table(rows: &[Row], ticks: u64) {
             r.futex_rounds_per_s / r.runtime_ticks_per_s,
         );
     }
+    println!("runtime = the runtime with its default futex barrier; rt-ev = the same run with runtime.barrier = \"iox2-event\".");
     println!("rt/iox2 = runtime tick time / raw iceoryx2 round time (mean); below 1 means faster than the raw round.");
 }
 
 pub fn bench_tick(sizes: &[u32], ticks: u64) -> Result<Vec<Row>, String> {
     let mut rows = Vec::new();
     for &n in sizes {
-        let rt = runtime(n, ticks)?;
+        let rt = runtime(n, ticks, BarrierKind::Futex)?;
+        let rt_ev = runtime(n, ticks, BarrierKind::Iox2Event)?;
         let iox = raw_iox2(n, ticks)?;
         let fx = futex_floor(n, ticks)?;
         rows.push(Row {
@@ -97,6 +106,8 @@ pub fn bench_tick(sizes: &[u32], ticks: u64) -> Result<Vec<Row>, String> {
             runtime_ticks_per_s: rt.per_s,
             runtime_p50_us: rt.p50_us,
             runtime_p99_us: rt.p99_us,
+            runtime_ev_ticks_per_s: rt_ev.per_s,
+            runtime_ev_p50_us: rt_ev.p50_us,
             iox2_rounds_per_s: iox.per_s,
             iox2_p50_us: iox.p50_us,
             iox2_p99_us: iox.p99_us,
@@ -109,9 +120,10 @@ pub fn bench_tick(sizes: &[u32], ticks: u64) -> Result<Vec<Row>, String> {
 }
 
 /// The runtime itself: the roam scenario with N robots for `ticks` ticks (+ warm-up).
-fn runtime(n: u32, ticks: u64) -> Result<Stats, String> {
+fn runtime(n: u32, ticks: u64, barrier: BarrierKind) -> Result<Stats, String> {
     let mut sc = Scenario::roam();
     sc.run.robots = n;
+    sc.runtime.barrier = barrier;
     let warmup = (ticks / 20).max(10);
     sc.run.max_ticks = ticks + warmup;
     sc.validate(&|_| "bench".into())
