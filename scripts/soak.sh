@@ -4,7 +4,8 @@
 #
 #   scripts/soak.sh [ROBOTS] [TICKS] [KILLS_PER_100_TICKS]
 #
-# Defaults: 20 robots, 11000 ticks, 1 kill per 100 ticks (~100-110 kills).
+# Defaults: 20 robots, 11000 ticks, 1 kill per 100 ticks (~100-110 kills). It runs the roam
+# scenario (configs/roam.toml): a search run would end when its targets are found.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 robots=${1:-20}
@@ -14,7 +15,7 @@ cargo build --release -q
 out=$(mktemp -d /tmp/swarm-soak.XXXXXX)
 before_shm=$(ls /dev/shm | grep -c '^sw' || true)
 start=$(date +%s.%N)
-./target/release/orchestrator up --quiet --robots "$robots" --max-ticks "$ticks" \
+./target/release/orchestrator up --quiet --scenario configs/roam.toml --robots "$robots" --max-ticks "$ticks" \
   --chaos "$rate" --on-fault restart --max-restarts 1000000 --out "$out/run"
 end=$(date +%s.%N)
 sleep 0.5
