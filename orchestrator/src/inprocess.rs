@@ -5,42 +5,11 @@
 use agent::{dispatch, BehaviourVisitor};
 use std::path::Path;
 use std::time::Instant;
-use swarm::behaviour::RadioTx;
-use swarm::frames::{Action, RadioHeader, Sense};
+use swarm::frames::{Action, Sense};
+use swarm::mailbox::{Air, Mailbox};
 use swarm::scenario::Scenario;
 use swarm::{AgentRuntime, Behaviour};
 use world::{RunOutputs, Summary, Timing, World};
-
-/// Messages of one tick: headers and their encoded payloads in one buffer.
-#[derive(Default)]
-struct Air {
-    headers: Vec<(RadioHeader, usize)>,
-    bytes: Vec<u8>,
-}
-
-impl RadioTx for Air {
-    fn transmit(&mut self, h: &RadioHeader, fill: &mut dyn FnMut(&mut [u8])) {
-        let at = self.bytes.len();
-        self.bytes.resize(at + h.len as usize, 0);
-        fill(&mut self.bytes[at..]);
-        self.headers.push((*h, at));
-    }
-}
-
-impl Air {
-    fn clear(&mut self) {
-        self.headers.clear();
-        self.bytes.clear();
-    }
-
-    /// Appends another buffer's messages after ours (in their order).
-    fn append(&mut self, other: &Air) {
-        let base = self.bytes.len();
-        self.bytes.extend_from_slice(&other.bytes);
-        self.headers
-            .extend(other.headers.iter().map(|(h, at)| (*h, at + base)));
-    }
-}
 
 /// Robots per worker thread below which a run stays on one thread (thread hand-offs cost more
 /// than small ticks).
@@ -51,17 +20,14 @@ const MIN_ROBOTS_PER_THREAD: usize = 16;
 fn agent_tick<B: Behaviour>(
     rt: &mut AgentRuntime<B>,
     s: &Sense,
-    prev: &Air,
-    decoded: &[Option<B::Msg>],
+    mailbox: &Mailbox<B::Msg>,
     air: &mut Air,
 ) -> Action {
     rt.begin(s);
-    // What the robot's links carry: every message sent last tick (the runtime keeps only those
-    // from linked senders, exactly as its subscriptions would).
-    for ((h, _), msg) in prev.headers.iter().zip(decoded) {
-        rt.ingest_decoded(h, msg.as_ref());
-    }
-    let a = rt.step(s, air);
+    // What the robot's links carry: the messages sent last tick by the robots it is linked to,
+    // exactly as its subscriptions would.
+    rt.ingest_mailbox(mailbox);
+    let a = rt.step_mailbox(s, mailbox, air);
     rt.update_links(s);
     a
 }
@@ -96,11 +62,9 @@ impl BehaviourVisitor for InProcess<'_> {
             .map(|i| AgentRuntime::new(sc, i, make(i)))
             .collect();
         let mut senses: Vec<Box<Sense>> = (0..n).map(|_| Sense::zeroed()).collect();
-        let mut prev = Air::default();
+        // This tick's messages; then, decoded once for all their receivers, the mailbox.
         let mut cur = Air::default();
-        // Last tick's messages decoded once for all their receivers (what each receiver would
-        // decode from the same bytes; None: malformed).
-        let mut decoded: Vec<Option<B::Msg>> = Vec::new();
+        let mut mailbox: Mailbox<B::Msg> = Mailbox::new(n, sc.radio.delay_ticks as u64);
         let mut actions: Vec<Option<Action>> = vec![None; n];
         let threads = self.threads.clamp(1, (n / MIN_ROBOTS_PER_THREAD).max(1));
         let chunk = n.div_ceil(threads);
@@ -110,6 +74,7 @@ impl BehaviourVisitor for InProcess<'_> {
         let t_loop = Instant::now();
         let mut end = "completed";
         while world.tick < sc.run.max_ticks {
+            sc.runtime.pace(t_loop, world.tick);
             let t_tick = Instant::now();
             world.begin_tick();
             if world.tick + 1 == sc.run.max_ticks {
@@ -123,14 +88,14 @@ impl BehaviourVisitor for InProcess<'_> {
                 }
             }
             let alive = &world.alive;
-            let (prev_r, decoded_r, senses_r) = (&prev, &decoded[..], &senses[..]);
+            let (mailbox_r, senses_r) = (&mailbox, &senses[..]);
             let work = |first: usize,
                         rts: &mut [AgentRuntime<B>],
                         acts: &mut [Option<Action>],
                         air: &mut Air| {
                 for (j, (rt, act)) in rts.iter_mut().zip(acts.iter_mut()).enumerate() {
                     let i = first + j;
-                    *act = alive[i].then(|| agent_tick(rt, &senses_r[i], prev_r, decoded_r, air));
+                    *act = alive[i].then(|| agent_tick(rt, &senses_r[i], mailbox_r, air));
                 }
             };
             if threads == 1 {
@@ -154,14 +119,8 @@ impl BehaviourVisitor for InProcess<'_> {
             }
             let rec = world.apply(&actions);
             outputs.push(&rec)?;
-            std::mem::swap(&mut prev, &mut cur);
+            mailbox.post(rec.tick, &cur);
             cur.clear();
-            decoded.clear();
-            decoded.extend(
-                prev.headers
-                    .iter()
-                    .map(|(h, at)| AgentRuntime::<B>::decode(h, &prev.bytes[*at..])),
-            );
             tick_ns.push(t_tick.elapsed().as_nanos() as u64);
             (self.on_tick)(&world);
             if world.mission_complete() {

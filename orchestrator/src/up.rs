@@ -41,6 +41,10 @@ pub struct UpArgs {
     /// Radio delay in ticks [scenario: radio.delay_ticks].
     #[arg(long)]
     pub delay: Option<u32>,
+    /// Pacing: at most this many ticks per second, 0 = unpaced; results are the same
+    /// [scenario: runtime.tick_hz].
+    #[arg(long)]
+    pub tick_hz: Option<f64>,
     /// Run folder (default runs/<run-id>).
     #[arg(long)]
     pub out: Option<PathBuf>,
@@ -123,6 +127,7 @@ const FLAG_KEYS: &[(&str, &str)] = &[
     ("faults.kill_at", "--chaos-at"),
     ("faults.kill_fraction", "--kill-fraction"),
     ("faults.max_restarts", "--max-restarts"),
+    ("runtime.tick_hz", "--tick-hz"),
 ];
 
 /// The scenario with the flags applied and validated.
@@ -176,6 +181,9 @@ pub fn resolve(a: &UpArgs) -> Result<Scenario, ConfigError> {
     }
     if let Some(v) = a.kill_fraction {
         set("faults.kill_fraction", &mut || sc.faults.kill_fraction = v);
+    }
+    if let Some(v) = a.tick_hz {
+        set("runtime.tick_hz", &mut || sc.runtime.tick_hz = v);
     }
     if let Some(v) = a.max_restarts {
         set("faults.max_restarts", &mut || sc.faults.max_restarts = v);

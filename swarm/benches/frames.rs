@@ -25,7 +25,7 @@ struct Talker<M> {
 
 impl<M: Serialize + for<'de> Deserialize<'de> + Clone> Behaviour for Talker<M> {
     type Msg = M;
-    fn step(&mut self, _s: &Sense, _i: &[Received<M>], out: &mut Outbox<M>) -> Command {
+    fn step_refs(&mut self, _s: &Sense, _i: &[&Received<M>], out: &mut Outbox<M>) -> Command {
         out.broadcast(self.msg.clone());
         Command::default()
     }
@@ -36,7 +36,7 @@ struct Quiet<M>(std::marker::PhantomData<M>);
 
 impl<M: Serialize + for<'de> Deserialize<'de> + Clone> Behaviour for Quiet<M> {
     type Msg = M;
-    fn step(&mut self, _s: &Sense, _i: &[Received<M>], _out: &mut Outbox<M>) -> Command {
+    fn step_refs(&mut self, _s: &Sense, _i: &[&Received<M>], _out: &mut Outbox<M>) -> Command {
         Command::default()
     }
 }

@@ -1,11 +1,14 @@
 //! The behaviour API and the agent-side runtime that sits between a behaviour and the radio.
 //!
-//! A behaviour is a pure state machine: `step(sense, inbox, outbox) -> command`. It can only
-//! `broadcast` or `send(to)`; range, loss, delay, ordering and counting happen below it in
-//! [`AgentRuntime`], which both executors use unchanged.
+//! A behaviour is a pure state machine: `step_refs(sense, inbox, outbox) -> command`. It can
+//! only `broadcast` or `send(to)`; range, loss, delay, ordering and counting happen below it in
+//! [`AgentRuntime`], which both executors use: the multi-process agent feeds it the messages
+//! it takes off its links (`ingest`), the in-process executor its view of the shared
+//! [`Mailbox`] (`ingest_mailbox`), with the same decisions.
 
 use crate::frames::{Action, RadioHeader, Sense, BROADCAST, MAX_SENT};
 use crate::link::LinkSet;
+use crate::mailbox::Mailbox;
 use crate::radio::{decide, Verdict};
 use crate::scenario::Scenario;
 use rand::SeedableRng;
@@ -17,15 +20,28 @@ use std::collections::VecDeque;
 /// A robot's behaviour.
 pub trait Behaviour {
     /// What the robot says on the radio (encoded with bincode into shared memory).
-    type Msg: Serialize + DeserializeOwned + Clone;
+    type Msg: Serialize + DeserializeOwned;
     /// One tick: read the Sense frame and the inbox (messages sent at k - 1 - delay that the
     /// radio delivered, ordered by sender and sequence), queue messages, return a command.
+    /// The inbox refers to the messages: in-process, all receivers of a message share one
+    /// decoded copy (see `mailbox`).
+    fn step_refs(
+        &mut self,
+        sense: &Sense,
+        inbox: &[&Received<Self::Msg>],
+        out: &mut Outbox<Self::Msg>,
+    ) -> Command;
+
+    /// [`Behaviour::step_refs`] over an inbox of owned messages (unit tests).
     fn step(
         &mut self,
         sense: &Sense,
         inbox: &[Received<Self::Msg>],
         out: &mut Outbox<Self::Msg>,
-    ) -> Command;
+    ) -> Command {
+        let refs: Vec<&Received<Self::Msg>> = inbox.iter().collect();
+        self.step_refs(sense, &refs, out)
+    }
 }
 
 /// A delivered radio message.
@@ -55,8 +71,13 @@ pub struct Outbox<M> {
 
 impl<M> Outbox<M> {
     fn new(limit: usize) -> Self {
+        Self::reusing(Vec::new(), limit)
+    }
+    /// An empty outbox that fills `buf` (cleared), to keep its allocation from tick to tick.
+    fn reusing(mut buf: Vec<(u32, M)>, limit: usize) -> Self {
+        buf.clear();
         Outbox {
-            msgs: Vec::new(),
+            msgs: buf,
             limit: limit.min(MAX_SENT),
             refused: 0,
         }
@@ -99,7 +120,10 @@ pub fn robot_rng(seed: u64, robot: u32, stream: u64) -> ChaCha8Rng {
 }
 
 enum Outcome<M> {
-    Delivered(Received<M>),
+    /// Decoded by this runtime (a message taken off a link).
+    Delivered(Box<Received<M>>),
+    /// The mailbox's message with this index (in-process).
+    Posted(u64),
     Lost,
     Malformed,
 }
@@ -132,12 +156,32 @@ pub struct AgentRuntime<B: Behaviour> {
     pending: Vec<Pending<B::Msg>>,
     /// The due messages of the current tick (kept to reuse its allocation).
     due: Vec<Pending<B::Msg>>,
-    inbox: Vec<Received<B::Msg>>,
+    /// The behaviour's outbox (kept to reuse its allocation).
+    out: Vec<(u32, B::Msg)>,
     pub stats: RuntimeStats,
 }
 
 fn bincode_config() -> bincode::config::Configuration {
     bincode::config::standard()
+}
+
+/// A radio payload as every receiver decodes it: None if malformed (undecodable, or its length
+/// does not match the header).
+pub fn decode<M: DeserializeOwned>(h: &RadioHeader, payload: &[u8]) -> Option<M> {
+    let len = h.len as usize;
+    if len > payload.len() {
+        return None;
+    }
+    bincode::serde::decode_from_slice::<M, _>(&payload[..len], bincode_config())
+        .ok()
+        .filter(|(_, used)| *used == len)
+        .map(|(msg, _)| msg)
+}
+
+/// A payload as the runtime encodes it (for tests).
+#[cfg(test)]
+pub(crate) fn encode<M: Serialize>(msg: &M) -> Vec<u8> {
+    bincode::serde::encode_to_vec(msg, bincode_config()).expect("encodable")
 }
 
 impl<B: Behaviour> AgentRuntime<B> {
@@ -155,7 +199,7 @@ impl<B: Behaviour> AgentRuntime<B> {
             positions: VecDeque::new(),
             pending: Vec::new(),
             due: Vec::new(),
-            inbox: Vec::new(),
+            out: Vec::new(),
             stats: RuntimeStats::default(),
         }
     }
@@ -185,41 +229,67 @@ impl<B: Behaviour> AgentRuntime<B> {
     /// Takes one raw message off a link (straight from shared memory): decides range and loss
     /// now, decodes only if delivered, and holds it until its due tick.
     pub fn ingest(&mut self, h: &RadioHeader, payload: &[u8]) {
-        self.ingest_with(h, || Self::decode(h, payload));
-    }
-
-    /// The payload of a message as `ingest` decodes it: None if malformed (undecodable, or its
-    /// length does not match the header).
-    pub fn decode(h: &RadioHeader, payload: &[u8]) -> Option<B::Msg> {
-        let len = h.len as usize;
-        if len > payload.len() {
-            return None;
-        }
-        bincode::serde::decode_from_slice::<B::Msg, _>(&payload[..len], bincode_config())
-            .ok()
-            .filter(|(_, used)| *used == len)
-            .map(|(msg, _)| msg)
-    }
-
-    /// `ingest` for a message already decoded with [`AgentRuntime::decode`] (the in-process
-    /// executor decodes each broadcast once for all its receivers): the same decisions, the
-    /// same result.
-    pub fn ingest_decoded(&mut self, h: &RadioHeader, msg: Option<&B::Msg>) {
-        self.ingest_with(h, || msg.cloned());
-    }
-
-    fn ingest_with(&mut self, h: &RadioHeader, decode: impl FnOnce() -> Option<B::Msg>) {
-        if h.sender == self.robot
-            || (h.dest != BROADCAST && h.dest != self.robot)
-            || !self.links.accepts(h.sender, h.tick)
-        {
+        if h.sender == self.robot || !self.links.accepts(h.sender, h.tick) {
             return;
         }
-        let Some(own) = self.own_pos_at(h.tick) else {
-            self.stats.stale_messages += 1;
+        if let Some(deliver) = self.judge(h, self.own_pos_at(h.tick)) {
+            let outcome = if !deliver {
+                Outcome::Lost
+            } else {
+                match decode(h, payload) {
+                    Some(msg) => Outcome::Delivered(Box::new(Received {
+                        from: h.sender,
+                        tick: h.tick,
+                        seq: h.seq,
+                        sender_pos: h.sender_pos,
+                        unicast: h.dest != BROADCAST,
+                        msg,
+                    })),
+                    None => Outcome::Malformed,
+                }
+            };
+            self.hold(h, outcome);
+        }
+    }
+
+    /// In-process: takes the mailbox's latest messages that this robot's links carry, with the
+    /// decisions `ingest` makes for each. Links are walked in robot-id order, so the messages
+    /// are held in (sender, seq) order, as the multi-process agent takes them off its links.
+    pub fn ingest_mailbox(&mut self, mailbox: &Mailbox<B::Msg>) {
+        let Some(tick) = mailbox.latest_tick() else {
             return;
         };
-        let verdict = decide(
+        let own = self.own_pos_at(tick);
+        for i in 0..self.links.len() {
+            let Some(sender) = self.links.carrier(i, tick) else {
+                continue;
+            };
+            for (index, h, decoded) in mailbox.latest_from(sender) {
+                if let Some(deliver) = self.judge(h, own) {
+                    let outcome = match (deliver, decoded) {
+                        (false, _) => Outcome::Lost,
+                        (true, true) => Outcome::Posted(index),
+                        (true, false) => Outcome::Malformed,
+                    };
+                    self.hold(h, outcome);
+                }
+            }
+        }
+    }
+
+    /// For a message on one of this robot's links, given the robot's own position at the send
+    /// tick: None if it is not for this robot or out of range (the world counts range drops
+    /// from ground truth; the receiver ignores them), else whether the loss draw delivers it.
+    #[inline]
+    fn judge(&mut self, h: &RadioHeader, own: Option<[f64; 2]>) -> Option<bool> {
+        if h.dest != BROADCAST && h.dest != self.robot {
+            return None;
+        }
+        let Some(own) = own else {
+            self.stats.stale_messages += 1;
+            return None;
+        };
+        match decide(
             &self.radio,
             self.seed,
             h.tick,
@@ -228,23 +298,15 @@ impl<B: Behaviour> AgentRuntime<B> {
             self.robot,
             own,
             h.seq,
-        );
-        let outcome = match verdict {
-            // The world counts range drops from ground truth; the receiver ignores them.
-            Verdict::OutOfRange => return,
-            Verdict::Lost => Outcome::Lost,
-            Verdict::Deliver => match decode() {
-                Some(msg) => Outcome::Delivered(Received {
-                    from: h.sender,
-                    tick: h.tick,
-                    seq: h.seq,
-                    sender_pos: h.sender_pos,
-                    unicast: h.dest != BROADCAST,
-                    msg,
-                }),
-                None => Outcome::Malformed,
-            },
-        };
+        ) {
+            Verdict::OutOfRange => None,
+            Verdict::Lost => Some(false),
+            Verdict::Deliver => Some(true),
+        }
+    }
+
+    /// Holds a message's outcome until its due tick.
+    fn hold(&mut self, h: &RadioHeader, outcome: Outcome<B::Msg>) {
         self.pending.push(Pending {
             due: h.tick + 1 + self.radio.delay_ticks as u64,
             from: h.sender,
@@ -256,6 +318,25 @@ impl<B: Behaviour> AgentRuntime<B> {
     /// Finishes tick k: delivers what is due, steps the behaviour, transmits its messages and
     /// returns the Action frame.
     pub fn step(&mut self, sense: &Sense, tx: &mut dyn RadioTx) -> Action {
+        self.step_with(sense, None, tx)
+    }
+
+    /// `step` in-process: messages held by `ingest_mailbox` are read from the mailbox.
+    pub fn step_mailbox(
+        &mut self,
+        sense: &Sense,
+        mailbox: &Mailbox<B::Msg>,
+        tx: &mut dyn RadioTx,
+    ) -> Action {
+        self.step_with(sense, Some(mailbox), tx)
+    }
+
+    fn step_with(
+        &mut self,
+        sense: &Sense,
+        mailbox: Option<&Mailbox<B::Msg>>,
+        tx: &mut dyn RadioTx,
+    ) -> Action {
         let k = sense.tick;
         let mut action = Action::idle(k, self.robot);
         // Due messages in a fixed order: (sender, seq). Scheduling cannot change the inbox.
@@ -277,20 +358,32 @@ impl<B: Behaviour> AgentRuntime<B> {
         if !due.is_sorted_by_key(|p| (p.from, p.seq)) {
             due.sort_unstable_by_key(|p| (p.from, p.seq));
         }
-        self.inbox.clear();
-        for p in due.drain(..) {
-            match p.outcome {
-                Outcome::Delivered(r) => {
-                    action.radio_delivered += 1;
-                    self.inbox.push(r);
-                }
+        let mut inbox: Vec<&Received<B::Msg>> = Vec::with_capacity(due.len());
+        for p in &due {
+            match &p.outcome {
+                Outcome::Delivered(r) => inbox.push(r),
+                Outcome::Posted(i) => match mailbox.and_then(|m| m.get(*i)) {
+                    Some(r) => inbox.push(r),
+                    // Only a runtime stepped again after missing ticks could hold a message
+                    // the mailbox has forgotten; the in-process executor never does that.
+                    None => {
+                        self.stats.stale_messages += 1;
+                        continue;
+                    }
+                },
                 Outcome::Lost => action.radio_dropped_loss += 1,
                 Outcome::Malformed => action.radio_malformed += 1,
             }
         }
+        action.radio_delivered = inbox.len() as u32;
+        let mut out = Outbox::reusing(
+            std::mem::take(&mut self.out),
+            self.radio.max_messages_per_tick as usize,
+        );
+        let cmd = self.behaviour.step_refs(sense, &inbox, &mut out);
+        drop(inbox);
+        due.clear();
         self.due = due;
-        let mut out = Outbox::new(self.radio.max_messages_per_tick as usize);
-        let cmd = self.behaviour.step(sense, &self.inbox, &mut out);
         self.stats.refused_sends += out.refused as u64;
         action.vel = cmd.vel;
         action.events = cmd.events;
@@ -317,6 +410,7 @@ impl<B: Behaviour> AgentRuntime<B> {
             action.sent_to[action.n_sent as usize] = *dest;
             action.n_sent += 1;
         }
+        self.out = out.msgs;
         action
     }
 
@@ -338,7 +432,12 @@ mod tests {
     }
     impl Behaviour for Echo {
         type Msg = u64;
-        fn step(&mut self, s: &Sense, inbox: &[Received<u64>], out: &mut Outbox<u64>) -> Command {
+        fn step_refs(
+            &mut self,
+            s: &Sense,
+            inbox: &[&Received<u64>],
+            out: &mut Outbox<u64>,
+        ) -> Command {
             self.heard.extend(inbox.iter().map(|r| (r.from, r.msg)));
             out.broadcast(s.tick);
             Command::default()

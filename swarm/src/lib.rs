@@ -3,7 +3,8 @@
 //! Everything both executors (multi-process and in-process) share lives here, so that the two
 //! give byte-identical recordings: the frames, the scenario types and their validation, the
 //! radio model (range, loss, delay, link management), the behaviour API with its agent-side
-//! runtime, the recording format, and the iceoryx2 / futex plumbing of the multi-process path.
+//! runtime, the in-process radio (`mailbox`), the recording format, and the iceoryx2 / futex
+//! plumbing of the multi-process path.
 
 pub mod barrier;
 pub mod behaviour;
@@ -13,6 +14,7 @@ pub mod cleanup;
 pub mod frames;
 pub mod geometry;
 pub mod link;
+pub mod mailbox;
 pub mod radio;
 pub mod recording;
 pub mod scenario;

@@ -19,6 +19,8 @@ pub struct LinkSet {
     links: Vec<(u32, u64, u64)>,
     added: Vec<u32>,
     removed: Vec<u32>,
+    /// Scratch of `update`: one bit per robot id, all clear between calls.
+    marks: Vec<u64>,
 }
 
 impl LinkSet {
@@ -29,6 +31,34 @@ impl LinkSet {
             links: Vec::new(),
             added: Vec::new(),
             removed: Vec::new(),
+            marks: Vec::new(),
+        }
+    }
+
+    /// Marks robot r; false (and no mark) for an id beyond any run's robots, which a corrupt
+    /// frame could hold: the bitmap stays small.
+    fn mark(&mut self, r: u32) -> bool {
+        if r >= crate::scenario::MAX_ROBOTS {
+            return false;
+        }
+        let w = r as usize / 64;
+        if w >= self.marks.len() {
+            self.marks.resize(w + 1, 0);
+        }
+        self.marks[w] |= 1 << (r % 64);
+        true
+    }
+
+    /// Clears robot r's mark; whether it was set.
+    fn unmark(marks: &mut [u64], r: u32) -> bool {
+        match marks.get_mut(r as usize / 64) {
+            Some(w) => {
+                let bit = 1 << (r % 64);
+                let was = *w & bit != 0;
+                *w &= !bit;
+                was
+            }
+            None => false,
         }
     }
 
@@ -36,16 +66,34 @@ impl LinkSet {
     pub fn update(&mut self, tick: u64, listed: &[u32], own: u32) -> (&[u32], &[u32]) {
         self.added.clear();
         self.removed.clear();
+        // Mark the listed robots; refresh the links to marked ones (unmarking them); what is
+        // still marked is new. Linear in listed + links: every robot does this every tick, and
+        // a search per listed robot cost more.
         for &r in listed {
-            if r == own {
-                continue;
-            }
-            match self.links.binary_search_by_key(&r, |l| l.0) {
-                Ok(i) => self.links[i].1 = tick,
-                Err(i) => {
-                    self.links.insert(i, (r, tick, tick));
-                    self.added.push(r);
+            if r != own && !self.mark(r) {
+                // Unmarkable: looked up instead.
+                match self.links.binary_search_by_key(&r, |l| l.0) {
+                    Ok(i) => self.links[i].1 = tick,
+                    Err(i) => {
+                        self.links.insert(i, (r, tick, tick));
+                        self.added.push(r);
+                    }
                 }
+            }
+        }
+        for l in self.links.iter_mut() {
+            if Self::unmark(&mut self.marks, l.0) {
+                l.1 = tick;
+            }
+        }
+        for &r in listed {
+            if r != own && Self::unmark(&mut self.marks, r) {
+                self.added.push(r);
+            }
+        }
+        for &r in &self.added {
+            if let Err(i) = self.links.binary_search_by_key(&r, |l| l.0) {
+                self.links.insert(i, (r, tick, tick));
             }
         }
         let linger = self.linger;
@@ -81,11 +129,21 @@ impl LinkSet {
     /// A link made while handling Sense_j carries only messages sent after tick j: whether
     /// one sent at j itself was seen depends on scheduling, so it never counts (the world
     /// counts it as unlinked). This keeps both executors identical even when max_links binds.
+    #[inline]
     pub fn accepts(&self, sender: u32, msg_tick: u64) -> bool {
         match self.links.binary_search_by_key(&sender, |l| l.0) {
             Ok(i) => self.links[i].2 < msg_tick,
             Err(_) => false,
         }
+    }
+
+    /// The robot of the `i`-th link (in robot-id order) if that link carries messages sent at
+    /// `msg_tick` (as [`LinkSet::accepts`]): lets a receiver walk its links instead of looking
+    /// up each message's sender.
+    #[inline]
+    pub fn carrier(&self, i: usize, msg_tick: u64) -> Option<u32> {
+        let &(r, _, created) = self.links.get(i)?;
+        (created < msg_tick).then_some(r)
     }
 
     pub fn contains(&self, robot: u32) -> bool {
@@ -133,6 +191,26 @@ mod tests {
         assert_eq!(r.to_vec(), vec![3]);
         assert!(!l.contains(3));
         assert!(l.accepts(1, 1) && !l.accepts(1, 0) && !l.accepts(3, 5));
+        assert_eq!(
+            (l.carrier(0, 1), l.carrier(0, 0), l.carrier(1, 1)),
+            (Some(1), None, None)
+        );
+    }
+
+    #[test]
+    fn duplicates_and_own_id_in_the_list_are_harmless() {
+        let mut l = LinkSet::new(8, 2);
+        let (a, _) = l.update(0, &[70, 3, 70, 5, 3], 5);
+        assert_eq!(a.to_vec(), vec![3, 70]);
+        let (a, r) = l.update(1, &[3, 200, 3, u32::MAX - 1, u32::MAX - 1], 5);
+        assert_eq!((a.to_vec(), r.to_vec()), (vec![200, u32::MAX - 1], vec![]));
+        assert_eq!(
+            l.robots().collect::<Vec<_>>(),
+            vec![3, 70, 200, u32::MAX - 1]
+        );
+        assert!(l.marks.iter().all(|w| *w == 0) && l.marks.len() <= 4);
+        let (a, r) = l.update(2, &[u32::MAX - 1], 5);
+        assert!(a.is_empty() && r.is_empty());
     }
 
     #[test]

@@ -16,6 +16,7 @@ pub enum Verdict {
 }
 
 /// SplitMix64 finaliser: a well-mixed 64-bit hash step.
+#[inline]
 fn mix(mut z: u64) -> u64 {
     z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
     z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
@@ -23,6 +24,7 @@ fn mix(mut z: u64) -> u64 {
 }
 
 /// Uniform draw in [0, 1) from (seed, tick, sender, receiver, seq).
+#[inline]
 pub fn loss_draw(seed: u64, tick: u64, sender: u32, receiver: u32, seq: u32) -> f64 {
     let mut h = mix(seed ^ 0x5241_4449_4f00_0000); // "RADIO"
     h = mix(h ^ tick);
@@ -32,6 +34,7 @@ pub fn loss_draw(seed: u64, tick: u64, sender: u32, receiver: u32, seq: u32) -> 
 }
 
 /// Loss probability at distance d.
+#[inline]
 pub fn loss_probability(p: &RadioParams, d: f64) -> f64 {
     match p.loss_model {
         LossModel::Bernoulli => p.loss,
@@ -43,6 +46,7 @@ pub fn loss_probability(p: &RadioParams, d: f64) -> f64 {
 }
 
 /// Euclidean distance, computed the same way everywhere (so range decisions agree bit for bit).
+#[inline]
 pub fn distance(a: [f64; 2], b: [f64; 2]) -> f64 {
     let dx = a[0] - b[0];
     let dy = a[1] - b[1];
@@ -51,6 +55,7 @@ pub fn distance(a: [f64; 2], b: [f64; 2]) -> f64 {
 
 /// The decision for one (message, receiver) pair.
 #[allow(clippy::too_many_arguments)]
+#[inline]
 pub fn decide(
     p: &RadioParams,
     seed: u64,
@@ -61,11 +66,25 @@ pub fn decide(
     receiver_pos: [f64; 2],
     seq: u32,
 ) -> Verdict {
-    let d = distance(sender_pos, receiver_pos);
-    if d > p.comm_radius {
+    // d = sqrt(s) is needed only near the range (and by the distance loss model): a square
+    // beyond (below) R^2 by far more than sqrt's rounding decides `d > R` without it. Half the
+    // pairs are out of range, and the sqrt sat in front of that unpredictable branch.
+    let dx = sender_pos[0] - receiver_pos[0];
+    let dy = sender_pos[1] - receiver_pos[1];
+    let s = dx * dx + dy * dy;
+    let r2 = p.comm_radius * p.comm_radius;
+    if s > r2 * (1.0 + 1e-9) {
         return Verdict::OutOfRange;
     }
-    let pl = loss_probability(p, d);
+    let pl = if s < r2 * (1.0 - 1e-9) && p.loss_model == LossModel::Bernoulli {
+        p.loss
+    } else {
+        let d = s.sqrt();
+        if d > p.comm_radius {
+            return Verdict::OutOfRange;
+        }
+        loss_probability(p, d)
+    };
     if pl > 0.0 && loss_draw(seed, tick, sender, receiver, seq) < pl {
         Verdict::Lost
     } else {
@@ -172,6 +191,31 @@ mod tests {
             decide(&p, 0, 0, 1, [0.0, 0.0], 2, [300.001, 0.0], 0),
             Verdict::OutOfRange
         );
+    }
+
+    #[test]
+    fn range_decisions_match_the_distance_at_the_edge() {
+        let mut p = Scenario::default().radio;
+        for (r, model) in [(300.0, LossModel::Bernoulli), (0.1, LossModel::Distance)] {
+            p.comm_radius = r;
+            p.loss_model = model;
+            p.loss = 0.0;
+            p.loss_at_range = 0.0;
+            let mut x = r * (1.0 - 1e-8);
+            while x < r * (1.0 + 1e-8) {
+                for y in [0.0, 1e-3 * r, 0.3 * r] {
+                    let b = [x, y];
+                    let want = if distance([0.0, 0.0], b) > r {
+                        Verdict::OutOfRange
+                    } else {
+                        Verdict::Deliver
+                    };
+                    assert_eq!(decide(&p, 0, 0, 1, [0.0, 0.0], 2, b, 0), want, "{b:?}");
+                    assert_eq!(decide(&p, 0, 0, 1, b, 2, [0.0, 0.0], 0), want, "{b:?}");
+                }
+                x = f64::from_bits(x.to_bits() + 1_000_000);
+            }
+        }
     }
 
     #[test]

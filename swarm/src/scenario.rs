@@ -98,6 +98,27 @@ pub struct RuntimeParams {
     pub ack_deadline_ms: u64,
     pub poll_ms: u64,
     pub startup_timeout_s: u64,
+    /// Pacing: at most this many ticks per second (0 = as fast as the agents allow). Still
+    /// lock-step (every live agent is waited for), so results do not depend on it.
+    #[serde(default)]
+    pub tick_hz: f64,
+}
+
+impl RuntimeParams {
+    /// When tick `k` may start, counted from the start of the loop (None: unpaced).
+    pub fn tick_start(&self, k: u64) -> Option<std::time::Duration> {
+        (self.tick_hz > 0.0).then(|| std::time::Duration::from_secs_f64(k as f64 / self.tick_hz))
+    }
+
+    /// Sleeps until tick `k` may start (a no-op when unpaced or already late).
+    pub fn pace(&self, loop_start: std::time::Instant, k: u64) {
+        if let Some(at) = self.tick_start(k) {
+            let now = loop_start.elapsed();
+            if at > now {
+                std::thread::sleep(at - now);
+            }
+        }
+    }
 }
 
 /// The multi-target search scenario (spec/search.md): targets, their signal, the mode.
@@ -377,6 +398,7 @@ impl Scenario {
             600_000,
         )?;
         range_u("runtime.poll_ms", self.runtime.poll_ms, 1, 10_000)?;
+        range_f("runtime.tick_hz", self.runtime.tick_hz, 0.0, 1e6, false)?;
         range_u(
             "runtime.startup_timeout_s",
             self.runtime.startup_timeout_s,

@@ -165,3 +165,30 @@ fn the_iox2_event_barrier_gives_the_same_run_as_the_futex_one() {
     assert_eq!(a["distance_travelled"], b["distance_travelled"]);
     assert_eq!(a["faults"].as_array().unwrap().len(), 1);
 }
+
+#[test]
+fn a_paced_run_ticks_no_faster_than_asked_and_records_the_same_ticks() {
+    let _g = serial();
+    let base = ["--robots", "6", "--max-ticks", "200", "--seed", "3"];
+    let fast = tmp_dir("pace-free");
+    let paced = tmp_dir("pace-400");
+    assert!(up(&base, &fast).status.success());
+    let o = up(&[&base[..], &["--tick-hz", "400"]].concat(), &paced);
+    assert!(o.status.success(), "{}", stderr(&o));
+    // Tick 199 starts no earlier than 199 / 400 s into the loop: at most 200 / 0.4975 ticks/s.
+    let rate = summary(&paced)["ticks_per_second"].as_f64().unwrap();
+    assert!(
+        rate <= 200.0 / (199.0 / 400.0),
+        "paced run ticked at {rate}/s"
+    );
+    let ticks = |d: &std::path::Path| {
+        swarm::recording::read_recording(std::fs::File::open(d.join("recording.bin")).unwrap())
+            .unwrap()
+            .1
+    };
+    // Pacing changes only when ticks start, never what happens in them (the header's resolved
+    // scenario differs by runtime.tick_hz alone).
+    assert!(ticks(&fast) == ticks(&paced), "pacing changed the run");
+    assert_left_nothing(&fast);
+    assert_left_nothing(&paced);
+}

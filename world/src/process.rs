@@ -154,8 +154,9 @@ pub fn run(args: &WorldArgs) -> Result<i32> {
     let deadline = Duration::from_millis(sc.runtime.ack_deadline_ms);
     let mut end = "completed".to_string();
     while world.tick < sc.run.max_ticks {
-        let t_tick = Instant::now();
         let k = world.tick;
+        sc.runtime.pace(t_loop, k);
+        let t_tick = Instant::now();
         world.begin_tick();
         if restart {
             // A new agent process attached for a dead robot: it drives the robot from now on.

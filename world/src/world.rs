@@ -100,7 +100,7 @@ impl World {
             static_points(sc),
             sc.arena.width,
             sc.arena.height,
-            sc.robot.sensing_radius.max(10.0),
+            (sc.robot.sensing_radius / 4.0).max(2.5),
         );
         let traj_every = (sc.run.max_ticks / 2000).max(1);
         Ok(World {

@@ -28,8 +28,13 @@ pub fn fault_at(tick: u64) -> Option<u64> {
 
 impl Behaviour for Faulty {
     type Msg = Beacon;
-    fn step(&mut self, s: &Sense, inbox: &[Received<Beacon>], out: &mut Outbox<Beacon>) -> Command {
-        let mut c = self.inner.step(s, inbox, out);
+    fn step_refs(
+        &mut self,
+        s: &Sense,
+        inbox: &[&Received<Beacon>],
+        out: &mut Outbox<Beacon>,
+    ) -> Command {
+        let mut c = self.inner.step_refs(s, inbox, out);
         match fault_at(s.tick) {
             Some(0) => c.vel = [f64::NAN, 1.0],
             Some(1) => c.vel = [f64::INFINITY, 0.0],

@@ -46,7 +46,12 @@ impl Roam {
 impl Behaviour for Roam {
     type Msg = Beacon;
 
-    fn step(&mut self, s: &Sense, inbox: &[Received<Beacon>], out: &mut Outbox<Beacon>) -> Command {
+    fn step_refs(
+        &mut self,
+        s: &Sense,
+        inbox: &[&Received<Beacon>],
+        out: &mut Outbox<Beacon>,
+    ) -> Command {
         out.broadcast(Beacon { pos: s.pos });
         let me = s.pos;
         // The two nearest robots heard (positions they sent last tick); ties by sender id.

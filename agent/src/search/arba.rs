@@ -1,58 +1,106 @@
 //! ARBA, the adaptive robotic bat algorithm baseline (search layer "A", modes BA and SA;
-//! spec/search.md 2.8 and 5 item 29).
+//! spec/search.md 2.11, 4.1 Table 3 and 5 item 29).
 //!
-//! The paper cites ARBA (Tang et al., "A multirobot target searching method based on bat
-//! algorithm in unknown environments", Expert Systems with Applications 2020, 141: 112945) and
-//! says only that it is "an adaptive robot bat algorithm that considers obstacle avoidance and a
-//! mechanism for escaping local optima". Its text is not available here, so this is the bat
-//! algorithm (Yang 2010) mapped onto robots the way that paper describes it, with every
-//! assumption a named parameter below marked [assumed]:
+//! The search paper cites ARBA (Tang H., Sun W., Yu H. et al., "A multirobot target searching
+//! method based on bat algorithm in unknown environments", Expert Systems with Applications
+//! 2020, 141: 112945) and says only that it is "an adaptive robot bat algorithm that considers
+//! obstacle avoidance and a mechanism for escaping local optima". Neither that paper nor its
+//! parameters are available here, so this is the bat algorithm (Yang 2010) mapped onto robots
+//! the way the cited paper describes it in outline (each robot is a bat; the best is the best
+//! position its group knows from the target signal; speeds limited to V_max; adaptive inertia;
+//! obstacle avoidance; an escape from local optima). Per cooperative tick of robot i:
 //!
-//!   f_i   = f_min + (f_max − f_min) β,                 β ~ U(0, 1)           (frequency)
-//!   V_i   = w_i V_i + f_i (X* − X_i)                                         (velocity)
-//!   if rand > r_i:  V_i = (X* + ε A_i V_max u) − X_i,  u ~ U(−1, 1)²          (local walk)
-//!   on improvement of the robot's own best, with probability A_i:
-//!         A_i ← α_A A_i,   r_i ← r_0 (1 − exp(−γ t))                        (adaptation)
+//! ```text
+//!   f_i = f_min + (f_max − f_min) β,   β ~ U(0, 1)                           (frequency)
+//!   V_i = w_i V_i(t) + f_i (X* − X_i)                                        (velocity)
+//!   if rand > r_i:  V_i = (X* + ε A_i V_max local_walk) − X_i,  ε ~ U(−1, 1)² (local walk)
+//!   V_i = V_i clamped to ‖V_i‖ ≤ V_max                                        (V_max)
+//!   on improvement of the robot's own best fitness, with probability A_i (rand < A_i):
+//!         A_i ← α_A A_i,   r_i ← r_0 (1 − exp(−γ t))                         (adaptation)
 //!   w_i = w_min + (w_max − w_min) A_i / A_0                                  (adaptive inertia)
-//!   no improvement for `stall_ticks`: a random heading for `escape_ticks`, A_i ← A_0
+//!   no improvement for `stall_ticks`: a random heading at V_max for `escape_ticks`, A_i ← A_0
 //!                                                                            (escape)
+//! ```
 //!
-//! X* is the best position the robot's subgroup knows (sgb, learnt over the radio as in
-//! TPEPSO), the fitness the robot's own signal I_ij. Obstacle avoidance is the mode's obstacle
-//! layer (BSOA or SVF) applied afterwards, as for every search layer (Table 3).
+//! Assumptions, each marked [assumed] (the values are the fields of [`Params`]):
+//! 1. **Sign of the frequency term.** Yang writes v ← v + (x_i − x*) f_i; here robots are
+//!    pulled towards X*, (X* − X_i), as in the robotic and most later bat variants (with Yang's
+//!    sign and no candidate evaluation a robot would be pushed away from the best).
+//! 2. **The best X\*** is the subgroup best sgb: the best personal best (pb, fitness = own
+//!    measured I_ij of the subgroup's target) announced by the members heard over the radio,
+//!    exactly the sgb of TPEPSO (the caller keeps it; the existing `Status` message carries pb).
+//! 3. **No candidate evaluation.** A robot cannot test a candidate position without going there,
+//!    so the bat's "new solution" is the position it moves to; it is "accepted" when the fitness
+//!    measured there beats the robot's own best so far, and then, with probability A_i (Yang's
+//!    rand < A_i), loudness and pulse rate adapt.
+//! 4. **Own loudness** A_i scales the local walk, not the swarm's mean loudness ⟨A⟩ (which a
+//!    robot does not know without extra radio fields).
+//! 5. **t of the pulse-rate law** is the number of cooperative ticks since the bat was created
+//!    (the robot joined the subgroup of a new target); r_i starts at r_0 (1 − e^0) = 0, so a
+//!    fresh bat walks around X* until its first accepted improvement (with A_0 = 1 that is its
+//!    first tick, whose measurement always beats the empty best: r_i = r_0 (1 − e^{−γ})).
+//! 6. **Adaptive inertia** w_i falls from w_max to w_min with the loudness (loud = exploring,
+//!    quiet = exploiting); ARBA's published adaptation rule is not available.
+//! 7. **Escape from local optima:** `stall_ticks` ticks without improving the own best start
+//!    `escape_ticks` ticks of flight at V_max in a random heading, after which the bat is loud
+//!    again (A_i = A_0), so it explores before it settles.
+//! 8. **Obstacle avoidance** is not a term of this rule: Table 3 pairs ARBA with the mode's
+//!    obstacle layer (BSOA in BA, SVF in SA), applied to the returned velocity as for every
+//!    search layer. Robot-robot separation inside a subgroup is the behaviour's
+//!    `subgroup_separation`, also common to every search layer.
+//! 9. Roaming, target choice (roulette), Type II attachment and the closed-loop adjustment are
+//!    those of the other modes (Table 3 swaps only the search method); ARBA runs inside a
+//!    subgroup where TPEPSO / EPSO would.
+//!
+//! Draws per call, from the caller's stream (a dedicated one in the behaviour): one for the
+//! acceptance if the fitness improved, one heading when an escape starts, then (unless
+//! escaping) β, the walk decision and, if walking, two for ε.
 
 use crate::search::geometry::{clamp_norm, v2, Vec2};
 use rand::Rng;
 use serde::{Deserialize, Serialize};
 
-/// Tunables of the bat rule. None is given in the search paper.
+/// Tunables of the bat rule. The search paper gives none of them and ARBA's own values are not
+/// available here: every one is an assumption (the scenario file lists them under
+/// `[search.kernels.arba]`).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct Params {
-    /// Lowest pulse frequency f_min. [assumed] 0 (Yang 2010).
+    /// Lowest pulse frequency f_min. [assumed] 0, Yang 2010's f_min.
     pub f_min: f64,
     /// Highest pulse frequency f_max: the pull towards X* per tick as a share of the distance.
-    /// [assumed] 1, so that a robot can reach X* within a step or two, as eq. (11)'s c2 α does.
+    /// [assumed] 1 (Yang 2010 uses f ∈ [0, 1] or [0, 2]); with 1 the mean pull 0.5 (X* − X_i)
+    /// lets a robot reach X* in a few ticks, like eq. (11)'s social term.
     pub f_max: f64,
-    /// Initial loudness A_0. [assumed] 1 (Yang 2010).
+    /// Initial loudness A_0 (also the loudness after an escape). [assumed] 1, Yang 2010's A_0
+    /// range [1, 2] at its lower end, so that A_i is a probability (acceptance rand < A_i).
     pub loudness_initial: f64,
-    /// Loudness decay α_A per accepted improvement. [assumed] 0.9 (Yang 2010).
+    /// Loudness factor α (A_i ← α A_i on each accepted improvement). [assumed] 0.9, Yang 2010.
     pub loudness_decay: f64,
-    /// Asymptotic pulse rate r_0. [assumed] 0.5 (Yang 2010).
+    /// Pulse rate r_0 (r_i ← r_0 (1 − exp(−γ t)) on each accepted improvement): the limit of the
+    /// probability of flying by frequency instead of walking around X*. [assumed] 0.5, the
+    /// r_0 of Yang's demo code.
     pub pulse_rate_initial: f64,
-    /// Pulse-rate growth γ. [assumed] 0.9 (Yang 2010).
+    /// Pulse-rate growth γ of r_i = r_0 (1 − exp(−γ t)). [assumed] 0.9, Yang 2010.
     pub pulse_rate_growth: f64,
-    /// Inertia while loud (exploring). [assumed] 0.9.
+    /// Inertia w_i while the bat is loud (A_i = A_0: exploring). [assumed] 0.9, the usual upper
+    /// inertia of linearly adapted PSO weights (the adaptive inertia of the robotic PSO line of
+    /// work ARBA follows; its exact rule is not available).
     pub w_max: f64,
-    /// Inertia once quiet (exploiting). [assumed] 0.4.
+    /// Inertia w_i as the loudness goes to 0 (exploiting). [assumed] 0.4, the usual lower PSO
+    /// inertia; w_i = w_min + (w_max − w_min) A_i / A_0.
     pub w_min: f64,
-    /// Local random walk radius around X*, in units of A_i V_max. [assumed] 1.
+    /// Half-width of the local random walk box around X*, in units of A_i V_max (Yang's
+    /// x_new = x* + ε ⟨A⟩ with ε ∈ [−1, 1], scaled to the robot's reach per tick).
+    /// [assumed] 1: a fresh bat aims within ±V_max of X* per coordinate.
     pub local_walk: f64,
-    /// Ticks without improving the robot's own best before it escapes. [assumed] 20.
+    /// Ticks without improving the robot's own best fitness before it escapes (the local-optimum
+    /// test); 0 turns the escape off. [assumed] 20 = 2 L_T / V_max, the ticks to cross the signal disc of a target.
     pub stall_ticks: u32,
-    /// Ticks of the escape move (a random heading at V_max). [assumed] 5.
+    /// Ticks of the escape flight (a random heading at V_max, about escape_ticks V_max = 50
+    /// units away, half of L_T). [assumed] 5.
     pub escape_ticks: u32,
-    /// Maximum speed V_max = 10 (Table 4).
+    /// Maximum speed V_max = 10 (Table 4); must equal robot.v_max.
     pub v_max: f64,
 }
 
@@ -76,40 +124,61 @@ impl Default for Params {
 }
 
 impl Params {
-    /// Ranges the rule needs; the message names the key.
+    /// Ranges the rule needs; the message names the first key out of range.
     pub fn check(&self) -> Result<(), String> {
-        let ok = self.f_min >= 0.0
-            && self.f_max >= self.f_min
-            && self.loudness_initial > 0.0
-            && (0.0..=1.0).contains(&self.loudness_decay)
-            && (0.0..=1.0).contains(&self.pulse_rate_initial)
-            && self.pulse_rate_growth >= 0.0
-            && self.w_min >= 0.0
-            && self.w_max >= self.w_min
-            && self.local_walk >= 0.0
-            && self.v_max > 0.0;
-        if ok {
-            Ok(())
-        } else {
-            Err(
-                "arba: need 0 <= f_min <= f_max, loudness_initial > 0, loudness_decay and \
-                 pulse_rate_initial in [0, 1], pulse_rate_growth >= 0, 0 <= w_min <= w_max, \
-                 local_walk >= 0, v_max > 0"
-                    .into(),
-            )
+        let checks: [(&str, bool, &str); 8] = [
+            ("f_min", self.f_min >= 0.0, ">= 0"),
+            ("f_max", self.f_max >= self.f_min, ">= f_min"),
+            ("loudness_initial", self.loudness_initial > 0.0, "> 0"),
+            (
+                "loudness_decay",
+                (0.0..=1.0).contains(&self.loudness_decay),
+                "in [0, 1]",
+            ),
+            (
+                "pulse_rate_initial",
+                (0.0..=1.0).contains(&self.pulse_rate_initial),
+                "in [0, 1]",
+            ),
+            ("pulse_rate_growth", self.pulse_rate_growth >= 0.0, ">= 0"),
+            (
+                "w_min, w_max",
+                self.w_min >= 0.0 && self.w_max >= self.w_min,
+                "0 <= w_min <= w_max",
+            ),
+            (
+                "local_walk, v_max",
+                self.local_walk >= 0.0 && self.v_max > 0.0,
+                "local_walk >= 0 and v_max > 0",
+            ),
+        ];
+        match checks.iter().find(|(_, ok, _)| !ok) {
+            None => Ok(()),
+            Some((key, _, need)) => Err(format!("arba.{key}: need {need}")),
         }
+    }
+
+    /// The pulse-rate law r(t) = r_0 (1 − exp(−γ t)).
+    pub fn pulse_rate_at(&self, t: u32) -> f64 {
+        self.pulse_rate_initial * (1.0 - (-self.pulse_rate_growth * t as f64).exp())
     }
 }
 
-/// One robot's bat: its loudness, pulse rate and escape state (reset when it joins a subgroup).
+/// One robot's bat: its loudness, pulse rate and escape state. The behaviour makes a fresh one
+/// whenever the robot starts a fresh subgroup memory (a new target).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Bat {
+    /// A_i: the acceptance probability of an improvement and the local walk's scale.
     pub loudness: f64,
+    /// r_i: the probability of flying by frequency rather than walking around X*.
     pub pulse_rate: f64,
     /// Cooperative ticks so far (the t of the pulse-rate law).
     pub t: u32,
+    /// The robot's own best fitness so far (the acceptance test).
     best: f64,
+    /// Ticks since the own best last improved (the local-optimum test).
     stall: u32,
+    /// Ticks of escape flight left, and its heading.
     escape_left: u32,
     escape_dir: Vec2,
 }
@@ -129,8 +198,10 @@ impl Bat {
     }
 }
 
-/// The desired velocity of a cooperative robot at `position` moving with `velocity`, whose
-/// subgroup's best known position is `best` and whose own measured fitness now is `fitness`.
+/// The desired velocity V_if of a cooperative robot at `position` moving with `velocity`, whose
+/// subgroup's best known position is `best` (X* = sgb, learnt over the radio) and whose own
+/// measured fitness now is `fitness` (I_ij; larger is better). ‖V_if‖ ≤ V_max. The obstacle
+/// layer is applied by the caller.
 pub fn desired_velocity(
     bat: &mut Bat,
     position: Vec2,
@@ -141,14 +212,14 @@ pub fn desired_velocity(
     rng: &mut impl Rng,
 ) -> Vec2 {
     bat.t += 1;
-    // Adaptation on improvement of the robot's own best.
+    // Acceptance (assumption 3): the fitness measured where the last move led beats the own
+    // best; then, with probability A_i, the bat grows quieter and pulses more often.
     if fitness > bat.best {
         bat.best = fitness;
         bat.stall = 0;
         if rng.gen::<f64>() < bat.loudness {
             bat.loudness *= p.loudness_decay;
-            bat.pulse_rate =
-                p.pulse_rate_initial * (1.0 - (-p.pulse_rate_growth * bat.t as f64).exp());
+            bat.pulse_rate = p.pulse_rate_at(bat.t);
         }
     } else {
         bat.stall += 1;
@@ -165,10 +236,12 @@ pub fn desired_velocity(
         bat.escape_left -= 1;
         return bat.escape_dir * p.v_max;
     }
+    // Frequency, inertia from loudness (assumption 6) and the pull towards X* (assumption 1).
     let beta: f64 = rng.gen();
     let f = p.f_min + (p.f_max - p.f_min) * beta;
     let w = p.w_min + (p.w_max - p.w_min) * (bat.loudness / p.loudness_initial).min(1.0);
     let mut v = velocity * w + (best - position) * f;
+    // Local random walk around X* (assumption 4) when rand > r_i.
     if rng.gen::<f64>() > bat.pulse_rate {
         let r = p.local_walk * bat.loudness * p.v_max;
         let u = v2(rng.gen_range(-1.0..=1.0), rng.gen_range(-1.0..=1.0));
@@ -276,5 +349,157 @@ mod tests {
             "{speeds:?}"
         );
         assert_eq!(bat.loudness, p.loudness_initial);
+    }
+
+    /// Ticks until one of a subgroup of g_max = 6 bats comes within L_0 = 5 of a static target
+    /// in an empty field, from starts 70-95 away (inside L_T), with the noisy eq. (33) signal as
+    /// fitness, pb per bat and sgb = the best pb (what the radio gives the behaviour).
+    fn ticks_to_l0(seed: u64, p: &Params) -> Option<usize> {
+        use crate::search::calibration::{self, measure_signal};
+        let sig = calibration::Params::default();
+        let target = v2(500.0, 500.0);
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let mut noise = ChaCha8Rng::seed_from_u64(seed + 1000);
+        let mut xs: Vec<Vec2> = (0..6)
+            .map(|_| {
+                let a: f64 = rng.gen_range(-0.6..0.6);
+                let d: f64 = rng.gen_range(70.0..95.0);
+                target + v2(a.cos(), a.sin()) * d
+            })
+            .collect();
+        let mut vs = [v2(0.0, 0.0); 6];
+        let mut bats: Vec<Bat> = (0..6).map(|_| Bat::new(p)).collect();
+        let mut pbs: Vec<(Vec2, f64)> = vec![(v2(0.0, 0.0), f64::NEG_INFINITY); 6];
+        for tick in 0..400 {
+            if xs.iter().any(|x| (x - target).norm() < 5.0) {
+                return Some(tick);
+            }
+            let fit: Vec<f64> = xs
+                .iter()
+                .map(|x| measure_signal((x - target).norm(), &sig, &mut noise))
+                .collect();
+            for i in 0..6 {
+                if fit[i] > pbs[i].1 {
+                    pbs[i] = (xs[i], fit[i]);
+                }
+            }
+            let sgb = pbs
+                .iter()
+                .fold(pbs[0], |b, q| if q.1 > b.1 { *q } else { b });
+            for i in 0..6 {
+                let v = desired_velocity(&mut bats[i], xs[i], vs[i], sgb.0, fit[i], p, &mut rng);
+                assert!(v.norm() <= p.v_max + 1e-9);
+                vs[i] = v;
+                xs[i] += v;
+            }
+        }
+        None
+    }
+
+    #[test]
+    fn a_subgroup_on_the_noisy_signal_reaches_l0_for_every_seed() {
+        let p = Params::default();
+        let ticks: Vec<Option<usize>> = (0..10).map(|s| ticks_to_l0(s, &p)).collect();
+        eprintln!("ARBA ticks to L_0 over 10 seeds: {ticks:?}");
+        assert!(
+            ticks.iter().all(|t| t.is_some_and(|t| t < 150)),
+            "{ticks:?}"
+        );
+    }
+
+    #[test]
+    fn adaptation_follows_the_bat_laws() {
+        // Every change of A_i is one factor α, made only on an improvement, and sets r_i to
+        // r_0 (1 − e^{−γ t}) at that tick; without improvement nothing changes (no escape here).
+        let p = Params {
+            stall_ticks: 0,
+            ..Params::default()
+        };
+        let mut rng = ChaCha8Rng::seed_from_u64(11);
+        let mut bat = Bat::new(&p);
+        assert_eq!((bat.loudness, bat.pulse_rate), (p.loudness_initial, 0.0));
+        let mut accepted = 0;
+        for k in 0..200u32 {
+            // Improves on even ticks only.
+            let fitness = (k / 2) as f64 + if k % 2 == 0 { 0.5 } else { 0.0 };
+            let (a, r) = (bat.loudness, bat.pulse_rate);
+            desired_velocity(
+                &mut bat,
+                v2(0.0, 0.0),
+                v2(0.0, 0.0),
+                v2(50.0, 0.0),
+                fitness,
+                &p,
+                &mut rng,
+            );
+            assert_eq!(bat.t, k + 1);
+            if bat.loudness != a {
+                assert!(k % 2 == 0, "adapted without an improvement at tick {k}");
+                assert!((bat.loudness - a * p.loudness_decay).abs() < 1e-15);
+                assert!((bat.pulse_rate - p.pulse_rate_at(bat.t)).abs() < 1e-15);
+                accepted += 1;
+            } else {
+                assert_eq!(bat.pulse_rate, r, "r_i changed without A_i at tick {k}");
+            }
+        }
+        // Acceptance with probability A_i: frequent while loud, rarer as A_i falls.
+        assert!(accepted >= 10, "{accepted}");
+        assert!(accepted < 100, "{accepted}");
+        assert!((bat.loudness - p.loudness_decay.powi(accepted)).abs() < 1e-12);
+        assert!(bat.pulse_rate > 0.49 && bat.pulse_rate <= p.pulse_rate_initial);
+        assert!((p.pulse_rate_at(1) - 0.5 * (1.0 - (-0.9f64).exp())).abs() < 1e-15);
+    }
+
+    #[test]
+    fn the_speed_never_exceeds_v_max() {
+        let p = Params::default();
+        let mut rng = ChaCha8Rng::seed_from_u64(5);
+        let mut bat = Bat::new(&p);
+        for k in 0..2000 {
+            let x = v2(rng.gen_range(-1e3..1e3), rng.gen_range(-1e3..1e3));
+            let v = v2(rng.gen_range(-1e2..1e2), rng.gen_range(-1e2..1e2));
+            let best = v2(rng.gen_range(-1e3..1e3), rng.gen_range(-1e3..1e3));
+            let out = desired_velocity(&mut bat, x, v, best, (k % 7) as f64, &p, &mut rng);
+            assert!(out.norm() <= p.v_max + 1e-9, "{out:?}");
+        }
+    }
+
+    #[test]
+    fn a_fresh_bat_walks_inside_the_loudness_box_around_the_best() {
+        // r_i = 0 before any accepted improvement: every move aims at X* + ε A_i V_max
+        // local_walk, whatever the inertia.
+        let p = Params {
+            local_walk: 0.2,
+            ..Params::default()
+        };
+        let best = v2(100.0, 100.0);
+        let x = v2(103.0, 100.0);
+        for seed in 0..50 {
+            let mut bat = Bat::new(&p);
+            bat.best = 10.0; // no improvement: A_i and r_i stay as they are
+            let mut rng = ChaCha8Rng::seed_from_u64(seed);
+            let v = desired_velocity(&mut bat, x, v2(9.0, 9.0), best, 1.0, &p, &mut rng);
+            let aim = x + v - best;
+            let half = p.local_walk * p.loudness_initial * p.v_max;
+            assert!(
+                aim.x.abs() <= half + 1e-9 && aim.y.abs() <= half + 1e-9,
+                "{aim:?}"
+            );
+        }
+    }
+
+    #[test]
+    fn check_names_the_key_out_of_range() {
+        assert_eq!(Params::default().check(), Ok(()));
+        let bad = Params {
+            pulse_rate_initial: 1.5,
+            ..Params::default()
+        };
+        assert!(bad.check().unwrap_err().contains("arba.pulse_rate_initial"));
+        let bad = Params {
+            w_min: 0.95,
+            ..Params::default()
+        };
+        assert!(bad.check().unwrap_err().contains("w_max"));
     }
 }

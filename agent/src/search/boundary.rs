@@ -142,14 +142,12 @@ fn gap_threshold(d: f64, p: &Params) -> f64 {
 /// min(L_B, L_T) (Table 2, line 1).
 pub fn scan(x: &Vec2, obstacle_points: &[Vec2], range: f64, p: &Params) -> Scan {
     // (angle, distance, point); points on the robot itself are ignored.
-    let mut pts: Vec<(f64, f64, Vec2)> = obstacle_points
-        .iter()
-        .filter_map(|b| {
-            let r = b - x;
-            let d = r.norm();
-            (d < range && d > 1e-9).then(|| (angle_of(&r), d, *b))
-        })
-        .collect();
+    let mut pts: Vec<(f64, f64, Vec2)> = Vec::with_capacity(obstacle_points.len());
+    pts.extend(obstacle_points.iter().filter_map(|b| {
+        let r = b - x;
+        let d = r.norm();
+        (d < range && d > 1e-9).then(|| (angle_of(&r), d, *b))
+    }));
     let n = pts.len();
     if n == 0 {
         return Scan::default();
@@ -165,7 +163,10 @@ pub fn scan(x: &Vec2, obstacle_points: &[Vec2], range: f64, p: &Params) -> Scan 
             } else {
                 b.0 - a.0
             };
-            gap > gap_threshold(a.1.min(b.1), p)
+            // The threshold is never below min_gap_angle: most gaps (neighbouring samples)
+            // are decided without its asin.
+            (gap > p.min_gap_angle || p.min_gap_angle.is_nan())
+                && gap > gap_threshold(a.1.min(b.1), p)
         })
         .collect();
     // Canonical start: after the widest free gap (ties: first), so a frontal

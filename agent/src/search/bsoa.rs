@@ -144,9 +144,21 @@ impl Params {
 /// is some obstacle point in the direction of `v_if`?
 pub fn obstacle_ahead(x: &Vec2, v_if: &Vec2, pts: &[Vec2], tol: f64, half_width: f64) -> bool {
     let u = v_if.normalize();
+    let heading = angle_of(v_if);
+    // Most points lie far outside the heading cone; a test without atan2 rules them out. Its
+    // margin (1e-6 rad) is ~10^9 times the rounding of the angles, so every point it rules out
+    // fails the exact test too, and the result is the same bit for bit.
+    let margin = 1e-6;
+    let cone = (tol + margin < 1.0).then(|| (tol + margin).tan());
     pts.iter().any(|b| {
         let r = b - x;
-        angle_between(v_if, &r).abs() < tol || (r.dot(&u) > 0.0 && cross(&u, &r).abs() < half_width)
+        // (A zero v_if makes u NaN: nothing is ruled out.)
+        let outside = cone.is_some_and(|t| {
+            let along = u.dot(&r);
+            along <= 0.0 || cross(&u, &r).abs() > along * t
+        });
+        (!outside && wrap_angle(heading - angle_of(&r)).abs() < tol)
+            || (r.dot(&u) > 0.0 && cross(&u, &r).abs() < half_width)
     })
 }
 
@@ -249,11 +261,13 @@ pub fn avoid(x: &Vec2, v_if: &Vec2, obstacle_points: &[Vec2], prev: Sense, p: &P
     };
     let range = p.l_b.min(p.l_t);
     // Obstacles within L_B and L_T (paper §3.4); nearest first, ties by input order.
-    let mut near: Vec<(f64, Vec2)> = obstacle_points
-        .iter()
-        .map(|b| ((b - x).norm(), *b))
-        .filter(|(d, _)| *d < range && *d > 1e-9)
-        .collect();
+    let mut near: Vec<(f64, Vec2)> = Vec::with_capacity(obstacle_points.len());
+    near.extend(
+        obstacle_points
+            .iter()
+            .map(|b| ((b - x).norm(), *b))
+            .filter(|(d, _)| *d < range && *d > 1e-9),
+    );
     if near.is_empty() || v_if.norm() <= 1e-12 {
         return free; // Fig. 3(a) case 1 (or no desired motion)
     }

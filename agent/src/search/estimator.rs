@@ -109,7 +109,7 @@ pub fn nelder_mead<F: Fn(&Vec2) -> f64>(
         (x0 + v2(0.0, step), f(&(x0 + v2(0.0, step)))),
     ];
     for _ in 0..max_iter {
-        s.sort_by(|a, b| a.1.total_cmp(&b.1));
+        sort3(&mut s);
         let size = (s[1].0 - s[0].0).norm().max((s[2].0 - s[0].0).norm());
         if (s[2].1 - s[0].1).abs() <= tol && size <= tol.sqrt() {
             break;
@@ -141,8 +141,22 @@ pub fn nelder_mead<F: Fn(&Vec2) -> f64>(
             }
         }
     }
-    s.sort_by(|a, b| a.1.total_cmp(&b.1));
+    sort3(&mut s);
     s[0]
+}
+
+/// The simplex by objective value, ties keeping their order: what a stable sort gives, by
+/// insertion (the generic sort's set-up cost was most of a Nelder-Mead iteration).
+fn sort3(s: &mut [(Vec2, f64); 3]) {
+    if s[1].1.total_cmp(&s[0].1).is_lt() {
+        s.swap(0, 1);
+    }
+    if s[2].1.total_cmp(&s[1].1).is_lt() {
+        s.swap(1, 2);
+        if s[1].1.total_cmp(&s[0].1).is_lt() {
+            s.swap(0, 1);
+        }
+    }
 }
 
 /// T_est from the detections (eq. 10), or `None` with fewer than
@@ -317,6 +331,22 @@ mod tests {
         let b = estimate(&d, &Params::default()).unwrap();
         assert_eq!(a.position.x.to_bits(), b.position.x.to_bits());
         assert_eq!(a.position.y.to_bits(), b.position.y.to_bits());
+    }
+
+    #[test]
+    fn sort3_is_a_stable_sort() {
+        let vals = [0.0, 1.0, -1.0, f64::NAN, 0.0, -0.0];
+        for a in vals {
+            for b in vals {
+                for c in vals {
+                    let mut s = [(v2(0.0, 0.0), a), (v2(1.0, 0.0), b), (v2(2.0, 0.0), c)];
+                    let mut want = s;
+                    want.sort_by(|x, y| x.1.total_cmp(&y.1));
+                    sort3(&mut s);
+                    assert_eq!(format!("{s:?}"), format!("{want:?}"));
+                }
+            }
+        }
     }
 
     #[test]

@@ -1,6 +1,7 @@
-//! Kernels of the multi-target search paper (BSOA + TPEPSO; spec/search.md), pure functions
-//! with their unit tests. The search scenario (issue 3) wires them into a behaviour; see
-//! `NOTES.md` beside this file for every choice made where the paper is silent.
+//! Kernels of the multi-target search paper (BSOA + TPEPSO; spec/search.md) and of its
+//! baselines (SVF, EPSO, ARBA), pure functions with their unit tests. The search scenario
+//! (issue 3) wires them into a behaviour; see `NOTES.md` beside this file for every choice made
+//! where the paper is silent.
 
 pub mod arba;
 pub mod boundary;
@@ -31,6 +32,8 @@ pub struct Params {
     pub estimator: estimator::Params,
     /// Eq. (11) TPEPSO / EPSO.
     pub tpepso: tpepso::Params,
+    /// ARBA, the bat-algorithm baseline (every value an assumption; arba.rs).
+    pub arba: arba::Params,
     /// BSOA, eqs. (12)-(22) and Table 2 (includes the boundary scan).
     pub bsoa: bsoa::Params,
     /// SVF baseline.
@@ -46,6 +49,7 @@ impl Params {
         let v = [
             ("virtual_force.v_max", self.virtual_force.v_max),
             ("tpepso.v_max", self.tpepso.v_max),
+            ("arba.v_max", self.arba.v_max),
             ("bsoa.v_max", self.bsoa.v_max),
             ("svf.v_max", self.svf.v_max),
         ];
@@ -83,6 +87,9 @@ mod tests {
         let mut p = Params::default();
         p.svf.v_max = 5.0;
         assert!(p.check_consistency().is_err());
+        let mut p = Params::default();
+        p.arba.v_max = 5.0;
+        assert!(p.check_consistency().unwrap_err().contains("arba.v_max"));
     }
 
     #[test]

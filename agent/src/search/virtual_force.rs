@@ -76,20 +76,34 @@ pub fn attraction(x: &Vec2, to: &Vec2, p: &Params) -> Vec2 {
 /// Indices of the two robots of `others` nearest to `x` (ties: lower
 /// index first; robots at exactly `x` are skipped).
 pub fn two_nearest(x: &Vec2, others: &[Vec2]) -> Vec<usize> {
-    let mut idx: Vec<(f64, usize)> = others
-        .iter()
-        .enumerate()
-        .map(|(i, o)| ((o - x).norm(), i))
-        .filter(|(d, _)| *d > 1e-9)
-        .collect();
-    idx.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-    idx.into_iter().take(2).map(|(_, i)| i).collect()
+    nearest_two(x, others).into_iter().flatten().collect()
+}
+
+/// [`two_nearest`] in one pass, without sorting or allocating: keeps the two smallest
+/// (distance, index) keys, comparing distances strictly so that a tie keeps the lower index.
+fn nearest_two(x: &Vec2, others: &[Vec2]) -> [Option<usize>; 2] {
+    let mut best: [Option<(f64, usize)>; 2] = [None, None];
+    for (i, o) in others.iter().enumerate() {
+        let d = (o - x).norm();
+        // Coincident robots are skipped (and NaN distances, as the filter of a sort would).
+        if d <= 1e-9 || d.is_nan() {
+            continue;
+        }
+        match best {
+            [Some(b0), _] if d < b0.0 => best = [Some((d, i)), Some(b0)],
+            [Some(_), Some(b1)] if d >= b1.0 => {}
+            [Some(_), _] => best[1] = Some((d, i)),
+            [None, _] => best[0] = Some((d, i)),
+        }
+    }
+    best.map(|b| b.map(|(_, i)| i))
 }
 
 /// f_i = f_vr1 + f_vr2: repulsion of the two nearest robots (Fig. 2).
 pub fn roaming_force(x: &Vec2, others: &[Vec2], p: &Params) -> Vec2 {
-    two_nearest(x, others)
+    nearest_two(x, others)
         .into_iter()
+        .flatten()
         .map(|i| repulsion(x, &others[i], p.d0_robot(), p))
         .sum()
 }
@@ -152,6 +166,27 @@ mod tests {
         assert!(v.x < 0.0 && v.y < 0.0, "{v:?}");
         // stronger (nearer) east robot dominates: mostly westward
         assert!(v.x.abs() > v.y.abs());
+    }
+
+    #[test]
+    fn two_nearest_matches_sorting_all() {
+        let x = v2(0.0, 0.0);
+        let mut others: Vec<Vec2> = (0..40)
+            .map(|i| v2(((i * 37) % 11) as f64 - 5.0, ((i * 53) % 7) as f64 - 3.0))
+            .collect();
+        others.push(v2(f64::NAN, 0.0));
+        for n in 0..others.len() {
+            let o = &others[..n];
+            let mut idx: Vec<(f64, usize)> = o
+                .iter()
+                .enumerate()
+                .map(|(i, q)| ((q - x).norm(), i))
+                .filter(|(d, _)| *d > 1e-9)
+                .collect();
+            idx.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+            let want: Vec<usize> = idx.into_iter().take(2).map(|(_, i)| i).collect();
+            assert_eq!(two_nearest(&x, o), want, "first {n}");
+        }
     }
 
     #[test]

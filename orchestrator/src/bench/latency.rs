@@ -449,7 +449,7 @@ struct LatBehaviour<M> {
 
 impl<M: Payload> Behaviour for LatBehaviour<M> {
     type Msg = M;
-    fn step(&mut self, _s: &Sense, inbox: &[Received<M>], out: &mut Outbox<M>) -> Command {
+    fn step_refs(&mut self, _s: &Sense, inbox: &[&Received<M>], out: &mut Outbox<M>) -> Command {
         if self.echo {
             if let Some(r) = inbox.last() {
                 let data = r.msg.data().to_vec();

@@ -100,6 +100,9 @@ enum BenchWhat {
         /// One seed.
         #[arg(long)]
         quick: bool,
+        /// Only this many worker threads (default: 1, then all cores).
+        #[arg(long)]
+        threads: Option<usize>,
     },
     /// latency, throughput, tick and memory, one after the other.
     All {
@@ -275,16 +278,21 @@ pub fn bench(a: BenchArgs) -> i32 {
             seeds,
             json,
             quick,
+            threads,
         } => {
             print_machine();
             let seeds = if quick { 1 } else { seeds };
+            let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+            let threads = match threads {
+                Some(t) => vec![t.max(1)],
+                None if cores > 1 => vec![1, cores],
+                None => vec![1],
+            };
             finish(
-                search::run(robots, &mode, seeds, 1)
-                    .and_then(|mut rows| {
-                        let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
-                        if cores > 1 {
-                            rows.extend(search::run(robots, &mode, seeds, cores)?);
-                        }
+                threads
+                    .iter()
+                    .try_fold(Vec::new(), |mut rows, &t| {
+                        rows.extend(search::run(robots, &mode, seeds, t)?);
                         Ok(rows)
                     })
                     .and_then(|rows| {

@@ -18,6 +18,7 @@ pub struct Row {
     pub threads: usize,
     pub ticks: u64,
     pub loop_seconds: f64,
+    pub ticks_per_s: f64,
     pub robot_steps_per_s: f64,
 }
 
@@ -51,6 +52,7 @@ pub fn run(robots: u32, mode: &str, seeds: u64, threads: usize) -> Result<Vec<Ro
             threads,
             ticks,
             loop_seconds,
+            ticks_per_s: ticks as f64 / loop_seconds,
             robot_steps_per_s: robots as f64 * ticks as f64 / loop_seconds,
         });
     }
@@ -60,13 +62,20 @@ pub fn run(robots: u32, mode: &str, seeds: u64, threads: usize) -> Result<Vec<Ro
 pub fn print(rows: &[Row]) {
     println!("search scenario, in-process executor, one run at a time (robot-steps per second = robots x ticks / loop seconds)");
     println!(
-        "{:>6} {:>4} {:>5} {:>7} {:>6} {:>9} {:>14}",
-        "robots", "mode", "seed", "threads", "ticks", "loop s", "robot-steps/s"
+        "{:>6} {:>4} {:>5} {:>7} {:>6} {:>9} {:>8} {:>14}",
+        "robots", "mode", "seed", "threads", "ticks", "loop s", "ticks/s", "robot-steps/s"
     );
     for r in rows {
         println!(
-            "{:>6} {:>4} {:>5} {:>7} {:>6} {:>9.3} {:>14.0}",
-            r.robots, r.mode, r.seed, r.threads, r.ticks, r.loop_seconds, r.robot_steps_per_s
+            "{:>6} {:>4} {:>5} {:>7} {:>6} {:>9.3} {:>8.0} {:>14.0}",
+            r.robots,
+            r.mode,
+            r.seed,
+            r.threads,
+            r.ticks,
+            r.loop_seconds,
+            r.ticks_per_s,
+            r.robot_steps_per_s
         );
     }
     let mut threads: Vec<usize> = rows.iter().map(|r| r.threads).collect();
@@ -74,10 +83,12 @@ pub fn print(rows: &[Row]) {
     for t in threads {
         let of: Vec<&Row> = rows.iter().filter(|r| r.threads == t).collect();
         let steps: f64 = of.iter().map(|r| r.robots as f64 * r.ticks as f64).sum();
+        let ticks: u64 = of.iter().map(|r| r.ticks).sum();
         let secs: f64 = of.iter().map(|r| r.loop_seconds).sum();
         println!(
-            "all seeds, {t} thread(s): {:.0} robot-steps/s ({:.0} robot-steps in {:.2} s)",
+            "all seeds, {t} thread(s): {:.0} robot-steps/s, {:.0} ticks/s ({:.0} robot-steps, {ticks} ticks in {:.2} s)",
             steps / secs,
+            ticks as f64 / secs,
             steps,
             secs
         );

@@ -252,7 +252,7 @@ struct Flood<M> {
 
 impl<M: Make> Behaviour for Flood<M> {
     type Msg = M;
-    fn step(&mut self, _s: &Sense, _inbox: &[Received<M>], out: &mut Outbox<M>) -> Command {
+    fn step_refs(&mut self, _s: &Sense, _inbox: &[&Received<M>], out: &mut Outbox<M>) -> Command {
         out.broadcast(M::make(self.data.clone()));
         Command::default()
     }

@@ -1,4 +1,4 @@
-//! The multi-target search behaviour of spec/search.md (BSOA + TPEPSO and the SVF / EPSO
+//! The multi-target search behaviour of spec/search.md (BSOA + TPEPSO and the SVF / EPSO / ARBA
 //! baselines): the per-robot loop of spec 2.9 for one robot, from its Sense frame and its radio
 //! inbox only.
 //!
@@ -11,7 +11,8 @@
 //! 4. Closed-loop adjustment (Table 1) over itself and the candidates of the same target it
 //!    heard: kept -> cooperative, dropped -> roaming.
 //! 5. Cooperative: pb_i and sgb (fitness = own I_ij; sgb from the members' pbs heard), T_est
-//!    from >= 3 detections (own and heard) via the calibration inverse (mode *T), eq. (11).
+//!    from >= 3 detections (own and heard) via the calibration inverse (mode *T), eq. (11)
+//!    (modes *T, *E) or the bat rule of search/arba.rs (modes *A).
 //!    Roaming: eq. (5) repulsion of the two nearest robots heard, heading kept without force.
 //! 6. Obstacle layer (BSOA or SVF) on the desired velocity, every tick, in every state.
 //! 7. Broadcast the status (position, detections, candidacy, pb, found list).
@@ -35,9 +36,12 @@
 //!   (`goal_horizon_margin`) and keep apart by eq. (5) within `subgroup_separation`.
 //! * The finder stands still for good and falls silent (spec 5 item 8).
 //! * ARBA (modes BA, SA) replaces eq. (11) for cooperative robots by the bat rule of
-//!   search/arba.rs with X* = sgb and fitness = own I_ij; everything else (roaming, subgroups,
-//!   the obstacle layer) is as in the other modes. Its draws come from the PSO stream, which
-//!   the A modes do not otherwise use.
+//!   search/arba.rs with X* = sgb (from the pbs heard, as for TPEPSO) and fitness = own I_ij;
+//!   everything else (roaming, roulette, Type II attachment, the closed-loop adjustment,
+//!   `subgroup_separation`, the obstacle layer B or S) is as in the other modes, because Table 3
+//!   swaps only the search method. ARBA's own obstacle-avoidance term is the mode's obstacle
+//!   layer. Its draws come from a stream of their own (24); the bat is new whenever the
+//!   subgroup memory is (a new target).
 
 pub mod messages;
 pub mod params;
@@ -67,6 +71,7 @@ const STREAM_HEADING: u64 = 20;
 const STREAM_CALIBRATION: u64 = 21;
 const STREAM_ROULETTE: u64 = 22;
 const STREAM_PSO: u64 = 23;
+const STREAM_BAT: u64 = 24;
 
 /// The robot's state (paper 2.3, Fig. 1).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -97,6 +102,7 @@ pub struct Search {
     cal: Calibration,
     rng_roulette: ChaCha8Rng,
     rng_pso: ChaCha8Rng,
+    rng_bat: ChaCha8Rng,
     mode: Mode,
     /// Targets known to be found.
     found: BTreeSet<u32>,
@@ -145,6 +151,7 @@ impl Search {
             cal,
             rng_roulette: robot_rng(seed, robot, STREAM_ROULETTE),
             rng_pso: robot_rng(seed, robot, STREAM_PSO),
+            rng_bat: robot_rng(seed, robot, STREAM_BAT),
             mode: Mode::Roaming,
             found: BTreeSet::new(),
             choice: None,
@@ -288,7 +295,7 @@ fn role_of(w: WireRole) -> Role {
 impl Behaviour for Search {
     type Msg = Msg;
 
-    fn step(&mut self, s: &Sense, inbox: &[Received<Msg>], out: &mut Outbox<Msg>) -> Command {
+    fn step_refs(&mut self, s: &Sense, inbox: &[&Received<Msg>], out: &mut Outbox<Msg>) -> Command {
         if let Mode::Declared { target } = self.mode {
             return self.declared_step(target, out, 0);
         }
@@ -311,15 +318,23 @@ impl Behaviour for Search {
             return self.declared_step(t, out, EVENT_TARGET_DECLARED);
         }
         // 2. What the radio says (the inbox is ordered by sender, then sequence).
-        let mut heard: Vec<(u32, &Status)> = Vec::new();
+        let mut heard: Vec<(u32, &Status)> = Vec::with_capacity(inbox.len());
+        // Most statuses gossip targets this robot already knows: a sorted-slice check skips
+        // the set inserts (which would change nothing).
+        let mut known = self.found_list();
         for r in inbox {
             match &r.msg {
                 Msg::Found { target, found } => {
                     self.found.insert(*target);
                     self.found.extend(found.iter().copied());
+                    known = self.found_list();
                 }
                 Msg::Status(st) => {
-                    self.found.extend(st.found.iter().copied());
+                    if st.found != known && !st.found.iter().all(|t| known.binary_search(t).is_ok())
+                    {
+                        self.found.extend(st.found.iter().copied());
+                        known = self.found_list();
+                    }
                     if r.from != self.robot {
                         heard.push((r.from, st));
                     }
@@ -452,7 +467,7 @@ impl Behaviour for Search {
                         sgb.0,
                         fitness,
                         &self.p.arba,
-                        &mut self.rng_pso,
+                        &mut self.rng_bat,
                     ),
                     layer => {
                         let variant = if layer == SearchLayer::Tpepso {
@@ -493,12 +508,17 @@ impl Behaviour for Search {
             }
             _ => f64::INFINITY,
         };
-        let pts: Vec<Vec2> = s
-            .obstacle_points()
-            .iter()
-            .map(|q| v2(q[0], q[1]))
-            .filter(|q| (q - me).norm() < horizon)
-            .collect();
+        let mut pts: Vec<Vec2> = Vec::with_capacity(s.obstacle_points().len());
+        pts.extend(
+            s.obstacle_points()
+                .iter()
+                .map(|q| v2(q[0], q[1]))
+                // Without a horizon only a non-finite distance fails, and sqrt keeps finiteness.
+                .filter(|q| match horizon {
+                    f64::INFINITY => (q - me).norm_squared() < horizon,
+                    _ => (q - me).norm() < horizon,
+                }),
+        );
         let v = match self.obstacle {
             ObstacleLayer::Bsoa => {
                 let o = bsoa::avoid(&me, &v_if, &pts, self.sf, &self.p.bsoa);

@@ -413,18 +413,64 @@ loudness_decay = 1.5
 
 #[test]
 fn same_seed_same_commands() {
-    let sc = scenario("BT");
-    let run = || {
-        let mut r = Search::new(&sc, 7);
-        let mut v = Vec::new();
-        for k in 0..30 {
-            let s = sense(
-                [300.0 + k as f64, 300.0],
-                &[(1, 0, 3.0 + (k % 3) as f64), (2, 0, 2.5)],
-            );
-            v.push(r.step(&s, &[], &mut Outbox::new_for_tests(8)).vel);
-        }
-        v
-    };
-    assert_eq!(run(), run());
+    for mode in ["BT", "BA", "SA"] {
+        let sc = scenario(mode);
+        let run = |robot: u32| {
+            let mut r = Search::new(&sc, robot);
+            let mut v = Vec::new();
+            for k in 0..30 {
+                let s = sense(
+                    [300.0 + k as f64, 300.0],
+                    &[(1, 0, 3.0 + (k % 3) as f64), (2, 0, 2.5)],
+                );
+                v.push(r.step(&s, &[], &mut Outbox::new_for_tests(8)).vel);
+            }
+            v
+        };
+        assert_eq!(run(7), run(7), "{mode}");
+        assert_ne!(run(7), run(8), "{mode}: each robot has its own streams");
+    }
+}
+
+#[test]
+fn arba_robot_flies_to_the_subgroup_best_heard_on_the_radio() {
+    for mode in ["BA", "SA"] {
+        let sc = scenario(mode);
+        let mut r = Search::new(&sc, 0);
+        let me = [560.0, 500.0];
+        let best = [505.0, 500.0];
+        // A kept member of target 3's subgroup announces a pb much better than anything this
+        // robot has measured: it becomes the robot's sgb = X* of the bat rule.
+        let member = Candidacy {
+            pb: Some((pack(best), signal_at(5.0) as f32)),
+            ..type1_candidacy(3, signal_at(5.0) as f32).unwrap()
+        };
+        let inbox = vec![rx(
+            1,
+            status(best, &[(3, signal_at(5.0) as f32)], Some(member)),
+        )];
+        let c = r.step(
+            &sense(me, &[(3, 0, signal_at(60.0))]),
+            &inbox,
+            &mut Outbox::new_for_tests(8),
+        );
+        assert_eq!(c.events & 0xff, STATE_COOPERATIVE, "{mode}");
+        let (sgb, _) = r.subgroup_best().expect("sgb");
+        assert!(
+            (sgb - v2(best[0], best[1])).norm() < 1e-3,
+            "{mode}: {sgb:?}"
+        );
+        // At rest, it either flies by frequency (f_i (X* − X_i)) or walks to within A_i V_max
+        // of X*, 55 away: either way towards X*, at most V_max.
+        let v = v2(c.vel[0], c.vel[1]);
+        let to = v2(best[0] - me[0], best[1] - me[1]);
+        assert!(
+            speed(&c) > 0.0 && speed(&c) <= sc.robot.v_max + 1e-9,
+            "{mode}: {v:?}"
+        );
+        assert!(v.dot(&to) / (v.norm() * to.norm()) > 0.95, "{mode}: {v:?}");
+        // What it tells the others: its own pb, not the sgb it learnt.
+        let pb = r.last_status().unwrap().candidacy.as_ref().unwrap().pb;
+        assert_eq!(pb, Some((pack(me), signal_at(60.0) as f32)), "{mode}");
+    }
 }
