@@ -144,11 +144,24 @@ fn run_loop<B: Behaviour>(args: &AgentArgs, mut rt: AgentRuntime<B>) -> Result<i
         // Take off each link exactly the messages its sender sent at k-1 (FIFO per link; any of
         // tick k that a faster sender already sent stay for the next tick, or are taken early
         // in their place: the runtime orders and times delivery by header, not by arrival).
+        //
+        // A link whose robot was beyond comm_radius + link_margin at k-1 carries nothing in
+        // range: its messages are left on the link (not even touched), where the sender's next
+        // messages overwrite the oldest (iceoryx2's safe overflow). When the robot comes back
+        // within reach, what is older than k-1 is taken off and dropped before its k-1 messages.
         if k > 0 {
             for (&s, link) in links.iter() {
-                for _ in 0..barrier.sent_count(s, k - 1) {
+                if !rt.links().reaches(s, k - 1) {
+                    continue;
+                }
+                let mut taken = 0;
+                while taken < barrier.sent_count(s, k - 1) {
                     match link.sub.receive() {
-                        Ok(Some(m)) => rt.ingest(m.user_header(), m.payload()),
+                        Ok(Some(m)) if m.user_header().tick + 1 < k => rt.stats.skipped += 1,
+                        Ok(Some(m)) => {
+                            rt.ingest(m.user_header(), m.payload());
+                            taken += 1;
+                        }
                         _ => break,
                     }
                 }

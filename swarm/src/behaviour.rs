@@ -141,6 +141,8 @@ pub struct RuntimeStats {
     pub refused_sends: u64,
     pub oversize_sends: u64,
     pub stale_messages: u64,
+    /// Messages left on a link while their sender was out of reach, dropped when it came back.
+    pub skipped: u64,
 }
 
 /// Everything between one behaviour and the transport, for one robot.
@@ -261,7 +263,9 @@ impl<B: Behaviour> AgentRuntime<B> {
         };
         let own = self.own_pos_at(tick);
         for i in 0..self.links.len() {
-            let Some(sender) = self.links.carrier(i, tick) else {
+            // Links whose robot was out of reach at `tick` carry nothing in range (the agent
+            // process does not take those messages off its links either).
+            let Some(sender) = self.links.reaching(i, tick) else {
                 continue;
             };
             for (index, h, decoded) in mailbox.latest_from(sender) {

@@ -21,6 +21,8 @@ pub struct LinkSet {
     removed: Vec<u32>,
     /// Scratch of `update`: one bit per robot id, all clear between calls.
     marks: Vec<u64>,
+    /// The tick of the last `update`.
+    last_update: Option<u64>,
 }
 
 impl LinkSet {
@@ -32,6 +34,7 @@ impl LinkSet {
             added: Vec::new(),
             removed: Vec::new(),
             marks: Vec::new(),
+            last_update: None,
         }
     }
 
@@ -64,6 +67,7 @@ impl LinkSet {
 
     /// Applies Sense_k's neighbour list. Returns (added, removed), both sorted by robot id.
     pub fn update(&mut self, tick: u64, listed: &[u32], own: u32) -> (&[u32], &[u32]) {
+        self.last_update = Some(tick);
         self.added.clear();
         self.removed.clear();
         // Mark the listed robots; refresh the links to marked ones (unmarking them); what is
@@ -146,6 +150,32 @@ impl LinkSet {
         (created < msg_tick).then_some(r)
     }
 
+    /// Whether link `i` may hold a message sent at `msg_tick` that is in range: it carries that
+    /// tick's messages ([`LinkSet::carrier`]) and its robot was on the list of tick
+    /// `msg_tick`. A linked robot off that list was beyond comm_radius + link_margin at
+    /// `msg_tick` (a list cut at max_links leaves no lingering link: see `update`), so every
+    /// message it sent then is out of range: the receiver need not even take it off its link.
+    /// When the last list is not that tick's, the answer is "yes" (judged as usual).
+    #[inline]
+    pub fn reaching(&self, i: usize, msg_tick: u64) -> Option<u32> {
+        let &(r, last, created) = self.links.get(i)?;
+        if created >= msg_tick {
+            return None;
+        }
+        match self.last_update {
+            Some(t) if t == msg_tick && last < msg_tick => None,
+            _ => Some(r),
+        }
+    }
+
+    /// [`LinkSet::reaching`] by robot id.
+    pub fn reaches(&self, robot: u32, msg_tick: u64) -> bool {
+        match self.links.binary_search_by_key(&robot, |l| l.0) {
+            Ok(i) => self.reaching(i, msg_tick).is_some(),
+            Err(_) => false,
+        }
+    }
+
     pub fn contains(&self, robot: u32) -> bool {
         self.links.binary_search_by_key(&robot, |l| l.0).is_ok()
     }
@@ -211,6 +241,27 @@ mod tests {
         assert!(l.marks.iter().all(|w| *w == 0) && l.marks.len() <= 4);
         let (a, r) = l.update(2, &[u32::MAX - 1], 5);
         assert!(a.is_empty() && r.is_empty());
+    }
+
+    #[test]
+    fn a_lingering_link_off_the_last_list_does_not_reach() {
+        let mut l = LinkSet::new(3, 100);
+        l.update(0, &[1, 2], 0);
+        l.update(1, &[1], 0);
+        // Tick 1's list was not full: 2 was beyond reach at tick 1.
+        assert_eq!((l.reaching(0, 1), l.reaching(1, 1)), (Some(1), None));
+        assert!(l.reaches(1, 1) && !l.reaches(2, 1) && !l.reaches(9, 1));
+        // Messages of another tick than the last list's: no claim.
+        assert_eq!(l.reaching(1, 2), Some(2));
+        // A full list evicts the lingering links: every link left was listed.
+        l.update(2, &[1, 3, 4], 0);
+        assert_eq!(l.robots().collect::<Vec<_>>(), vec![1, 3, 4]);
+        assert_eq!(l.reaching(0, 2), Some(1));
+        // Made while handling tick 2's list: carries nothing of tick 2.
+        assert_eq!(
+            l.reaching(l.robots().position(|r| r == 3).unwrap(), 2),
+            None
+        );
     }
 
     #[test]
