@@ -195,6 +195,7 @@ impl<B: Behaviour> AgentRuntime<B> {
             radio: sc.radio.clone(),
             links: LinkSet::new(
                 sc.radio.max_links as usize,
+                sc.radio.lingering_links as usize,
                 sc.radio.link_linger_ticks as u64,
             ),
             seq: 0,

@@ -2,8 +2,8 @@
 //!
 //! The world's Sense frame lists the robots within comm_radius + link_margin (nearest first,
 //! at most radio.max_links). The agent links to those, keeps a link for `linger` ticks after a
-//! robot drops off the list (links cost ~0.5 ms to make on this VM, so churn is avoided), and
-//! never holds more than max_links. Both executors run this same code, so the set of messages a
+//! robot drops off the list (links cost ~1 ms to make on this VM, so churn is avoided), and
+//! never holds more than max_links + radio.lingering_links. Both executors run this same code, so the set of messages a
 //! receiver can see is the same in both.
 //!
 //! Why no in-range message is missed: a link made while handling Sense_k exists before any
@@ -13,7 +13,10 @@
 
 #[derive(Debug, Clone)]
 pub struct LinkSet {
+    /// Longest list the world sends.
     max_links: usize,
+    /// Most links held: max_links plus the lingering slack.
+    cap: usize,
     linger: u64,
     /// (robot, last tick it was listed, tick whose Sense created the link), sorted by robot id.
     links: Vec<(u32, u64, u64)>,
@@ -21,14 +24,16 @@ pub struct LinkSet {
     removed: Vec<u32>,
     /// Scratch of `update`: one bit per robot id, all clear between calls.
     marks: Vec<u64>,
-    /// The tick of the last `update`.
-    last_update: Option<u64>,
+    /// The tick of the last `update` and whether its list was full (then robots within reach
+    /// may be off it, on lingering links).
+    last_update: Option<(u64, bool)>,
 }
 
 impl LinkSet {
-    pub fn new(max_links: usize, linger_ticks: u64) -> LinkSet {
+    pub fn new(max_links: usize, lingering: usize, linger_ticks: u64) -> LinkSet {
         LinkSet {
             max_links,
+            cap: max_links + lingering,
             linger: linger_ticks,
             links: Vec::new(),
             added: Vec::new(),
@@ -67,7 +72,7 @@ impl LinkSet {
 
     /// Applies Sense_k's neighbour list. Returns (added, removed), both sorted by robot id.
     pub fn update(&mut self, tick: u64, listed: &[u32], own: u32) -> (&[u32], &[u32]) {
-        self.last_update = Some(tick);
+        self.last_update = Some((tick, listed.len() >= self.max_links));
         self.added.clear();
         self.removed.clear();
         // Mark the listed robots; refresh the links to marked ones (unmarking them); what is
@@ -109,9 +114,9 @@ impl LinkSet {
             }
             keep
         });
-        while self.links.len() > self.max_links {
+        while self.links.len() > self.cap {
             // Evict the link listed longest ago (ties: highest id). Listed ones have last == tick
-            // and the world lists at most max_links, so only lingering links go.
+            // and the world lists at most max_links <= cap, so only lingering links go.
             let (i, _) = self
                 .links
                 .iter()
@@ -151,11 +156,11 @@ impl LinkSet {
     }
 
     /// Whether link `i` may hold a message sent at `msg_tick` that is in range: it carries that
-    /// tick's messages ([`LinkSet::carrier`]) and its robot was on the list of tick
-    /// `msg_tick`. A linked robot off that list was beyond comm_radius + link_margin at
-    /// `msg_tick` (a list cut at max_links leaves no lingering link: see `update`), so every
-    /// message it sent then is out of range: the receiver need not even take it off its link.
-    /// When the last list is not that tick's, the answer is "yes" (judged as usual).
+    /// tick's messages ([`LinkSet::carrier`]) and, unless that tick's list was full, its robot
+    /// was on it. A linked robot off a list that was not full was beyond comm_radius +
+    /// link_margin at `msg_tick`, so every message it sent then is out of range: the receiver
+    /// need not even take it off its link. When the last list is not that tick's, or was
+    /// full, the answer is "yes" (the messages are judged as usual).
     #[inline]
     pub fn reaching(&self, i: usize, msg_tick: u64) -> Option<u32> {
         let &(r, last, created) = self.links.get(i)?;
@@ -163,7 +168,7 @@ impl LinkSet {
             return None;
         }
         match self.last_update {
-            Some(t) if t == msg_tick && last < msg_tick => None,
+            Some((t, false)) if t == msg_tick && last < msg_tick => None,
             _ => Some(r),
         }
     }
@@ -210,7 +215,7 @@ mod tests {
 
     #[test]
     fn links_follow_the_list_and_linger() {
-        let mut l = LinkSet::new(8, 2);
+        let mut l = LinkSet::new(8, 0, 2);
         let (a, r) = l.update(0, &[3, 1, 0], 0);
         assert_eq!((a.to_vec(), r.to_vec()), (vec![1, 3], vec![]));
         let (a, r) = l.update(1, &[1], 0);
@@ -229,7 +234,7 @@ mod tests {
 
     #[test]
     fn duplicates_and_own_id_in_the_list_are_harmless() {
-        let mut l = LinkSet::new(8, 2);
+        let mut l = LinkSet::new(8, 0, 2);
         let (a, _) = l.update(0, &[70, 3, 70, 5, 3], 5);
         assert_eq!(a.to_vec(), vec![3, 70]);
         let (a, r) = l.update(1, &[3, 200, 3, u32::MAX - 1, u32::MAX - 1], 5);
@@ -245,7 +250,7 @@ mod tests {
 
     #[test]
     fn a_lingering_link_off_the_last_list_does_not_reach() {
-        let mut l = LinkSet::new(3, 100);
+        let mut l = LinkSet::new(3, 1, 100);
         l.update(0, &[1, 2], 0);
         l.update(1, &[1], 0);
         // Tick 1's list was not full: 2 was beyond reach at tick 1.
@@ -253,10 +258,10 @@ mod tests {
         assert!(l.reaches(1, 1) && !l.reaches(2, 1) && !l.reaches(9, 1));
         // Messages of another tick than the last list's: no claim.
         assert_eq!(l.reaching(1, 2), Some(2));
-        // A full list evicts the lingering links: every link left was listed.
+        // A full list may have left robots in reach off it: their links may carry.
         l.update(2, &[1, 3, 4], 0);
-        assert_eq!(l.robots().collect::<Vec<_>>(), vec![1, 3, 4]);
-        assert_eq!(l.reaching(0, 2), Some(1));
+        assert_eq!(l.robots().collect::<Vec<_>>(), vec![1, 2, 3, 4]);
+        assert_eq!(l.reaching(1, 2), Some(2));
         // Made while handling tick 2's list: carries nothing of tick 2.
         assert_eq!(
             l.reaching(l.robots().position(|r| r == 3).unwrap(), 2),
@@ -265,12 +270,20 @@ mod tests {
     }
 
     #[test]
-    fn never_more_than_max_links_lingering_evicted_first() {
-        let mut l = LinkSet::new(3, 100);
+    fn never_more_than_the_cap_lingering_evicted_first() {
+        let mut l = LinkSet::new(3, 0, 100);
         l.update(0, &[1, 2, 3], 0);
         let (a, r) = l.update(1, &[4, 5, 1], 0);
         assert_eq!(a.to_vec(), vec![4, 5]);
         assert_eq!(r.to_vec(), vec![2, 3]);
         assert_eq!(l.robots().collect::<Vec<_>>(), vec![1, 4, 5]);
+        // With slack, robots that fall off a full list stay linked up to the cap.
+        let mut l = LinkSet::new(3, 2, 100);
+        l.update(0, &[1, 2, 3], 0);
+        let (a, r) = l.update(1, &[4, 1, 2], 0);
+        assert_eq!((a.to_vec(), r.to_vec()), (vec![4], vec![]));
+        let (a, r) = l.update(2, &[5, 6, 1], 0);
+        assert_eq!((a.to_vec(), r.to_vec()), (vec![5, 6], vec![3]));
+        assert_eq!(l.robots().collect::<Vec<_>>(), vec![1, 2, 4, 5, 6]);
     }
 }

@@ -115,7 +115,7 @@ pub struct RadioCounters {
     pub dropped_loss: u64,
     /// In range, but the receiver could not decode the payload.
     pub malformed: u64,
-    /// In range, but never reached the receiver's transport: no link (radio.max_links reached)
+    /// In range, but never reached the receiver's transport: no link (max_links + lingering_links reached)
     /// or the receiver died before the message was due.
     pub dropped_unlinked: u64,
     /// Sent in the last ticks of the run and not yet due when it ended.

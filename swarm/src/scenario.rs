@@ -77,6 +77,9 @@ pub struct RadioParams {
     pub link_margin: f64,
     pub link_linger_ticks: u32,
     pub max_links: u32,
+    /// Links an agent keeps beyond max_links to robots that dropped off its list.
+    #[serde(default)]
+    pub lingering_links: u32,
     pub max_message_bytes: u32,
     pub max_messages_per_tick: u32,
 }
@@ -377,6 +380,12 @@ impl Scenario {
             "radio.max_links",
             self.radio.max_links as u64,
             1,
+            crate::frames::MAX_NEIGHBOURS as u64,
+        )?;
+        range_u(
+            "radio.lingering_links",
+            self.radio.lingering_links as u64,
+            0,
             crate::frames::MAX_NEIGHBOURS as u64,
         )?;
         range_u(

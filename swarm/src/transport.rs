@@ -101,7 +101,8 @@ pub const CONTROL_NAME: &str = "run/control";
 /// Slack for a restarted agent whose dead predecessor's ports are not cleaned yet.
 const RESTART_SLACK: usize = 1;
 
-/// Subscribers one radio service must admit. Each agent holds at most radio.max_links links,
+/// Subscribers one radio service must admit. Each agent holds at most radio.max_links +
+/// radio.lingering_links links,
 /// but the robots linked to one sender are bounded only by the swarm (links linger, and
 /// "among my nearest max_links" is not symmetric). A subscription refused for capacity would
 /// make delivery depend on timing, so every robot can always link to every other one. The

@@ -192,3 +192,36 @@ fn a_paced_run_ticks_no_faster_than_asked_and_records_the_same_ticks() {
     assert_left_nothing(&fast);
     assert_left_nothing(&paced);
 }
+
+#[test]
+fn full_neighbour_lists_and_lingering_links_give_the_same_run_in_both_executors() {
+    let _g = serial();
+    // 12 robots in the start square, each listing only its 4 "nearest" (sticky when full) and
+    // keeping 2 lingering links: links churn and carry messages from robots off the list.
+    let dir = tmp_dir("det-links-sc");
+    std::fs::create_dir_all(&dir).unwrap();
+    let sc = dir.join("links.toml");
+    std::fs::write(&sc, "[radio]\nmax_links = 4\nlingering_links = 2\n").unwrap();
+    let args = [
+        "--scenario",
+        sc.to_str().unwrap(),
+        "--robots",
+        "12",
+        "--max-ticks",
+        "200",
+        "--loss",
+        "0.2",
+    ];
+    let a = tmp_dir("det-links-p");
+    let b = tmp_dir("det-links-i");
+    for (dir, exec) in [(&a, "processes"), (&b, "inprocess")] {
+        let o = up(&[&args[..], &["--executor", exec]].concat(), dir);
+        assert!(o.status.success(), "{exec}: {}", stderr(&o));
+    }
+    assert!(recording(&a) == recording(&b), "the executors differ");
+    let m = &summary(&a)["messages"];
+    // The lists bind: in-range messages went unheard for want of a link.
+    assert!(m["dropped_unlinked"].as_u64().unwrap() > 1000, "{m}");
+    assert!(m["delivered"].as_u64().unwrap() > 1000, "{m}");
+    assert_left_nothing(&a);
+}

@@ -141,6 +141,8 @@ pub fn static_points(sc: &Scenario) -> Vec<[f64; 2]> {
 #[derive(Default)]
 pub struct SenseScratch {
     near: Vec<(f64, u32)>,
+    /// One flag per robot, all clear between calls: on the robot's previous list.
+    listed_before: Vec<bool>,
 }
 
 /// Fills the obstacle-point list of `out`: static points and dead robots within the sensing
@@ -176,12 +178,21 @@ pub fn fill_obstacles(
 
 /// Fills the neighbour list of robot `me`: live robots within `range`, nearest first (ties by
 /// id), at most `cap`.
+///
+/// The list is sticky when more than `cap` robots are within `range` (a radio's neighbour
+/// table is full): robots of the previous list (`prev`) still within range keep their places
+/// and only the free ones go to the nearest others. Ranking all of them nearest first instead
+/// made the last places change every tick in a dense swarm, and each change cost the agent a
+/// radio link made and one dropped. When all fit, the list is every robot within range.
+/// `prev` becomes the new list.
+#[allow(clippy::too_many_arguments)]
 pub fn fill_neighbours(
     me: usize,
     pos: &[[f64; 3]],
     alive: &[bool],
     range: f64,
     cap: usize,
+    prev: &mut Vec<u32>,
     scratch: &mut SenseScratch,
     out: &mut Sense,
 ) {
@@ -196,12 +207,35 @@ pub fn fill_neighbours(
             scratch.near.push((d, j as u32));
         }
     }
-    sort_nearest_first(&mut scratch.near);
-    let n = scratch.near.len().min(cap).min(MAX_NEIGHBOURS);
-    for (k, &(_, j)) in scratch.near[..n].iter().enumerate() {
-        out.neighbours[k] = j;
+    let cap = cap.min(MAX_NEIGHBOURS);
+    if scratch.near.len() > cap {
+        // Full: the previous ones still in range first, then the nearest others.
+        if scratch.listed_before.len() < pos.len() {
+            scratch.listed_before.resize(pos.len(), false);
+        }
+        let before = &mut scratch.listed_before;
+        for &j in prev.iter() {
+            if let Some(b) = before.get_mut(j as usize) {
+                *b = true;
+            }
+        }
+        scratch
+            .near
+            .sort_unstable_by_key(|&(d, j)| (!before[j as usize], d.to_bits(), j));
+        for &j in prev.iter() {
+            if let Some(b) = before.get_mut(j as usize) {
+                *b = false;
+            }
+        }
+        scratch.near.truncate(cap);
     }
-    out.n_neighbours = n as u32;
+    sort_nearest_first(&mut scratch.near);
+    prev.clear();
+    for (k, &(_, j)) in scratch.near.iter().enumerate() {
+        out.neighbours[k] = j;
+        prev.push(j);
+    }
+    out.n_neighbours = scratch.near.len() as u32;
 }
 
 #[cfg(test)]
@@ -242,5 +276,32 @@ mod tests {
                 assert_eq!(got, want, "cell {cell} q {q:?}");
             }
         }
+    }
+
+    #[test]
+    fn a_full_neighbour_list_keeps_its_members_while_they_are_in_range() {
+        // Robot 0 at the origin, robots 1..=5 on the x axis at 10, 20, .., 50.
+        let mut pos: Vec<[f64; 3]> = (0..6).map(|i| [10.0 * i as f64, 0.0, 0.0]).collect();
+        let alive = vec![true; 6];
+        let (mut prev, mut scratch, mut out) =
+            (Vec::new(), SenseScratch::default(), Sense::zeroed());
+        let mut list = |pos: &[[f64; 3]], prev: &mut Vec<u32>| {
+            fill_neighbours(0, pos, &alive, 45.0, 3, prev, &mut scratch, &mut out);
+            out.neighbours().to_vec()
+        };
+        // Not full: everyone in range, nearest first.
+        assert_eq!(list(&pos, &mut prev), vec![1, 2, 3]);
+        assert_eq!(prev, vec![1, 2, 3]);
+        // Robot 5 moves nearest of all: the list is full, 1, 2, 3 keep their places.
+        pos[5] = [5.0, 0.0, 0.0];
+        assert_eq!(list(&pos, &mut prev), vec![1, 2, 3]);
+        // Robot 2 leaves the range: its place goes to the nearest other (5), nearest first.
+        pos[2] = [500.0, 0.0, 0.0];
+        assert_eq!(list(&pos, &mut prev), vec![5, 1, 3]);
+        // A fresh list (no previous one) is nearest first.
+        assert_eq!(list(&pos, &mut Vec::new()), vec![5, 1, 3]);
+        pos[4] = [1.0, 0.0, 0.0];
+        assert_eq!(list(&pos, &mut Vec::new()), vec![4, 5, 1]);
+        assert_eq!(list(&pos, &mut prev), vec![5, 1, 3]);
     }
 }

@@ -50,6 +50,8 @@ pub struct World {
     grid: PointGrid,
     dead_points: Vec<[f64; 2]>,
     scratch: SenseScratch,
+    /// Each robot's last neighbour list (kept sticky when it is full: see fill_neighbours).
+    listed: Vec<Vec<u32>>,
     in_flight: VecDeque<InFlight>,
     pub radio: RadioCounters,
     pub faults: Vec<Fault>,
@@ -113,6 +115,7 @@ impl World {
             grid,
             dead_points: Vec::new(),
             scratch: SenseScratch::default(),
+            listed: vec![Vec::new(); n],
             in_flight: VecDeque::new(),
             radio: RadioCounters::default(),
             faults: Vec::new(),
@@ -183,6 +186,7 @@ impl World {
             &self.alive,
             link_range,
             self.sc.radio.max_links as usize,
+            &mut self.listed[i],
             &mut self.scratch,
             out,
         );
