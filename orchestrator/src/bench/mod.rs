@@ -38,9 +38,10 @@ enum BenchWhat {
     /// Lock-step tick rate: runtime vs raw iceoryx2 round vs futex floor.
     Tick {
         /// Swarm sizes, comma separated.
-        #[arg(long, value_delimiter = ',', default_value = "10,50,100")]
+        #[arg(long, value_delimiter = ',', default_value = "10,50,100,200,500")]
         robots: Vec<u32>,
-        /// Ticks (rounds) measured per size.
+        /// Ticks (rounds) measured per size up to 100 robots; above, fewer in proportion
+        /// (ticks x 100 / N, at least 100).
         #[arg(long, default_value_t = 2000)]
         ticks: u64,
         /// Also write the table as JSON.
@@ -220,7 +221,7 @@ pub fn bench(a: BenchArgs) -> i32 {
             };
             finish(
                 tick::bench_tick(&robots, ticks).and_then(|rows| {
-                    tick::print_table(&rows, ticks);
+                    tick::print_table(&rows);
                     write_json(&json, &rows)
                 }),
                 "tick",
@@ -317,10 +318,10 @@ pub fn bench(a: BenchArgs) -> i32 {
                 let (sizes, ticks) = if quick {
                     (vec![10, 50], 300)
                 } else {
-                    (vec![10, 50, 100], 2000)
+                    (vec![10, 50, 100, 200, 500], 2000)
                 };
                 let tk = tick::bench_tick(&sizes, ticks)?;
-                tick::print_table(&tk, ticks);
+                tick::print_table(&tk);
                 out.tick = Some(tk);
                 println!();
                 let msizes = if quick {

@@ -22,12 +22,20 @@ use world::output::percentile;
 #[derive(Debug, Clone, Serialize)]
 pub struct Row {
     pub robots: u32,
+    /// Ticks (rounds) measured for this size.
+    pub ticks: u64,
     pub runtime_ticks_per_s: f64,
     pub runtime_p50_us: f64,
     pub runtime_p99_us: f64,
     /// The runtime with `runtime.barrier = "iox2-event"`.
     pub runtime_ev_ticks_per_s: f64,
     pub runtime_ev_p50_us: f64,
+    /// The runtime on the embedded default scenario (search, mode BT) run until every target
+    /// is found (or `ticks`): how many ticks that took, ticks per second, p50. None above
+    /// SEARCH_MAX_ROBOTS.
+    pub search_ticks: Option<u64>,
+    pub search_ticks_per_s: Option<f64>,
+    pub search_p50_us: Option<f64>,
     pub iox2_rounds_per_s: f64,
     pub iox2_p50_us: f64,
     pub iox2_p99_us: f64,
@@ -52,15 +60,23 @@ fn stats(mut ns: Vec<u64>) -> Stats {
     }
 }
 
-pub fn print_table(rows: &[Row], ticks: u64) {
-    println!("lock-step tick, {ticks} ticks per size (roam scenario, configs/roam.toml, for the runtime; no work for the others)");
+fn opt(v: Option<f64>) -> String {
+    v.map(|x| format!("{x:.0}")).unwrap_or_else(|| "-".into())
+}
+
+pub fn print_table(rows: &[Row]) {
+    println!("lock-step tick (roam scenario, configs/roam.toml, for the runtime; no work for the others)");
     println!(
-        "{:>6} | {:>10} {:>8} {:>8} | {:>10} {:>8} | {:>10} {:>8} {:>8} | {:>10} {:>8} {:>8} | {:>9} {:>9}",
+        "{:>6} {:>6} | {:>10} {:>8} {:>8} | {:>10} {:>8} | {:>6} {:>9} {:>8} | {:>10} {:>8} {:>8} | {:>10} {:>8} {:>8} | {:>9} {:>9}",
         "robots",
+        "ticks",
         "runtime/s",
         "p50 us",
         "p99 us",
         "rt-ev/s",
+        "p50 us",
+        "ticks",
+        "search/s",
         "p50 us",
         "iox2 rd/s",
         "p50 us",
@@ -73,13 +89,17 @@ pub fn print_table(rows: &[Row], ticks: u64) {
     );
     for r in rows {
         println!(
-            "{:>6} | {:>10.0} {:>8.0} {:>8.0} | {:>10.0} {:>8.0} | {:>10.0} {:>8.0} {:>8.0} | {:>10.0} {:>8.0} {:>8.0} | {:>8.2}x {:>8.2}x",
+            "{:>6} {:>6} | {:>10.0} {:>8.0} {:>8.0} | {:>10.0} {:>8.0} | {:>6} {:>9} {:>8} | {:>10.0} {:>8.0} {:>8.0} | {:>10.0} {:>8.0} {:>8.0} | {:>8.2}x {:>8.2}x",
             r.robots,
+            r.ticks,
             r.runtime_ticks_per_s,
             r.runtime_p50_us,
             r.runtime_p99_us,
             r.runtime_ev_ticks_per_s,
             r.runtime_ev_p50_us,
+            opt(r.search_ticks.map(|t| t as f64)),
+            opt(r.search_ticks_per_s),
+            opt(r.search_p50_us),
             r.iox2_rounds_per_s,
             r.iox2_p50_us,
             r.iox2_p99_us,
@@ -91,23 +111,49 @@ pub fn print_table(rows: &[Row], ticks: u64) {
         );
     }
     println!("runtime = the runtime with its default futex barrier; rt-ev = the same run with runtime.barrier = \"iox2-event\".");
+    println!("search = the runtime on the default scenario (search BT, futex barrier) until every target is found: ticks run, ticks/s, p50.");
     println!("rt/iox2 = runtime tick time / raw iceoryx2 round time (mean); below 1 means faster than the raw round.");
+}
+
+/// Ticks measured at size `n`: `ticks` up to 100 robots, then fewer in proportion (at least
+/// 100), so that 200 and 500 robots, whose runtime ticks take tens or hundreds of
+/// milliseconds, finish in a minute or two.
+pub fn ticks_for(n: u32, ticks: u64) -> u64 {
+    if n <= 100 {
+        ticks
+    } else {
+        (ticks * 100 / n as u64).max(100).min(ticks)
+    }
 }
 
 pub fn bench_tick(sizes: &[u32], ticks: u64) -> Result<Vec<Row>, String> {
     let mut rows = Vec::new();
     for &n in sizes {
+        let ticks = ticks_for(n, ticks);
         let rt = runtime(n, ticks, BarrierKind::Futex)?;
         let rt_ev = runtime(n, ticks, BarrierKind::Iox2Event)?;
+        let search = if n <= SEARCH_MAX_ROBOTS {
+            let mut sc = Scenario::default();
+            sc.run.robots = n;
+            sc.run.max_ticks = ticks;
+            agent::behaviours::resolve_defaults(&mut sc)?;
+            Some(run_stats(&sc)?)
+        } else {
+            None
+        };
         let iox = raw_iox2(n, ticks)?;
         let fx = futex_floor(n, ticks)?;
         rows.push(Row {
             robots: n,
+            ticks,
             runtime_ticks_per_s: rt.per_s,
             runtime_p50_us: rt.p50_us,
             runtime_p99_us: rt.p99_us,
             runtime_ev_ticks_per_s: rt_ev.per_s,
             runtime_ev_p50_us: rt_ev.p50_us,
+            search_ticks: search.as_ref().map(|s| s.0),
+            search_ticks_per_s: search.as_ref().map(|s| s.1.per_s),
+            search_p50_us: search.as_ref().map(|s| s.1.p50_us),
             iox2_rounds_per_s: iox.per_s,
             iox2_p50_us: iox.p50_us,
             iox2_p99_us: iox.p99_us,
@@ -119,6 +165,10 @@ pub fn bench_tick(sizes: &[u32], ticks: u64) -> Result<Vec<Row>, String> {
     Ok(rows)
 }
 
+/// The search run of the table stops at this swarm size (its behaviour's per-robot work grows
+/// with the robots in range, and 500 would take many minutes here).
+const SEARCH_MAX_ROBOTS: u32 = 200;
+
 /// The runtime itself: the roam scenario with N robots for `ticks` ticks (+ warm-up).
 fn runtime(n: u32, ticks: u64, barrier: BarrierKind) -> Result<Stats, String> {
     let mut sc = Scenario::roam();
@@ -126,6 +176,11 @@ fn runtime(n: u32, ticks: u64, barrier: BarrierKind) -> Result<Stats, String> {
     sc.runtime.barrier = barrier;
     let warmup = (ticks / 20).max(10);
     sc.run.max_ticks = ticks + warmup;
+    run_stats(&sc).map(|(_, s)| s)
+}
+
+/// Runs `sc` with the processes executor: the ticks it ran and its steady tick statistics.
+fn run_stats(sc: &Scenario) -> Result<(u64, Stats), String> {
     sc.validate(&|_| "bench".into())
         .map_err(|e| e.to_string())?;
     let run_id = crate::runid::new_run_id();
@@ -144,11 +199,14 @@ fn runtime(n: u32, ticks: u64, barrier: BarrierKind) -> Result<Stats, String> {
     )
     .map_err(|e| e.to_string())?;
     let _ = std::fs::remove_dir_all(&dir);
-    Ok(Stats {
-        per_s: s["steady_ticks_per_second"].as_f64().unwrap_or(0.0),
-        p50_us: s["tick_time"]["p50_us"].as_f64().unwrap_or(0.0),
-        p99_us: s["tick_time"]["p99_us"].as_f64().unwrap_or(0.0),
-    })
+    Ok((
+        s["ticks"].as_u64().unwrap_or(0),
+        Stats {
+            per_s: s["steady_ticks_per_second"].as_f64().unwrap_or(0.0),
+            p50_us: s["tick_time"]["p50_us"].as_f64().unwrap_or(0.0),
+            p99_us: s["tick_time"]["p99_us"].as_f64().unwrap_or(0.0),
+        },
+    ))
 }
 
 fn spawn_children(kind: &str, prefix: &str, n: u32) -> Result<Vec<Child>, String> {
