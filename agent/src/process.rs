@@ -1,16 +1,14 @@
 //! The agent process: one robot, one behaviour, over iceoryx2 and the tick barrier.
 
 use crate::behaviours::{dispatch, BehaviourVisitor};
-use iceoryx2::port::publisher::Publisher;
 use iceoryx2::port::subscriber::Subscriber;
 use iceoryx2::prelude::*;
 use std::collections::BTreeMap;
 use std::time::Duration;
 use swarm::barrier::{TickBarrier, Wake};
-use swarm::behaviour::RadioTx;
 use swarm::frames::RadioHeader;
 use swarm::scenario::Scenario;
-use swarm::transport::{self, Result};
+use swarm::transport::{self, Result, ShmTx};
 use swarm::{AgentRuntime, Behaviour};
 
 pub struct AgentArgs {
@@ -23,30 +21,6 @@ pub struct AgentArgs {
 pub const EXIT_OK: i32 = 0;
 pub const EXIT_WORLD_GONE: i32 = 3;
 pub const EXIT_SETUP: i32 = 4;
-
-/// Sends radio messages by loaning a slot in the robot's own radio service and encoding the
-/// message straight into it.
-struct ShmTx<'a> {
-    publisher: &'a Publisher<ipc::Service, [u8], RadioHeader>,
-    failures: u64,
-}
-
-impl RadioTx for ShmTx<'_> {
-    fn transmit(&mut self, h: &RadioHeader, fill: &mut dyn FnMut(&mut [u8])) {
-        let len = (h.len as usize).max(1);
-        match self.publisher.loan_slice_uninit(len) {
-            Ok(sample) => {
-                let mut sample = sample.write_from_fn(|_| 0u8);
-                *sample.user_header_mut() = *h;
-                fill(&mut sample.payload_mut()[..h.len as usize]);
-                if sample.send().is_err() {
-                    self.failures += 1;
-                }
-            }
-            Err(_) => self.failures += 1,
-        }
-    }
-}
 
 struct Link {
     _service: transport::RadioService,

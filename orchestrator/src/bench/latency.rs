@@ -35,9 +35,9 @@ use std::process::Child;
 use std::rc::Rc;
 use std::time::{Duration, Instant};
 use swarm::barrier::{TickBarrier, Wake};
-use swarm::behaviour::RadioTx;
-use swarm::frames::{Action, RadioHeader, MAX_NEIGHBOURS, MAX_OBSTACLE_POINTS, MAX_SIGNALS};
+use swarm::frames::{Action, MAX_NEIGHBOURS, MAX_OBSTACLE_POINTS, MAX_SIGNALS};
 use swarm::scenario::Scenario;
+use swarm::transport::ShmTx;
 use swarm::{cleanup, transport, AgentRuntime, Behaviour, Command, Outbox, Received, Sense};
 use world::output::percentile;
 
@@ -410,30 +410,6 @@ fn latency_scenario(size: usize) -> Scenario {
     sc.radio.loss = 0.0;
     sc.radio.delay_ticks = 0;
     sc
-}
-
-/// Sends like the agent process does (agent/src/process.rs `ShmTx`): loan `len` bytes in the
-/// robot's radio service, zero them, write the header, encode the message in place, send.
-struct ShmTx<'a> {
-    publisher: &'a Publisher<ipc::Service, [u8], RadioHeader>,
-    failures: u64,
-}
-
-impl RadioTx for ShmTx<'_> {
-    fn transmit(&mut self, h: &RadioHeader, fill: &mut dyn FnMut(&mut [u8])) {
-        let len = (h.len as usize).max(1);
-        match self.publisher.loan_slice_uninit(len) {
-            Ok(sample) => {
-                let mut sample = sample.write_from_fn(|_| 0u8);
-                *sample.user_header_mut() = *h;
-                fill(&mut sample.payload_mut()[..h.len as usize]);
-                if sample.send().is_err() {
-                    self.failures += 1;
-                }
-            }
-            Err(_) => self.failures += 1,
-        }
-    }
 }
 
 /// The behaviour of both ends: the parent sends when told and records the latency of each

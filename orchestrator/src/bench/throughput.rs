@@ -10,7 +10,6 @@
 //! frames): the numbers are the radio's.
 
 use super::{check_no_leftovers, spawn_child, tick, ByteBuf, ChildArgs};
-use iceoryx2::port::publisher::Publisher;
 use iceoryx2::port::subscriber::Subscriber;
 use iceoryx2::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -18,9 +17,9 @@ use std::collections::BTreeMap;
 use std::io::Read;
 use std::time::{Duration, Instant};
 use swarm::barrier::{TickBarrier, Wake};
-use swarm::behaviour::RadioTx;
 use swarm::frames::{RadioHeader, MAX_NEIGHBOURS};
 use swarm::scenario::Scenario;
+use swarm::transport::ShmTx;
 use swarm::{cleanup, transport, AgentRuntime, Behaviour, Command, Outbox, Received, Sense};
 use world::output::percentile;
 
@@ -255,29 +254,6 @@ impl<M: Make> Behaviour for Flood<M> {
     fn step_refs(&mut self, _s: &Sense, _inbox: &[&Received<M>], out: &mut Outbox<M>) -> Command {
         out.broadcast(M::make(self.data.clone()));
         Command::default()
-    }
-}
-
-/// As agent/src/process.rs sends: loan in the robot's radio service, encode in place, send.
-struct ShmTx<'a> {
-    publisher: &'a Publisher<ipc::Service, [u8], RadioHeader>,
-    failures: u64,
-}
-
-impl RadioTx for ShmTx<'_> {
-    fn transmit(&mut self, h: &RadioHeader, fill: &mut dyn FnMut(&mut [u8])) {
-        let len = (h.len as usize).max(1);
-        match self.publisher.loan_slice_uninit(len) {
-            Ok(sample) => {
-                let mut sample = sample.write_from_fn(|_| 0u8);
-                *sample.user_header_mut() = *h;
-                fill(&mut sample.payload_mut()[..h.len as usize]);
-                if sample.send().is_err() {
-                    self.failures += 1;
-                }
-            }
-            Err(_) => self.failures += 1,
-        }
     }
 }
 

@@ -186,7 +186,7 @@ fn run_stats(sc: &Scenario) -> Result<(u64, Stats), String> {
     let run_id = crate::runid::new_run_id();
     let dir = std::env::temp_dir().join(format!("swarm-bench-{run_id}"));
     let out = processes::run(processes::ProcessRun {
-        sc: &sc,
+        sc,
         run_id: &run_id,
         run_dir: &dir,
         on_status: &mut |_| {},
