@@ -50,7 +50,9 @@ pub struct Sense {
     pub n_neighbours: u32,
     pub n_obstacle_points: u32,
     pub n_signals: u32,
-    /// Robots within comm_radius + link_margin, nearest first: whom the transport links to.
+    /// Robots within comm_radius + link_margin, by robot id: whom the transport links to (at
+    /// most radio.max_links; when more are in reach, those of the last list first, then the
+    /// nearest others).
     pub neighbours: [u32; MAX_NEIGHBOURS],
     /// Obstacle, wall and dead-robot points within the sensing radius, nearest first.
     pub obstacle_points: [[f64; 2]; MAX_OBSTACLE_POINTS],

@@ -1,6 +1,6 @@
 //! Which robots an agent's transport is linked to (subscribed to the radio service of).
 //!
-//! The world's Sense frame lists the robots within comm_radius + link_margin (nearest first,
+//! The world's Sense frame lists the robots within comm_radius + link_margin (by id,
 //! at most radio.max_links). The agent links to those, keeps a link for `linger` ticks after a
 //! robot drops off the list (links cost ~1 ms to make on this VM, so churn is avoided), and
 //! never holds more than max_links + radio.lingering_links. Both executors run this same code, so the set of messages a
