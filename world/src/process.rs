@@ -201,6 +201,9 @@ pub fn run(args: &WorldArgs) -> Result<i32> {
         // declared dead at most ack_deadline_ms after the last progress.
         let mut waited = Instant::now();
         let mut acked = 0usize;
+        // A death the orchestrator reported before this release (its nudge of the ack counter
+        // was reset by the release): handled now, not after a whole poll_ms.
+        drain_control(&control, &mut world, &mut ctl);
         loop {
             let now_acked = world.live_robots().filter(|&i| barrier.acked(i, k)).count();
             if now_acked == world.alive_count() as usize {
