@@ -54,7 +54,7 @@ use crate::search::estimator::{self, Detection};
 use crate::search::geometry::{clamp_norm, v2, Vec2};
 use crate::search::subgroup::{self, Member, Role};
 use crate::search::{arba, bsoa, svf, tpepso, virtual_force};
-use messages::{pack, unpack};
+use messages::{pack, unpack, TargetSet};
 use rand::Rng;
 use rand_chacha::ChaCha8Rng;
 use std::collections::BTreeSet;
@@ -186,8 +186,8 @@ impl Search {
         self.memory.and_then(|m| m.sgb)
     }
 
-    fn found_list(&self) -> Vec<u32> {
-        self.found.iter().copied().collect()
+    fn found_list(&self) -> TargetSet {
+        TargetSet::from_sorted(self.found.iter().copied())
     }
 
     /// Step of a robot that has declared: silent after `declare_ticks` broadcasts, still.
@@ -326,13 +326,12 @@ impl Behaviour for Search {
             match &r.msg {
                 Msg::Found { target, found } => {
                     self.found.insert(*target);
-                    self.found.extend(found.iter().copied());
+                    self.found.extend(found.iter());
                     known = self.found_list();
                 }
                 Msg::Status(st) => {
-                    if st.found != known && !st.found.iter().all(|t| known.binary_search(t).is_ok())
-                    {
-                        self.found.extend(st.found.iter().copied());
+                    if !st.found.is_subset(&known) {
+                        self.found.extend(st.found.iter());
                         known = self.found_list();
                     }
                     if r.from != self.robot {

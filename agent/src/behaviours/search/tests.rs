@@ -27,7 +27,7 @@ fn status(pos: [f64; 2], detections: &[(u32, f32)], candidacy: Option<Candidacy>
         pos: pack(pos),
         detections: detections.to_vec(),
         candidacy,
-        found: vec![],
+        found: TargetSet::default(),
     })
 }
 
@@ -256,7 +256,7 @@ fn members_of_a_found_target_return_to_roaming() {
             8,
             Msg::Found {
                 target: 2,
-                found: vec![2],
+                found: TargetSet::from_sorted([2]),
             },
         ),
     ];
@@ -266,7 +266,7 @@ fn members_of_a_found_target_return_to_roaming() {
         &mut Outbox::new_for_tests(8),
     );
     assert_eq!(r.mode(), Mode::Roaming);
-    assert!(r.last_status().unwrap().found.contains(&2));
+    assert!(r.last_status().unwrap().found.contains(2));
 }
 
 #[test]
