@@ -52,6 +52,14 @@ fn main() {
     match agent::process::run(&a) {
         Ok(code) => std::process::exit(code),
         Err(e) => {
+            // A restarted agent can start just as the run ends: its services are gone with
+            // the run, which is no fault of the agent's. Say nothing then.
+            let run_over = swarm::barrier::TickBarrier::open(&a.prefix)
+                .map(|b| b.is_shutdown())
+                .unwrap_or(true);
+            if run_over {
+                std::process::exit(agent::process::EXIT_WORLD_GONE);
+            }
             eprintln!("agent {}: {e}", a.robot);
             std::process::exit(agent::process::EXIT_SETUP);
         }
