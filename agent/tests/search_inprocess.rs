@@ -2,34 +2,11 @@
 //! orchestrator/src/inprocess.rs): 20 robots, configs/search.toml, mode BT, seeds 1..=3.
 
 use agent::behaviours::search::{Mode, Search};
-use swarm::behaviour::RadioTx;
-use swarm::frames::{Action, RadioHeader, Sense};
+use swarm::frames::{Action, Sense};
+use swarm::mailbox::Air;
 use swarm::scenario::Scenario;
 use swarm::AgentRuntime;
 use world::World;
-
-/// Messages of one tick: headers and their encoded payloads in one buffer.
-#[derive(Default)]
-struct Air {
-    headers: Vec<(RadioHeader, usize)>,
-    bytes: Vec<u8>,
-}
-
-impl RadioTx for Air {
-    fn transmit(&mut self, h: &RadioHeader, fill: &mut dyn FnMut(&mut [u8])) {
-        let at = self.bytes.len();
-        self.bytes.resize(at + h.len as usize, 0);
-        fill(&mut self.bytes[at..]);
-        self.headers.push((*h, at));
-    }
-}
-
-impl Air {
-    fn clear(&mut self) {
-        self.headers.clear();
-        self.bytes.clear();
-    }
-}
 
 struct Outcome {
     found: Vec<Option<(u64, u32)>>,
@@ -78,8 +55,8 @@ fn run(sc: &Scenario) -> Outcome {
             let rt = &mut rts[i];
             let s = &senses[i];
             rt.begin(s);
-            for (h, at) in &prev.headers {
-                rt.ingest(h, &prev.bytes[*at..*at + h.len as usize]);
+            for (h, payload) in prev.messages() {
+                rt.ingest(h, payload);
             }
             actions[i] = Some(rt.step(s, &mut cur));
             rt.update_links(s);

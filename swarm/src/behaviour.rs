@@ -55,6 +55,20 @@ pub struct Received<M> {
     pub msg: M,
 }
 
+impl<M> Received<M> {
+    /// `msg` as delivered with header `h`.
+    pub fn new(h: &RadioHeader, msg: M) -> Received<M> {
+        Received {
+            from: h.sender,
+            tick: h.tick,
+            seq: h.seq,
+            sender_pos: h.sender_pos,
+            unicast: h.dest != BROADCAST,
+            msg,
+        }
+    }
+}
+
 /// What a behaviour commands for this tick.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct Command {
@@ -240,14 +254,7 @@ impl<B: Behaviour> AgentRuntime<B> {
                 Outcome::Lost
             } else {
                 match decode(h, payload) {
-                    Some(msg) => Outcome::Delivered(Box::new(Received {
-                        from: h.sender,
-                        tick: h.tick,
-                        seq: h.seq,
-                        sender_pos: h.sender_pos,
-                        unicast: h.dest != BROADCAST,
-                        msg,
-                    })),
+                    Some(msg) => Outcome::Delivered(Box::new(Received::new(h, msg))),
                     None => Outcome::Malformed,
                 }
             };

@@ -8,7 +8,7 @@
 //! cloning and dropping it once per receiver was most of the in-process radio's cost.
 
 use crate::behaviour::{decode, RadioTx, Received};
-use crate::frames::{RadioHeader, BROADCAST};
+use crate::frames::RadioHeader;
 use serde::de::DeserializeOwned;
 use std::collections::VecDeque;
 
@@ -29,6 +29,13 @@ impl RadioTx for Air {
 }
 
 impl Air {
+    /// The messages in the order sent: header and payload.
+    pub fn messages(&self) -> impl Iterator<Item = (&RadioHeader, &[u8])> + '_ {
+        self.headers
+            .iter()
+            .map(|(h, at)| (h, &self.bytes[*at..*at + h.len as usize]))
+    }
+
     pub fn clear(&mut self) {
         self.headers.clear();
         self.bytes.clear();
@@ -131,14 +138,7 @@ impl<M: DeserializeOwned> Mailbox<M> {
         self.ticks.push_back((tick, self.latest_first));
         for &i in &self.order {
             let (h, at) = &air.headers[i as usize];
-            let msg = decode::<M>(h, &air.bytes[*at..]).map(|msg| Received {
-                from: h.sender,
-                tick: h.tick,
-                seq: h.seq,
-                sender_pos: h.sender_pos,
-                unicast: h.dest != BROADCAST,
-                msg,
-            });
+            let msg = decode::<M>(h, &air.bytes[*at..]).map(|msg| Received::new(h, msg));
             self.headers.push_back(*h);
             self.msgs.push_back(msg);
         }
