@@ -20,6 +20,8 @@ pub struct LinkSet {
     linger: u64,
     /// (robot, last tick it was listed, tick whose Sense created the link), sorted by robot id.
     links: Vec<(u32, u64, u64)>,
+    /// Scratch of the merge in `update` (the next `links`).
+    merged: Vec<(u32, u64, u64)>,
     added: Vec<u32>,
     removed: Vec<u32>,
     /// Scratch of `update`: one bit per robot id, all clear between calls.
@@ -36,6 +38,7 @@ impl LinkSet {
             cap: max_links + lingering,
             linger: linger_ticks,
             links: Vec::new(),
+            merged: Vec::new(),
             added: Vec::new(),
             removed: Vec::new(),
             marks: Vec::new(),
@@ -75,6 +78,42 @@ impl LinkSet {
         self.last_update = Some((tick, listed.len() >= self.max_links));
         self.added.clear();
         self.removed.clear();
+        if listed.windows(2).all(|w| w[0] < w[1]) {
+            // The world lists by robot id, as the links are kept: one merge of the two.
+            self.merge(tick, listed, own);
+        } else {
+            self.mark_and_insert(tick, listed, own);
+        }
+        self.expire(tick)
+    }
+
+    /// `update` for a list sorted by robot id: links listed are refreshed, new ones made.
+    fn merge(&mut self, tick: u64, listed: &[u32], own: u32) {
+        let mut merged = std::mem::take(&mut self.merged);
+        merged.clear();
+        let mut i = 0;
+        for &r in listed {
+            if r == own {
+                continue;
+            }
+            while i < self.links.len() && self.links[i].0 < r {
+                merged.push(self.links[i]);
+                i += 1;
+            }
+            if i < self.links.len() && self.links[i].0 == r {
+                merged.push((r, tick, self.links[i].2));
+                i += 1;
+            } else {
+                merged.push((r, tick, tick));
+                self.added.push(r);
+            }
+        }
+        merged.extend_from_slice(&self.links[i..]);
+        self.merged = std::mem::replace(&mut self.links, merged);
+    }
+
+    /// `update` for a list in any order (duplicates, own id and ids beyond any run allowed).
+    fn mark_and_insert(&mut self, tick: u64, listed: &[u32], own: u32) {
         // Mark the listed robots; refresh the links to marked ones (unmarking them); what is
         // still marked is new. Linear in listed + links: every robot does this every tick, and
         // a search per listed robot cost more.
@@ -105,6 +144,10 @@ impl LinkSet {
                 self.links.insert(i, (r, tick, tick));
             }
         }
+    }
+
+    /// The rest of `update`: drops links that lingered too long or exceed the cap.
+    fn expire(&mut self, tick: u64) -> (&[u32], &[u32]) {
         let linger = self.linger;
         let removed = &mut self.removed;
         self.links.retain(|&(r, last, _)| {
@@ -246,6 +289,33 @@ mod tests {
         assert!(l.marks.iter().all(|w| *w == 0) && l.marks.len() <= 4);
         let (a, r) = l.update(2, &[u32::MAX - 1], 5);
         assert!(a.is_empty() && r.is_empty());
+    }
+
+    #[test]
+    fn the_merge_of_a_sorted_list_keeps_the_same_links_as_marking() {
+        let (mut a, mut b) = (LinkSet::new(6, 3, 4), LinkSet::new(6, 3, 4));
+        let mut x: u64 = 12345;
+        for tick in 0..400u64 {
+            let mut list: Vec<u32> = Vec::new();
+            for r in 0..20u32 {
+                x = x
+                    .wrapping_mul(6364136223846793005)
+                    .wrapping_add(1442695040888963407);
+                if (x >> 33) % 3 == 0 && list.len() < 6 {
+                    list.push(r);
+                }
+            }
+            let own = (tick % 20) as u32;
+            a.last_update = Some((tick, list.len() >= a.max_links));
+            a.added.clear();
+            a.removed.clear();
+            a.mark_and_insert(tick, &list, own);
+            let (aa, ar) = a.expire(tick);
+            let (aa, ar) = (aa.to_vec(), ar.to_vec());
+            let (ba, br) = b.update(tick, &list, own);
+            assert_eq!((aa, ar), (ba.to_vec(), br.to_vec()), "tick {tick}");
+            assert_eq!(a.links, b.links, "tick {tick}");
+        }
     }
 
     #[test]
