@@ -206,10 +206,8 @@ impl LinkSet {
     /// full, the answer is "yes" (the messages are judged as usual).
     #[inline]
     pub fn reaching(&self, i: usize, msg_tick: u64) -> Option<u32> {
-        let &(r, last, created) = self.links.get(i)?;
-        if created >= msg_tick {
-            return None;
-        }
+        let r = self.carrier(i, msg_tick)?;
+        let last = self.links[i].1;
         match self.last_update {
             Some((t, false)) if t == msg_tick && last < msg_tick => None,
             _ => Some(r),

@@ -7,6 +7,19 @@ fn recording(out: &std::path::Path) -> Vec<u8> {
     std::fs::read(out.join("recording.bin")).expect("recording.bin")
 }
 
+/// Runs `up ARGS` with the processes and the in-process executor (folders `NAME-p`, `NAME-i`),
+/// checks that both succeed with the same recording and returns the processes run's folder.
+fn same_run_in_both_executors(name: &str, args: &[&str]) -> std::path::PathBuf {
+    let a = tmp_dir(&format!("{name}-p"));
+    let b = tmp_dir(&format!("{name}-i"));
+    for (dir, exec) in [(&a, "processes"), (&b, "inprocess")] {
+        let o = up(&[args, &["--executor", exec]].concat(), dir);
+        assert!(o.status.success(), "{exec}: {}", stderr(&o));
+    }
+    assert!(recording(&a) == recording(&b), "the executors differ");
+    a
+}
+
 #[test]
 fn processes_and_inprocess_give_identical_recordings() {
     let _g = serial();
@@ -212,13 +225,7 @@ fn full_neighbour_lists_and_lingering_links_give_the_same_run_in_both_executors(
         "--loss",
         "0.2",
     ];
-    let a = tmp_dir("det-links-p");
-    let b = tmp_dir("det-links-i");
-    for (dir, exec) in [(&a, "processes"), (&b, "inprocess")] {
-        let o = up(&[&args[..], &["--executor", exec]].concat(), dir);
-        assert!(o.status.success(), "{exec}: {}", stderr(&o));
-    }
-    assert!(recording(&a) == recording(&b), "the executors differ");
+    let a = same_run_in_both_executors("det-links", &args);
     let m = &summary(&a)["messages"];
     // The lists bind: in-range messages went unheard for want of a link.
     assert!(m["dropped_unlinked"].as_u64().unwrap() > 1000, "{m}");
@@ -243,13 +250,7 @@ fn robots_leaving_and_reentering_radio_reach_give_the_same_run_in_both_executors
         "--loss",
         "0.2",
     ];
-    let a = tmp_dir("det-reach-p");
-    let b = tmp_dir("det-reach-i");
-    for (dir, exec) in [(&a, "processes"), (&b, "inprocess")] {
-        let o = up(&[&args[..], &["--executor", exec]].concat(), dir);
-        assert!(o.status.success(), "{exec}: {}", stderr(&o));
-    }
-    assert!(recording(&a) == recording(&b), "the executors differ");
+    let a = same_run_in_both_executors("det-reach", &args);
     let m = &summary(&a)["messages"];
     assert!(
         m["dropped_range"].as_u64().unwrap() > m["delivered"].as_u64().unwrap(),
