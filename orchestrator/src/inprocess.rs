@@ -3,12 +3,16 @@
 //! gives the same recording as the multi-process executor.
 
 use agent::{dispatch, BehaviourVisitor};
+use std::panic::AssertUnwindSafe;
 use std::path::Path;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Barrier, Mutex, MutexGuard, RwLock};
 use std::time::Instant;
 use swarm::frames::{Action, Sense};
 use swarm::mailbox::{Air, Mailbox};
 use swarm::scenario::Scenario;
 use swarm::{AgentRuntime, Behaviour};
+use world::sensing::SenseScratch;
 use world::{RunOutputs, Summary, Timing, World};
 
 /// Robots per worker thread below which a run stays on one thread (thread hand-offs cost more
@@ -32,15 +36,60 @@ fn agent_tick<B: Behaviour>(
     a
 }
 
+/// The robots of one worker thread (a contiguous id range) and everything their side of a
+/// tick writes.
+struct Chunk<B: Behaviour> {
+    first: usize,
+    rts: Vec<AgentRuntime<B>>,
+    senses: Vec<Box<Sense>>,
+    /// The robots' last neighbour lists (the world's, lent for the run).
+    listed: Vec<Vec<u32>>,
+    actions: Vec<Option<Action>>,
+    /// Messages sent this tick, in robot order.
+    air: Air,
+    scratch: SenseScratch,
+}
+
+impl<B: Behaviour> Chunk<B> {
+    /// The parallel part of a tick: each live robot's neighbours and obstacle points (its
+    /// signals are in already), then its agent side.
+    fn work(&mut self, world: &World, mailbox: &Mailbox<B::Msg>) {
+        for j in 0..self.rts.len() {
+            let i = self.first + j;
+            self.actions[j] = if world.alive[i] {
+                world.sense_geometry(
+                    i,
+                    &mut self.listed[j],
+                    &mut self.scratch,
+                    &mut self.senses[j],
+                );
+                Some(agent_tick(
+                    &mut self.rts[j],
+                    &self.senses[j],
+                    mailbox,
+                    &mut self.air,
+                ))
+            } else {
+                None
+            };
+        }
+    }
+}
+
+/// A lock nobody can poison for good: a worker that panicked has already been reported.
+fn lock<T>(m: &Mutex<T>) -> MutexGuard<'_, T> {
+    m.lock().unwrap_or_else(|e| e.into_inner())
+}
+
 pub struct InProcess<'a> {
     pub sc: &'a Scenario,
     /// The run folder; None keeps only the returned Summary (sweeps).
     pub out_dir: Option<&'a Path>,
     pub run_id: &'a str,
     pub on_tick: &'a mut dyn FnMut(&World),
-    /// Worker threads for the agents' side of each tick (1: all on the calling thread). The
-    /// robots are split into contiguous id ranges and their messages joined in id order, so
-    /// the result does not depend on it.
+    /// Worker threads for the robots' side of each tick (1: all on the calling thread). The
+    /// robots are split into contiguous id ranges, one per thread, and their messages joined
+    /// in id order, so the result does not depend on it.
     pub threads: usize,
 }
 
@@ -58,80 +107,134 @@ impl BehaviourVisitor for InProcess<'_> {
             None => RunOutputs::summary_only(),
         };
         let n = world.n;
-        let mut rts: Vec<AgentRuntime<B>> = (0..n as u32)
-            .map(|i| AgentRuntime::new(sc, i, make(i)))
-            .collect();
-        let mut senses: Vec<Box<Sense>> = (0..n).map(|_| Sense::zeroed()).collect();
-        // This tick's messages; then, decoded once for all their receivers, the mailbox.
-        let mut cur = Air::default();
-        let mut mailbox: Mailbox<B::Msg> = Mailbox::new(n, sc.radio.delay_ticks as u64);
-        let mut actions: Vec<Option<Action>> = vec![None; n];
         let threads = self.threads.clamp(1, (n / MIN_ROBOTS_PER_THREAD).max(1));
-        let chunk = n.div_ceil(threads);
-        let mut airs: Vec<Air> = (0..threads).map(|_| Air::default()).collect();
+        let per = n.div_ceil(threads).max(1);
+        let mut lists = world.take_neighbour_lists().into_iter();
+        let chunks: Vec<Mutex<Chunk<B>>> = (0..n)
+            .step_by(per)
+            .map(|first| {
+                let ids = first..(first + per).min(n);
+                Mutex::new(Chunk {
+                    first,
+                    rts: ids
+                        .clone()
+                        .map(|i| AgentRuntime::new(sc, i as u32, make(i as u32)))
+                        .collect(),
+                    senses: ids.clone().map(|_| Sense::zeroed()).collect(),
+                    listed: lists.by_ref().take(ids.len()).collect(),
+                    actions: vec![None; ids.len()],
+                    air: Air::default(),
+                    scratch: SenseScratch::default(),
+                })
+            })
+            .collect();
+        let threads = chunks.len();
+        // Last tick's messages, decoded once for all their receivers.
+        let mailbox: RwLock<Mailbox<B::Msg>> =
+            RwLock::new(Mailbox::new(n, sc.radio.delay_ticks as u64));
+        let mut cur = Air::default();
+        let mut actions: Vec<Option<Action>> = vec![None; n];
         let mut tick_ns = Vec::with_capacity(sc.run.max_ticks.min(10_000_000) as usize);
         let startup_seconds = t0.elapsed().as_secs_f64();
+        let world = RwLock::new(world);
+        // Each tick: the calling thread does the serial parts (signals, whose noise draws
+        // follow robot order; the moves; the mailbox), between them every thread runs its
+        // chunk. `go` starts a chunk's work (or, with `stop` set, ends the worker), `done`
+        // waits for all.
+        let (go, done) = (Barrier::new(threads), Barrier::new(threads));
+        let stop = AtomicBool::new(false);
+        let panicked = AtomicBool::new(false);
+        let run_chunk = |c: &Mutex<Chunk<B>>| {
+            let r = std::panic::catch_unwind(AssertUnwindSafe(|| {
+                let (w, m) = (
+                    world.read().unwrap_or_else(|e| e.into_inner()),
+                    mailbox.read().unwrap_or_else(|e| e.into_inner()),
+                );
+                lock(c).work(&w, &m);
+            }));
+            if r.is_err() {
+                panicked.store(true, Ordering::SeqCst);
+            }
+        };
         let t_loop = Instant::now();
         let mut end = "completed";
-        while world.tick < sc.run.max_ticks {
-            sc.runtime.pace(t_loop, world.tick);
-            let t_tick = Instant::now();
-            world.begin_tick();
-            if world.tick + 1 == sc.run.max_ticks {
-                world.set_stopping();
-            }
-            // Sensing first, in robot order (the world's noise draws follow it), then each
-            // robot's agent side, independent of the others'.
-            for (i, sense) in senses.iter_mut().enumerate() {
-                if world.alive[i] {
-                    world.sense(i, sense);
-                }
-            }
-            let alive = &world.alive;
-            let (mailbox_r, senses_r) = (&mailbox, &senses[..]);
-            let work = |first: usize,
-                        rts: &mut [AgentRuntime<B>],
-                        acts: &mut [Option<Action>],
-                        air: &mut Air| {
-                for (j, (rt, act)) in rts.iter_mut().zip(acts.iter_mut()).enumerate() {
-                    let i = first + j;
-                    *act = alive[i].then(|| agent_tick(rt, &senses_r[i], mailbox_r, air));
-                }
-            };
-            if threads == 1 {
-                work(0, &mut rts, &mut actions, &mut cur);
-            } else {
-                std::thread::scope(|scope| {
-                    for (c, ((rts, acts), air)) in rts
-                        .chunks_mut(chunk)
-                        .zip(actions.chunks_mut(chunk))
-                        .zip(airs.iter_mut())
-                        .enumerate()
-                    {
-                        let work = &work;
-                        scope.spawn(move || work(c * chunk, rts, acts, air));
+        let on_tick = self.on_tick;
+        let result: std::io::Result<()> = std::thread::scope(|scope| {
+            for c in &chunks[1..] {
+                let (go, done, stop, run_chunk) = (&go, &done, &stop, &run_chunk);
+                scope.spawn(move || loop {
+                    go.wait();
+                    if stop.load(Ordering::SeqCst) {
+                        break;
                     }
+                    run_chunk(c);
+                    done.wait();
                 });
-                for air in airs.iter_mut() {
-                    cur.append(air);
-                    air.clear();
+            }
+            let result = (|| loop {
+                let mut w = world.write().unwrap_or_else(|e| e.into_inner());
+                if w.tick >= sc.run.max_ticks {
+                    return Ok(());
                 }
-            }
-            let rec = world.apply(&actions);
-            outputs.push(&rec)?;
-            mailbox.post(rec.tick, &cur);
-            cur.clear();
-            tick_ns.push(t_tick.elapsed().as_nanos() as u64);
-            (self.on_tick)(&world);
-            if world.mission_complete() {
-                end = "all targets found";
-                break;
-            }
-            if world.alive_count() == 0 {
-                end = "all robots dead";
-                break;
-            }
-        }
+                sc.runtime.pace(t_loop, w.tick);
+                let t_tick = Instant::now();
+                w.begin_tick();
+                if w.tick + 1 == sc.run.max_ticks {
+                    w.set_stopping();
+                }
+                for c in &chunks {
+                    let mut c = lock(c);
+                    let c = &mut *c;
+                    for (j, sense) in c.senses.iter_mut().enumerate() {
+                        if w.alive[c.first + j] {
+                            w.sense_signals(c.first + j, sense);
+                        }
+                    }
+                }
+                drop(w);
+                go.wait();
+                run_chunk(&chunks[0]);
+                done.wait();
+                if panicked.load(Ordering::SeqCst) {
+                    return Err(std::io::Error::other("a robot's behaviour panicked"));
+                }
+                for c in &chunks {
+                    let mut c = lock(c);
+                    actions[c.first..c.first + c.actions.len()].copy_from_slice(&c.actions);
+                    cur.append(&c.air);
+                    c.air.clear();
+                }
+                let mut w = world.write().unwrap_or_else(|e| e.into_inner());
+                let rec = w.apply(&actions);
+                outputs.push(&rec)?;
+                mailbox
+                    .write()
+                    .unwrap_or_else(|e| e.into_inner())
+                    .post(rec.tick, &cur);
+                cur.clear();
+                tick_ns.push(t_tick.elapsed().as_nanos() as u64);
+                on_tick(&w);
+                if w.mission_complete() {
+                    end = "all targets found";
+                    return Ok(());
+                }
+                if w.alive_count() == 0 {
+                    end = "all robots dead";
+                    return Ok(());
+                }
+            })();
+            stop.store(true, Ordering::SeqCst);
+            go.wait();
+            result
+        });
+        result?;
+        let mut world = world.into_inner().unwrap_or_else(|e| e.into_inner());
+        world.put_neighbour_lists(
+            chunks
+                .into_iter()
+                .flat_map(|c| c.into_inner().unwrap_or_else(|e| e.into_inner()).listed)
+                .collect(),
+        );
         let timing = Timing {
             wall_seconds: t0.elapsed().as_secs_f64(),
             loop_seconds: t_loop.elapsed().as_secs_f64(),
@@ -159,4 +262,31 @@ pub fn run(
             threads,
         },
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn recording(sc: &Scenario, threads: usize, tag: &str) -> Vec<u8> {
+        let dir = std::env::temp_dir().join(format!("swarm-inproc-{}-{tag}", std::process::id()));
+        let s = run(sc, Some(&dir), "threads-test", threads, &mut |_| {}).expect("run");
+        assert!(s.ticks > 10, "the run must last a while");
+        let bytes = std::fs::read(dir.join("recording.bin")).expect("recording");
+        std::fs::remove_dir_all(&dir).ok();
+        bytes
+    }
+
+    #[test]
+    fn the_number_of_worker_threads_does_not_change_the_recording() {
+        // Search, 50 robots (3 chunks of 17, 17, 16 with 3 threads), lossy radio with delay.
+        let mut sc = Scenario::default();
+        sc.run.robots = 50;
+        sc.run.max_ticks = 80;
+        sc.radio.loss = 0.2;
+        sc.radio.delay_ticks = 1;
+        let one = recording(&sc, 1, "1");
+        assert_eq!(one, recording(&sc, 2, "2"), "2 threads");
+        assert_eq!(one, recording(&sc, 3, "3"), "3 threads");
+    }
 }

@@ -163,6 +163,18 @@ impl World {
     /// Writes robot i's Sense frame for the current tick into `out` (in place: every field the
     /// agent reads is written, lists up to their counts).
     pub fn sense(&mut self, i: usize, out: &mut Sense) {
+        self.sense_signals(i, out);
+        let mut listed = std::mem::take(&mut self.listed[i]);
+        let mut scratch = std::mem::take(&mut self.scratch);
+        self.sense_geometry(i, &mut listed, &mut scratch, out);
+        self.listed[i] = listed;
+        self.scratch = scratch;
+    }
+
+    /// The part of [`World::sense`] that draws from the world's random stream (target signal
+    /// noise, drawn in robot order): must be called for the live robots in id order, before
+    /// their [`World::sense_geometry`].
+    pub fn sense_signals(&mut self, i: usize, out: &mut Sense) {
         let p = self.poses[i];
         out.tick = self.tick;
         out.robot = i as u32;
@@ -179,6 +191,19 @@ impl World {
         if let Some(t) = self.targets.as_mut() {
             t.sense(&self.sc, i as u32, [p[0], p[1]], out);
         }
+    }
+
+    /// The rest of [`World::sense`]: the neighbour list (`listed`: robot i's last one, see
+    /// [`World::take_neighbour_lists`]) and the obstacle points. Reads only this tick's ground
+    /// truth, so it may run for several robots at once (the in-process executor's threads).
+    pub fn sense_geometry(
+        &self,
+        i: usize,
+        listed: &mut Vec<u32>,
+        scratch: &mut SenseScratch,
+        out: &mut Sense,
+    ) {
+        let p = self.poses[i];
         let link_range = self.sc.radio.comm_radius + self.sc.radio.link_margin;
         fill_neighbours(
             i,
@@ -186,8 +211,8 @@ impl World {
             &self.alive,
             link_range,
             self.sc.radio.max_links as usize,
-            &mut self.listed[i],
-            &mut self.scratch,
+            listed,
+            scratch,
             out,
         );
         fill_obstacles(
@@ -195,9 +220,21 @@ impl World {
             &self.dead_points,
             [p[0], p[1]],
             self.sc.robot.sensing_radius,
-            &mut self.scratch,
+            scratch,
             out,
         );
+    }
+
+    /// Hands out every robot's last neighbour list, for callers of
+    /// [`World::sense_geometry`]; [`World::sense`] needs them back
+    /// ([`World::put_neighbour_lists`]).
+    pub fn take_neighbour_lists(&mut self) -> Vec<Vec<u32>> {
+        std::mem::take(&mut self.listed)
+    }
+
+    pub fn put_neighbour_lists(&mut self, lists: Vec<Vec<u32>>) {
+        assert_eq!(lists.len(), self.n, "one neighbour list per robot");
+        self.listed = lists;
     }
 
     /// Marks a robot dead from the current tick on: it stands still as an obstacle.
