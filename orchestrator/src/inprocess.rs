@@ -2,11 +2,12 @@
 //! process, with messages passed in memory instead of iceoryx2. For unit tests and sweeps; it
 //! gives the same recording as the multi-process executor.
 
+use crate::phase::PhaseBarrier;
 use agent::{dispatch, BehaviourVisitor};
 use std::panic::AssertUnwindSafe;
 use std::path::Path;
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::{Barrier, Mutex, MutexGuard, RwLock};
+use std::sync::{Mutex, MutexGuard, RwLock};
 use std::time::Instant;
 use swarm::frames::{Action, Sense};
 use swarm::mailbox::{Air, Mailbox};
@@ -141,7 +142,7 @@ impl BehaviourVisitor for InProcess<'_> {
         // follow robot order; the moves; the mailbox), between them every thread runs its
         // chunk. `go` starts a chunk's work (or, with `stop` set, ends the worker), `done`
         // waits for all.
-        let (go, done) = (Barrier::new(threads), Barrier::new(threads));
+        let (go, done) = (PhaseBarrier::new(threads), PhaseBarrier::new(threads));
         let stop = AtomicBool::new(false);
         let panicked = AtomicBool::new(false);
         let run_chunk = |c: &Mutex<Chunk<B>>| {

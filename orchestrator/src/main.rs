@@ -5,6 +5,7 @@ mod clean;
 mod control;
 mod experiment;
 mod inprocess;
+mod phase;
 mod processes;
 mod registry;
 mod runid;

@@ -56,7 +56,8 @@ fn shm_name(prefix: &str) -> std::ffi::CString {
     std::ffi::CString::new(format!("/{prefix}tick")).expect("prefix has no NUL")
 }
 
-fn futex_wait(word: &AtomicU32, expected: u32, timeout: Duration) {
+/// Sleeps while `word` holds `expected` (at most `timeout`; spurious returns are possible).
+pub fn futex_wait(word: &AtomicU32, expected: u32, timeout: Duration) {
     let ts = libc::timespec {
         tv_sec: timeout.as_secs() as libc::time_t,
         tv_nsec: timeout.subsec_nanos() as libc::c_long,
@@ -76,7 +77,8 @@ fn futex_wait(word: &AtomicU32, expected: u32, timeout: Duration) {
     }
 }
 
-fn futex_wake(word: &AtomicU32, n: i32) {
+/// Wakes up to `n` sleepers of `word`.
+pub fn futex_wake(word: &AtomicU32, n: i32) {
     // SAFETY: see futex_wait.
     unsafe {
         libc::syscall(

@@ -3,8 +3,22 @@
 
 use swarm::frames::{Sense, MAX_NEIGHBOURS, MAX_OBSTACLE_POINTS};
 use swarm::geometry::sample_boundary;
-use swarm::radio::distance;
 use swarm::scenario::Scenario;
+
+/// The distance from q to p if it is at most `radius` (`distance(q, p) <= radius`, exactly as
+/// that test decides). A square beyond radius^2 by far more than sqrt's rounding is out
+/// without the sqrt: most candidates of a query are.
+#[inline]
+fn within_radius(q: [f64; 2], p: [f64; 2], radius: f64) -> Option<f64> {
+    let dx = q[0] - p[0];
+    let dy = q[1] - p[1];
+    let s = dx * dx + dy * dy;
+    if s > radius * radius * (1.0 + 1e-9) {
+        return None;
+    }
+    let d = s.sqrt();
+    (d <= radius).then_some(d)
+}
 
 /// A uniform bucket grid over fixed points, for radius queries.
 ///
@@ -103,8 +117,7 @@ impl PointGrid {
                 let k = r as usize * self.cols + c as usize;
                 let cell = &self.in_cell[self.start[k] as usize..self.start[k + 1] as usize];
                 for &(p, i) in cell {
-                    let d = distance(q, p);
-                    if d <= radius {
+                    if let Some(d) = within_radius(q, p, radius) {
                         out.push((d, i));
                     }
                 }
@@ -159,8 +172,7 @@ pub fn fill_obstacles(
     grid.within(q, radius, &mut scratch.near);
     let base = grid.points.len() as u32;
     for (j, p) in dead.iter().enumerate() {
-        let d = distance(q, *p);
-        if d <= radius {
+        if let Some(d) = within_radius(q, *p, radius) {
             scratch.near.push((d, base + j as u32));
         }
     }
@@ -202,8 +214,7 @@ pub fn fill_neighbours(
         if j == me || !alive[j] {
             continue;
         }
-        let d = distance(q, [p[0], p[1]]);
-        if d <= range {
+        if let Some(d) = within_radius(q, [p[0], p[1]], range) {
             scratch.near.push((d, j as u32));
         }
     }
@@ -244,6 +255,7 @@ pub fn fill_neighbours(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use swarm::radio::distance;
 
     #[test]
     fn grid_query_matches_brute_force() {
