@@ -298,7 +298,17 @@ pub fn bench(a: BenchArgs) -> i32 {
                     })
                     .and_then(|rows| {
                         search::print(&rows);
-                        write_json(&json, &rows)
+                        // The sweep row: as `orchestrator experiment` runs, one run per core.
+                        let sweep = if cores > 1 {
+                            // Whole rounds of `cores` runs (seeds 1..), so no core idles at the end.
+                            let runs = seeds.div_ceil(cores as u64) * cores as u64;
+                            let s = search::sweep(robots, &mode, runs, cores)?;
+                            search::print_sweep(&s);
+                            Some(s)
+                        } else {
+                            None
+                        };
+                        write_json(&json, &serde_json::json!({ "runs": rows, "sweep": sweep }))
                     }),
                 "search",
             )

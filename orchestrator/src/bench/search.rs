@@ -1,6 +1,7 @@
 //! `orchestrator bench search`: robot-steps per second of the in-process executor running the
 //! search scenario (issue 3's speed figure), one run at a time, over several seeds, on one
-//! thread and on all cores (the in-process executor splits each tick's agents over threads).
+//! thread and on all cores (the in-process executor splits each tick's agents over threads),
+//! then as a sweep runs them: one run per core at once.
 //!
 //! A robot-step is one robot's tick: the world's sensing for it, its radio inbox, its
 //! behaviour's step and its move. The loop time excludes start-up (world and behaviour
@@ -8,6 +9,9 @@
 
 use crate::inprocess;
 use serde::Serialize;
+use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
+use std::sync::Mutex;
+use std::time::Instant;
 use swarm::scenario::Scenario;
 
 #[derive(Debug, Clone, Serialize)]
@@ -22,16 +26,82 @@ pub struct Row {
     pub robot_steps_per_s: f64,
 }
 
+/// The bench's scenario: the embedded default with these robots, seed and mode.
+fn scenario(robots: u32, mode: &str, seed: u64) -> Result<Scenario, String> {
+    let mut sc = Scenario::default();
+    sc.run.robots = robots;
+    sc.run.seed = seed;
+    sc.search.mode = mode.to_string();
+    sc.validate(&|_| "bench search".into())
+        .map_err(|e| e.to_string())?;
+    agent::behaviours::validate(&sc)?;
+    Ok(sc)
+}
+
+/// The same runs as a sweep does them (`orchestrator experiment`): `jobs` runs at once, one
+/// thread each, timed by the wall clock of the whole batch, start-up included.
+#[derive(Debug, Clone, Serialize)]
+pub struct Sweep {
+    pub robots: u32,
+    pub mode: String,
+    pub runs: u64,
+    pub jobs: usize,
+    pub robot_steps: u64,
+    pub wall_seconds: f64,
+    pub robot_steps_per_s: f64,
+}
+
+pub fn sweep(robots: u32, mode: &str, seeds: u64, jobs: usize) -> Result<Sweep, String> {
+    let scs: Vec<Scenario> = (1..=seeds)
+        .map(|seed| scenario(robots, mode, seed))
+        .collect::<Result<_, _>>()?;
+    let next = AtomicUsize::new(0);
+    let steps = AtomicU64::new(0);
+    let failure: Mutex<Option<String>> = Mutex::new(None);
+    let t0 = Instant::now();
+    std::thread::scope(|scope| {
+        for _ in 0..jobs.max(1) {
+            scope.spawn(|| {
+                while let Some(sc) = scs.get(next.fetch_add(1, Ordering::SeqCst)) {
+                    match inprocess::run(sc, None, "bench-search-sweep", 1, &mut |_| {}) {
+                        Ok(s) => {
+                            steps.fetch_add(s.robots as u64 * s.ticks, Ordering::SeqCst);
+                        }
+                        Err(e) => {
+                            *failure.lock().unwrap_or_else(|e| e.into_inner()) = Some(e.to_string())
+                        }
+                    }
+                }
+            });
+        }
+    });
+    let wall_seconds = t0.elapsed().as_secs_f64().max(1e-9);
+    if let Some(e) = failure.into_inner().unwrap_or_else(|e| e.into_inner()) {
+        return Err(e);
+    }
+    let robot_steps = steps.into_inner();
+    Ok(Sweep {
+        robots,
+        mode: mode.to_string(),
+        runs: seeds,
+        jobs: jobs.max(1),
+        robot_steps,
+        wall_seconds,
+        robot_steps_per_s: robot_steps as f64 / wall_seconds,
+    })
+}
+
+pub fn print_sweep(s: &Sweep) {
+    println!(
+        "sweep, {} run(s) at once, 1 thread each, wall clock with start-up (calibrations built above): {:.0} robot-steps/s ({} runs, {} robot-steps in {:.2} s)",
+        s.jobs, s.robot_steps_per_s, s.runs, s.robot_steps, s.wall_seconds
+    );
+}
+
 pub fn run(robots: u32, mode: &str, seeds: u64, threads: usize) -> Result<Vec<Row>, String> {
     let mut rows = Vec::new();
     for seed in 1..=seeds {
-        let mut sc = Scenario::default();
-        sc.run.robots = robots;
-        sc.run.seed = seed;
-        sc.search.mode = mode.to_string();
-        sc.validate(&|_| "bench search".into())
-            .map_err(|e| e.to_string())?;
-        agent::behaviours::validate(&sc)?;
+        let sc = scenario(robots, mode, seed)?;
         let s = inprocess::run(
             &sc,
             None,
