@@ -40,8 +40,11 @@ impl PhaseBarrier {
             // Reset before the generation moves on: a thread that sees the new generation may
             // arrive at the next one straight away.
             self.arrived.store(0, Ordering::Relaxed);
-            self.generation.fetch_add(1, Ordering::AcqRel);
-            if self.sleepers.load(Ordering::Acquire) > 0 {
+            // SeqCst here and on `sleepers` below: a waiter counts itself a sleeper before its
+            // futex re-reads the generation, the waker moves the generation before it reads
+            // the sleepers, so one of them sees the other (else the 100 ms timeout ends it).
+            self.generation.fetch_add(1, Ordering::SeqCst);
+            if self.sleepers.load(Ordering::SeqCst) > 0 {
                 futex_wake(&self.generation, i32::MAX);
             }
             return;
@@ -55,7 +58,7 @@ impl PhaseBarrier {
                 continue;
             }
             spins = u32::MAX;
-            self.sleepers.fetch_add(1, Ordering::AcqRel);
+            self.sleepers.fetch_add(1, Ordering::SeqCst);
             // Returns at once if the generation has moved on since the check above.
             futex_wait(&self.generation, gen, Duration::from_millis(100));
             self.sleepers.fetch_sub(1, Ordering::AcqRel);
