@@ -40,21 +40,28 @@ fn twenty_robots_in_processes_find_all_targets() {
     assert_left_nothing(&out);
 }
 
+/// A small experiment file in `dir` (created): the search map, seeds from 1, the step cap of
+/// Table 5's grid, then `rest` (modes, robots, seeds, paper rows).
+fn grid_file(dir: &std::path::Path, rest: &str) -> PathBuf {
+    std::fs::create_dir_all(dir).unwrap();
+    let file = dir.join("grid.toml");
+    let head = format!(
+        "scenario = {:?}\nfirst_seed = 1\nmax_ticks = 3000\n",
+        configs().join("search.toml").display().to_string()
+    );
+    std::fs::write(&file, head + rest).unwrap();
+    file
+}
+
 #[test]
 fn the_experiment_grid_writes_the_paper_style_table() {
     let _g = serial();
     let dir = tmp_dir("experiment");
-    std::fs::create_dir_all(&dir).unwrap();
-    let file = dir.join("small.toml");
-    std::fs::write(
-        &file,
-        format!(
-            "scenario = {:?}\nmodes = [\"BT\", \"BE\"]\nrobots = [20]\nseeds = 2\nfirst_seed = 1\nmax_ticks = 3000\n\
-             paper = [{{ robots = 20, mode = \"BT\", steps = [272, 463, 935], energy = [3.979, 5.982, 10.72] }}]\n",
-            configs().join("search.toml").display().to_string()
-        ),
-    )
-    .unwrap();
+    let file = grid_file(
+        &dir,
+        "modes = [\"BT\", \"BE\"]\nrobots = [20]\nseeds = 2\n\
+         paper = [{ robots = 20, mode = \"BT\", steps = [272, 463, 935], energy = [3.979, 5.982, 10.72] }]\n",
+    );
     let out = dir.join("results");
     let o = Command::new(orchestrator())
         .args([
@@ -102,16 +109,7 @@ fn the_experiment_grid_writes_the_paper_style_table() {
 fn the_experiment_grid_gives_the_same_runs_with_either_executor() {
     let _g = serial();
     let dir = tmp_dir("experiment-executors");
-    std::fs::create_dir_all(&dir).unwrap();
-    let file = dir.join("pair.toml");
-    std::fs::write(
-        &file,
-        format!(
-            "scenario = {:?}\nmodes = [\"BT\", \"SA\"]\nrobots = [40]\nseeds = 1\nfirst_seed = 1\nmax_ticks = 3000\n",
-            configs().join("search.toml").display().to_string()
-        ),
-    )
-    .unwrap();
+    let file = grid_file(&dir, "modes = [\"BT\", \"SA\"]\nrobots = [40]\nseeds = 1\n");
     // Both files as text: parsed, two floats 1 ulp apart can read back as one.
     let results = |executor: &str| -> (String, String) {
         let out = dir.join(executor);
