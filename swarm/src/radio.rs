@@ -53,6 +53,21 @@ pub fn distance(a: [f64; 2], b: [f64; 2]) -> f64 {
     (dx * dx + dy * dy).sqrt()
 }
 
+/// The distance from q to p if it is at most `radius` (`distance(q, p) <= radius`, exactly as
+/// that test decides). A square beyond radius^2 by far more than sqrt's rounding is out
+/// without the sqrt (as in [`decide`]): most candidates of a radius query are.
+#[inline]
+pub fn within_radius(q: [f64; 2], p: [f64; 2], radius: f64) -> Option<f64> {
+    let dx = q[0] - p[0];
+    let dy = q[1] - p[1];
+    let s = dx * dx + dy * dy;
+    if s > radius * radius * (1.0 + 1e-9) {
+        return None;
+    }
+    let d = s.sqrt();
+    (d <= radius).then_some(d)
+}
+
 /// The decision for one (message, receiver) pair.
 #[allow(clippy::too_many_arguments)]
 #[inline]

@@ -3,22 +3,8 @@
 
 use swarm::frames::{Sense, MAX_NEIGHBOURS, MAX_OBSTACLE_POINTS};
 use swarm::geometry::sample_boundary;
+use swarm::radio::within_radius;
 use swarm::scenario::Scenario;
-
-/// The distance from q to p if it is at most `radius` (`distance(q, p) <= radius`, exactly as
-/// that test decides). A square beyond radius^2 by far more than sqrt's rounding is out
-/// without the sqrt: most candidates of a query are.
-#[inline]
-fn within_radius(q: [f64; 2], p: [f64; 2], radius: f64) -> Option<f64> {
-    let dx = q[0] - p[0];
-    let dy = q[1] - p[1];
-    let s = dx * dx + dy * dy;
-    if s > radius * radius * (1.0 + 1e-9) {
-        return None;
-    }
-    let d = s.sqrt();
-    (d <= radius).then_some(d)
-}
 
 /// A uniform bucket grid over fixed points, for radius queries.
 ///
