@@ -133,9 +133,12 @@ pub fn robot_rng(seed: u64, robot: u32, stream: u64) -> ChaCha8Rng {
     r
 }
 
+// A decoded message is held inline: boxing it cost one heap allocation per delivered message
+// (2,450 a tick with 50 robots in range), for a smaller enum that is only moved a few times.
+#[allow(clippy::large_enum_variant)]
 enum Outcome<M> {
     /// Decoded by this runtime (a message taken off a link).
-    Delivered(Box<Received<M>>),
+    Delivered(Received<M>),
     /// The mailbox's message with this index (in-process).
     Posted(u64),
     Lost,
@@ -254,7 +257,7 @@ impl<B: Behaviour> AgentRuntime<B> {
                 Outcome::Lost
             } else {
                 match decode(h, payload) {
-                    Some(msg) => Outcome::Delivered(Box::new(Received::new(h, msg))),
+                    Some(msg) => Outcome::Delivered(Received::new(h, msg)),
                     None => Outcome::Malformed,
                 }
             };

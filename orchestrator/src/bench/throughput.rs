@@ -8,6 +8,11 @@
 //! the count and acknowledge. Every robot is within range of every other one and linked to it,
 //! so a tick delivers N (N - 1) messages. The parent only releases ticks (no physics, no Sense
 //! frames): the numbers are the radio's.
+//!
+//! The `raw` rows move the same traffic over the same services, barrier and link counting with
+//! raw iceoryx2 and no runtime: loan the payload's bytes, copy them in, send; receive each
+//! link's messages and drop them unread. They are what any runtime that carries this traffic
+//! over iceoryx2 pays on this machine, so runtime / raw is what our radio path adds.
 
 use super::{check_no_leftovers, spawn_child, tick, ByteBuf, ChildArgs};
 use iceoryx2::port::subscriber::Subscriber;
@@ -24,8 +29,15 @@ use swarm::{cleanup, transport, AgentRuntime, Behaviour, Command, Outbox, Receiv
 use world::output::percentile;
 
 /// (payload bytes, encoding): `seq` is a `Vec<u8>` as serde encodes it (element by element),
-/// `bytes` the same bytes as one byte string.
-pub const CASES: [(usize, &str); 4] = [(64, "seq"), (4096, "seq"), (64, "bytes"), (4096, "bytes")];
+/// `bytes` the same bytes as one byte string, `raw` raw iceoryx2 without the runtime.
+pub const CASES: [(usize, &str); 6] = [
+    (64, "seq"),
+    (4096, "seq"),
+    (64, "bytes"),
+    (4096, "bytes"),
+    (64, "raw"),
+    (4096, "raw"),
+];
 
 #[derive(Debug, Clone, Serialize)]
 pub struct Row {
@@ -110,8 +122,21 @@ pub fn print(rows: &[Row]) {
             100.0 * r.delivered as f64 / r.expected.max(1) as f64
         );
     }
-    println!("messages/s counts (message, receiver) pairs decoded by the receivers' runtimes; MiB/s = messages/s x payload.");
-    println!("enc: seq = the payload is a Vec<u8> (serde encodes it byte by byte), bytes = the same bytes as one byte string.");
+    for r in rows.iter().filter(|r| r.encoding == "bytes") {
+        if let Some(raw) = rows
+            .iter()
+            .find(|x| x.encoding == "raw" && x.payload_bytes == r.payload_bytes)
+        {
+            println!(
+                "runtime (bytes) / raw iceoryx2 tick time at {} B: {:.2}x",
+                r.payload_bytes,
+                raw.ticks_per_s / r.ticks_per_s.max(1e-9)
+            );
+        }
+    }
+    println!("messages/s counts (message, receiver) pairs decoded by the receivers' runtimes (raw: taken off the links); MiB/s = messages/s x payload.");
+    println!("enc: seq = the payload is a Vec<u8> (serde encodes it byte by byte), bytes = the same bytes as one byte string,");
+    println!("     raw = raw iceoryx2 on the same services, barrier and link counting: loan, copy in, send; receive, drop unread.");
 }
 
 fn one(n: u32, size: usize, enc: &str, ticks: u64) -> Result<Row, String> {
@@ -219,6 +244,55 @@ type Link = (
     Subscriber<ipc::Service, [u8], RadioHeader>,
 );
 
+/// The next tick after `done`, or None at shutdown.
+fn next_tick(barrier: &TickBarrier, done: u64) -> Option<u64> {
+    loop {
+        match barrier.wait_release(done, Duration::from_millis(200)) {
+            Wake::Shutdown => return None,
+            Wake::Timeout => continue,
+            Wake::Tick(k) => return Some(k),
+        }
+    }
+}
+
+/// A bench child's barrier, own radio publisher and links to every other robot (by id).
+struct Ports {
+    barrier: TickBarrier,
+    _node: Node<ipc::Service>,
+    _own: transport::RadioService,
+    publisher: iceoryx2::port::publisher::Publisher<ipc::Service, [u8], RadioHeader>,
+    links: BTreeMap<u32, Link>,
+}
+
+impl Ports {
+    fn open(a: &ChildArgs, sc: &Scenario) -> Result<Ports, String> {
+        let (n, me) = (a.robots, a.index);
+        let barrier = TickBarrier::open(&a.prefix).map_err(|e| e.to_string())?;
+        let config = transport::run_config(&a.prefix).map_err(|e| e.to_string())?;
+        let node =
+            transport::node(&config, &format!("bench-tput-{me}")).map_err(|e| e.to_string())?;
+        let own = transport::radio_service(&node, me, sc, false).map_err(|e| e.to_string())?;
+        let publisher = transport::radio_publisher(&own, sc).map_err(|e| e.to_string())?;
+        let mut links = BTreeMap::new();
+        for j in (0..n).filter(|&j| j != me) {
+            let svc = transport::radio_service(&node, j, sc, false).map_err(|e| e.to_string())?;
+            let sub = svc
+                .subscriber_builder()
+                .buffer_size(transport::radio_buffer(sc))
+                .create()
+                .map_err(|e| format!("radio subscriber: {e:?}"))?;
+            links.insert(j, (svc, sub));
+        }
+        Ok(Ports {
+            barrier,
+            _node: node,
+            _own: own,
+            publisher,
+            links,
+        })
+    }
+}
+
 /// The broadcast payload, element by element.
 #[derive(Clone, Serialize, Deserialize)]
 struct Blob(Vec<u8>);
@@ -275,10 +349,10 @@ fn data_len<M: Make>(size: usize) -> usize {
 }
 
 pub fn child(a: &ChildArgs) -> i32 {
-    let r = if a.mode == "bytes" {
-        child_run::<BytesBlob>(a)
-    } else {
-        child_run::<Blob>(a)
+    let r = match a.mode.as_str() {
+        "bytes" => child_run::<BytesBlob>(a),
+        "raw" => child_raw(a),
+        _ => child_run::<Blob>(a),
     };
     match r {
         Ok(()) => 0,
@@ -292,21 +366,8 @@ pub fn child(a: &ChildArgs) -> i32 {
 fn child_run<M: Make>(a: &ChildArgs) -> Result<(), String> {
     let (n, me) = (a.robots, a.index);
     let sc = scenario(n, a.size);
-    let barrier = TickBarrier::open(&a.prefix).map_err(|e| e.to_string())?;
-    let config = transport::run_config(&a.prefix).map_err(|e| e.to_string())?;
-    let node = transport::node(&config, &format!("bench-tput-{me}")).map_err(|e| e.to_string())?;
-    let own = transport::radio_service(&node, me, &sc, false).map_err(|e| e.to_string())?;
-    let publisher = transport::radio_publisher(&own, &sc).map_err(|e| e.to_string())?;
-    let mut links: BTreeMap<u32, Link> = BTreeMap::new();
-    for j in (0..n).filter(|&j| j != me) {
-        let svc = transport::radio_service(&node, j, &sc, false).map_err(|e| e.to_string())?;
-        let sub = svc
-            .subscriber_builder()
-            .buffer_size(transport::radio_buffer(&sc))
-            .create()
-            .map_err(|e| format!("radio subscriber: {e:?}"))?;
-        links.insert(j, (svc, sub));
-    }
+    let ports = Ports::open(a, &sc)?;
+    let (barrier, publisher, links) = (&ports.barrier, &ports.publisher, &ports.links);
     let mut rt = AgentRuntime::new(
         &sc,
         me,
@@ -316,7 +377,7 @@ fn child_run<M: Make>(a: &ChildArgs) -> Result<(), String> {
         },
     );
     let mut tx = ShmTx {
-        publisher: &publisher,
+        publisher,
         failures: 0,
     };
     let mut sense = Sense::zeroed();
@@ -332,12 +393,7 @@ fn child_run<M: Make>(a: &ChildArgs) -> Result<(), String> {
     let (mut delivered, mut lost, mut malformed) = (0u64, 0u64, 0u64);
     let mut done = 0;
     barrier.mark_ready(me);
-    loop {
-        let k = match barrier.wait_release(done, Duration::from_millis(200)) {
-            Wake::Shutdown => break,
-            Wake::Timeout => continue,
-            Wake::Tick(k) => k,
-        };
+    while let Some(k) = next_tick(barrier, done) {
         sense.tick = k;
         rt.begin(&sense);
         if k > 0 {
@@ -365,5 +421,60 @@ fn child_run<M: Make>(a: &ChildArgs) -> Result<(), String> {
         "delivered {delivered} lost {lost} malformed {malformed} failed_sends {}",
         tx.failures
     );
+    Ok(())
+}
+
+/// The raw iceoryx2 child: the same services, links, barrier and counts as `child_run`, no
+/// runtime (no encode, no range / loss decision, no decode).
+fn child_raw(a: &ChildArgs) -> Result<(), String> {
+    let me = a.index;
+    let sc = scenario(a.robots, a.size);
+    let ports = Ports::open(a, &sc)?;
+    let (barrier, publisher, links) = (&ports.barrier, &ports.publisher, &ports.links);
+    let data = vec![0xa5u8; a.size];
+    let warm = warm_for(a.rounds);
+    let (mut delivered, mut failures) = (0u64, 0u64);
+    let mut done = 0;
+    barrier.mark_ready(me);
+    while let Some(k) = next_tick(barrier, done) {
+        let mut got = 0u64;
+        if k > 0 {
+            for (&s, (_, sub)) in links.iter() {
+                for _ in 0..barrier.sent_count(s, k - 1) {
+                    match sub.receive() {
+                        Ok(Some(m)) => {
+                            std::hint::black_box(m.user_header().seq);
+                            got += 1;
+                        }
+                        _ => break,
+                    }
+                }
+            }
+        }
+        let header = RadioHeader {
+            sender: me,
+            tick: k,
+            len: a.size as u32,
+            ..Default::default()
+        };
+        let sent = match publisher.loan_slice_uninit(a.size) {
+            Ok(sample) => {
+                let mut sample = sample.write_from_slice(&data);
+                *sample.user_header_mut() = header;
+                sample.send().is_ok()
+            }
+            Err(_) => false,
+        };
+        if !sent {
+            failures += 1;
+        }
+        barrier.record_sent(me, k, sent as u32);
+        if k >= warm {
+            delivered += got;
+        }
+        barrier.ack(me, k);
+        done = k + 1;
+    }
+    println!("delivered {delivered} lost 0 malformed 0 failed_sends {failures}");
     Ok(())
 }
