@@ -4,6 +4,8 @@ use crate::behaviours::{dispatch, BehaviourVisitor};
 use iceoryx2::port::subscriber::Subscriber;
 use iceoryx2::prelude::*;
 use std::collections::BTreeMap;
+use std::sync::atomic::AtomicUsize;
+use std::sync::Arc;
 use std::time::Duration;
 use swarm::barrier::{TickBarrier, Wake};
 use swarm::frames::RadioHeader;
@@ -25,6 +27,8 @@ pub const EXIT_SETUP: i32 = 4;
 struct Link {
     _service: transport::RadioService,
     sub: Subscriber<ipc::Service, [u8], RadioHeader>,
+    /// Samples of this link held by zero-copy views.
+    live: Arc<AtomicUsize>,
 }
 
 fn world_alive(pid: u32) -> bool {
@@ -79,6 +83,7 @@ fn run_loop<B: Behaviour>(args: &AgentArgs, mut rt: AgentRuntime<B>) -> Result<i
     };
     let bell = bell.as_ref();
     let poll = Duration::from_millis(sc.runtime.poll_ms);
+    let held_limit = transport::radio_held_per_link(sc);
     let mut links: BTreeMap<u32, Link> = BTreeMap::new();
     let mut tx = ShmTx {
         publisher: &radio_pub,
@@ -133,7 +138,7 @@ fn run_loop<B: Behaviour>(args: &AgentArgs, mut rt: AgentRuntime<B>) -> Result<i
                     match link.sub.receive() {
                         Ok(Some(m)) if m.user_header().tick + 1 < k => rt.stats.skipped += 1,
                         Ok(Some(m)) => {
-                            rt.ingest(m.user_header(), m.payload());
+                            transport::take_radio(&mut rt, m, &link.live, held_limit);
                             taken += 1;
                         }
                         _ => break,
@@ -154,7 +159,11 @@ fn run_loop<B: Behaviour>(args: &AgentArgs, mut rt: AgentRuntime<B>) -> Result<i
                     .buffer_size(transport::radio_buffer(sc))
                     .create()
                     .map_err(|e| format!("radio subscriber: {e:?}"))?;
-                Ok(Link { _service: svc, sub })
+                Ok(Link {
+                    _service: svc,
+                    sub,
+                    live: Arc::default(),
+                })
             }) {
                 Ok(l) => {
                     links.insert(r, l);

@@ -132,7 +132,7 @@ impl BehaviourVisitor for InProcess<'_> {
         let threads = chunks.len();
         // Last tick's messages, decoded once for all their receivers.
         let mailbox: RwLock<Mailbox<B::Msg>> =
-            RwLock::new(Mailbox::new(n, sc.radio.delay_ticks as u64));
+            RwLock::new(Mailbox::new(n, sc.radio.delay_ticks as u64).zero_copy(B::ZERO_COPY));
         let mut cur = Air::default();
         let mut actions: Vec<Option<Action>> = vec![None; n];
         let mut tick_ns = Vec::with_capacity(sc.run.max_ticks.min(10_000_000) as usize);

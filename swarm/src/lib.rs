@@ -9,6 +9,7 @@
 pub mod barrier;
 pub mod behaviour;
 pub mod bell;
+pub mod blob;
 pub mod chaos;
 pub mod cleanup;
 pub mod frames;
@@ -21,5 +22,6 @@ pub mod scenario;
 pub mod transport;
 
 pub use behaviour::{AgentRuntime, Behaviour, Command, Outbox, Received};
+pub use blob::Blob;
 pub use frames::{Action, RadioHeader, Sense};
 pub use scenario::Scenario;

@@ -7,10 +7,12 @@
 //! mailbox instead of its own decoded copy. At N = 100 a message has ~50 receivers: decoding,
 //! cloning and dropping it once per receiver was most of the in-process radio's cost.
 
-use crate::behaviour::{decode, RadioTx, Received};
+use crate::behaviour::{decode, decode_in, RadioTx, Received};
+use crate::blob::AsBytes;
 use crate::frames::RadioHeader;
 use serde::de::DeserializeOwned;
 use std::collections::VecDeque;
+use std::sync::Arc;
 
 /// Messages sent in one tick: headers (with the offset of their payload) and the payloads.
 #[derive(Default)]
@@ -76,6 +78,9 @@ pub struct Mailbox<M> {
     /// Scratch of `post`: message order grouped by sender, next free place per sender.
     order: Vec<u32>,
     next: Vec<u32>,
+    /// Decode each tick's messages in a shared copy of its bytes, so that their Blob fields are
+    /// views into it (the behaviour's `ZERO_COPY`).
+    zero_copy: bool,
 }
 
 impl<M: DeserializeOwned> Mailbox<M> {
@@ -91,7 +96,15 @@ impl<M: DeserializeOwned> Mailbox<M> {
             keep: delay_ticks + 1,
             order: Vec::new(),
             next: Vec::new(),
+            zero_copy: false,
         }
+    }
+
+    /// Zero-copy receive (see [`crate::Behaviour::ZERO_COPY`]): each tick's bytes are copied
+    /// once into a shared buffer, and every receiver's Blob fields are views into it.
+    pub fn zero_copy(mut self, on: bool) -> Mailbox<M> {
+        self.zero_copy = on;
+        self
     }
 
     /// Posts the messages sent at `tick` (decoding each once) and forgets those that can no
@@ -136,11 +149,17 @@ impl<M: DeserializeOwned> Mailbox<M> {
         }
         self.latest_first = self.latest_end();
         self.ticks.push_back((tick, self.latest_first));
+        let shared: Option<Arc<dyn AsBytes>> = self
+            .zero_copy
+            .then(|| Arc::new(air.bytes.clone()) as Arc<dyn AsBytes>);
         for &i in &self.order {
             let (h, at) = &air.headers[i as usize];
-            let msg = decode::<M>(h, &air.bytes[*at..]).map(|msg| Received::new(h, msg));
+            let msg = match &shared {
+                Some(owner) => decode_in::<M>(h, owner, *at),
+                None => decode::<M>(h, &air.bytes[*at..]),
+            };
             self.headers.push_back(*h);
-            self.msgs.push_back(msg);
+            self.msgs.push_back(msg.map(|msg| Received::new(h, msg)));
         }
     }
 }
@@ -220,6 +239,43 @@ mod tests {
         mb.post(2, &air);
         assert!(mb.get(i0).is_none());
         assert_eq!(mb.latest_from(1).count(), 0);
+    }
+
+    #[test]
+    fn zero_copy_blobs_are_views_into_one_shared_copy_of_the_tick() {
+        use crate::blob::Blob;
+        for on in [false, true] {
+            let mut mb: Mailbox<(u32, Blob)> = Mailbox::new(3, 0).zero_copy(on);
+            let mut air = Air::default();
+            for sender in 0..3u32 {
+                let msg = (sender, Blob::from(vec![sender as u8; 100]));
+                let bytes = encode(&msg);
+                let h = RadioHeader {
+                    sender,
+                    len: bytes.len() as u32,
+                    ..Default::default()
+                };
+                air.transmit(&h, &mut |buf| buf.copy_from_slice(&bytes));
+            }
+            mb.post(0, &air);
+            let got: Vec<&(u32, Blob)> = (0..3)
+                .map(|s| {
+                    let (i, _, _) = mb.latest_from(s).next().unwrap();
+                    &mb.get(i).unwrap().msg
+                })
+                .collect();
+            for (s, m) in got.iter().enumerate() {
+                assert_eq!(m.0, s as u32);
+                assert_eq!(&m.1[..], &[s as u8; 100][..]);
+                assert_eq!(m.1.is_view(), on);
+            }
+            if on {
+                // One copy of the tick's bytes: the views lie in it, in order, and not in Air.
+                let (a, b) = (got[0].1.as_ptr() as usize, got[1].1.as_ptr() as usize);
+                assert!(b > a && b - a < air.bytes.len());
+                assert!(!air.bytes.as_ptr_range().contains(&got[0].1.as_ptr()));
+            }
+        }
     }
 
     #[test]

@@ -5,11 +5,15 @@
 //! starts; agents only open them. Each run has its own iceoryx2 prefix and root folder, so two
 //! runs never see each other and a run's leftovers are easy to find and remove.
 
+use crate::blob::AsBytes;
 use crate::frames::{Action, Control, RadioHeader, Sense, WorldStatus};
 use crate::scenario::Scenario;
+use crate::{AgentRuntime, Behaviour};
 use iceoryx2::prelude::*;
 use iceoryx2::service::port_factory::publish_subscribe::PortFactory;
 use std::path::PathBuf;
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::Arc;
 
 pub type Error = Box<dyn std::error::Error + Send + Sync>;
 pub type Result<T> = std::result::Result<T, Error>;
@@ -116,6 +120,18 @@ pub fn radio_buffer(sc: &Scenario) -> usize {
     2 * sc.radio.max_messages_per_tick as usize
 }
 
+/// Samples of one link that zero-copy receive may hold while Blob views refer into them: one
+/// tick's messages. Past it (a behaviour keeping views, a radio delay) messages are decoded as
+/// copies, with the same content.
+pub fn radio_held_per_link(sc: &Scenario) -> usize {
+    sc.radio.max_messages_per_tick as usize
+}
+
+/// Samples a radio subscriber may borrow at once: those held, and the one being taken off.
+pub fn radio_max_borrowed(sc: &Scenario) -> usize {
+    radio_held_per_link(sc) + 1
+}
+
 /// The world's side: creates (`create == true`) or opens robot i's three services.
 pub fn sense_service(node: &Node<ipc::Service>, robot: u32, create: bool) -> Result<SenseService> {
     let b = node
@@ -167,7 +183,7 @@ pub fn radio_service(
             .max_subscribers(subs)
             .max_nodes(subs + 1 + RESTART_SLACK + 1)
             .subscriber_max_buffer_size(radio_buffer(sc))
-            .subscriber_max_borrowed_samples(1)
+            .subscriber_max_borrowed_samples(radio_max_borrowed(sc))
             .history_size(0)
             .create()
             .map_err(|e| err("create radio service", e))
@@ -250,6 +266,76 @@ impl crate::behaviour::RadioTx for ShmTx<'_> {
             }
             Err(_) => self.failures += 1,
         }
+    }
+}
+
+/// A received radio sample kept while [`crate::Blob`] views refer into it (zero-copy
+/// receive). Dropping the last view returns the sample to its publisher.
+pub struct HeldSample {
+    sample: std::mem::ManuallyDrop<RadioSample>,
+    bytes: *const u8,
+    len: usize,
+    thread: std::thread::ThreadId,
+    live: Arc<AtomicUsize>,
+}
+
+/// A sample taken off a radio link.
+pub type RadioSample = iceoryx2::sample::Sample<ipc::Service, [u8], RadioHeader>;
+
+// SAFETY: an iceoryx2 ipc sample is neither Send nor Sync because releasing it touches its
+// subscriber's single-threaded state (an Rc). HeldSample reads only the payload bytes through
+// the pointer taken on the receiving thread (shared memory that the publisher does not reuse
+// while the sample is out), and releases the sample only on that thread: dropped on another
+// thread, it leaks the sample instead (its state is never touched there, the mapping stays).
+unsafe impl Send for HeldSample {}
+unsafe impl Sync for HeldSample {}
+
+impl HeldSample {
+    /// Holds `sample`, counted in `live` until dropped.
+    pub fn new(sample: RadioSample, live: &Arc<AtomicUsize>) -> HeldSample {
+        let p = sample.payload();
+        live.fetch_add(1, Ordering::AcqRel);
+        HeldSample {
+            bytes: p.as_ptr(),
+            len: p.len(),
+            sample: std::mem::ManuallyDrop::new(sample),
+            thread: std::thread::current().id(),
+            live: live.clone(),
+        }
+    }
+}
+
+impl AsBytes for HeldSample {
+    fn as_bytes(&self) -> &[u8] {
+        // SAFETY: the payload of the held sample, valid and unchanged while it is held.
+        unsafe { std::slice::from_raw_parts(self.bytes, self.len) }
+    }
+}
+
+impl Drop for HeldSample {
+    fn drop(&mut self) {
+        if std::thread::current().id() == self.thread {
+            // SAFETY: dropped once, here, on the thread that received it.
+            unsafe { std::mem::ManuallyDrop::drop(&mut self.sample) };
+        }
+        self.live.fetch_sub(1, Ordering::AcqRel);
+    }
+}
+
+/// Hands a radio sample taken off a link to the runtime: in place (zero-copy) if the behaviour
+/// asks for it and the link holds fewer than `radio_held_per_link` samples (`live`), else
+/// decoded at once and released.
+pub fn take_radio<B: Behaviour>(
+    rt: &mut AgentRuntime<B>,
+    sample: RadioSample,
+    live: &Arc<AtomicUsize>,
+    held_limit: usize,
+) {
+    if B::ZERO_COPY && live.load(Ordering::Acquire) < held_limit {
+        let h = *sample.user_header();
+        rt.ingest_held(&h, HeldSample::new(sample, live));
+    } else {
+        rt.ingest(sample.user_header(), sample.payload());
     }
 }
 

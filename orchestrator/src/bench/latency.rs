@@ -8,6 +8,8 @@
 //!   `AgentRuntime::ingest` decodes it out of shared memory. Message: `{ stamp: u64, data:
 //!   Vec<u8> }` (serde encodes a `Vec<u8>` element by element);
 //! - `runtime radio, bytes`: the same, with the data field serialised as one byte string;
+//! - `runtime radio, blob`: the same wire bytes, the data field a `swarm::Blob` and the
+//!   behaviour `ZERO_COPY`: the receiver decodes in place and holds a view into the sample;
 //! - `runtime Sense`: a whole Sense frame, `loan_uninit`, written in place, sent, read in place;
 //! - `raw iceoryx2`: `[u8]` publish-subscribe, loan, copy the payload in, send, receive;
 //! - `UDS + bincode`: the bytes variant of the radio's message encoded into a buffer, written
@@ -33,12 +35,13 @@ use std::os::linux::net::SocketAddrExt;
 use std::os::unix::net::{SocketAddr, UnixListener, UnixStream};
 use std::process::Child;
 use std::rc::Rc;
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 use swarm::barrier::{TickBarrier, Wake};
 use swarm::frames::{Action, MAX_NEIGHBOURS, MAX_OBSTACLE_POINTS, MAX_SIGNALS};
 use swarm::scenario::Scenario;
 use swarm::transport::ShmTx;
-use swarm::{cleanup, transport, AgentRuntime, Behaviour, Command, Outbox, Received, Sense};
+use swarm::{cleanup, transport, AgentRuntime, Behaviour, Blob, Command, Outbox, Received, Sense};
 use world::output::percentile;
 
 /// The radio payload sizes of the issue.
@@ -72,6 +75,7 @@ impl Mode {
 enum Path {
     Radio,
     RadioBytes,
+    RadioBlob,
     Sense,
     Iox2,
     Uds,
@@ -82,6 +86,7 @@ impl Path {
         match self {
             Path::Radio => "lat-radio",
             Path::RadioBytes => "lat-radio-bytes",
+            Path::RadioBlob => "lat-radio-blob",
             Path::Sense => "lat-sense",
             Path::Iox2 => "lat-iox2",
             Path::Uds => "lat-uds",
@@ -91,6 +96,7 @@ impl Path {
         match self {
             Path::Radio => "runtime radio",
             Path::RadioBytes => "runtime radio, bytes",
+            Path::RadioBlob => "runtime radio, blob",
             Path::Sense => "runtime Sense",
             Path::Iox2 => "raw iceoryx2",
             Path::Uds => "UDS + bincode",
@@ -145,6 +151,9 @@ pub fn run(quick: bool) -> Result<Report, String> {
     }
     for &s in &SIZES {
         cells.push((Path::RadioBytes, s));
+    }
+    for &s in &SIZES {
+        cells.push((Path::RadioBlob, s));
     }
     cells.push((Path::Sense, sense_bytes));
     let mut iox_sizes = SIZES.to_vec();
@@ -215,6 +224,14 @@ pub fn run(quick: bool) -> Result<Report, String> {
         add(
             "runtime radio, bytes / raw iceoryx2",
             Path::RadioBytes,
+            Path::Iox2,
+            s,
+        );
+    }
+    for &s in &SIZES {
+        add(
+            "runtime radio, blob / raw iceoryx2",
+            Path::RadioBlob,
             Path::Iox2,
             s,
         );
@@ -321,6 +338,7 @@ fn cell(path: Path, size: usize, mode: Mode, rounds: u64) -> Result<Vec<u64>, St
         let ns = match path {
             Path::Radio => p.radio::<SeqPing>()?,
             Path::RadioBytes => p.radio::<BytesPing>()?,
+            Path::RadioBlob => p.radio::<BlobPing>()?,
             Path::Sense => p.sense()?,
             Path::Iox2 => p.iox2()?,
             Path::Uds => p.uds()?,
@@ -337,6 +355,8 @@ fn cell(path: Path, size: usize, mode: Mode, rounds: u64) -> Result<Vec<u64>, St
 
 /// A radio message of the latency bench: the sender's time stamp and the payload.
 trait Payload: Serialize + DeserializeOwned + Clone + 'static {
+    /// Received in place (see `Behaviour::ZERO_COPY`).
+    const ZERO_COPY: bool = false;
     fn make(stamp: u64, data: Vec<u8>) -> Self;
     fn stamp(&self) -> u64;
     fn data(&self) -> &[u8];
@@ -383,6 +403,29 @@ impl Payload for BytesPing {
     }
 }
 
+/// `data` as a `swarm::Blob`: the same wire bytes as `BytesPing`, received in place.
+#[derive(Clone, Serialize, Deserialize)]
+struct BlobPing {
+    stamp: u64,
+    data: Blob,
+}
+
+impl Payload for BlobPing {
+    const ZERO_COPY: bool = true;
+    fn make(stamp: u64, data: Vec<u8>) -> Self {
+        BlobPing {
+            stamp,
+            data: Blob::from(data),
+        }
+    }
+    fn stamp(&self) -> u64 {
+        self.stamp
+    }
+    fn data(&self) -> &[u8] {
+        &self.data
+    }
+}
+
 fn encoded_len<M: Serialize>(m: &M) -> usize {
     let mut w = bincode::enc::write::SizeWriter::default();
     bincode::serde::encode_into_writer(m, &mut w, bincode::config::standard()).expect("encode");
@@ -425,6 +468,7 @@ struct LatBehaviour<M> {
 
 impl<M: Payload> Behaviour for LatBehaviour<M> {
     type Msg = M;
+    const ZERO_COPY: bool = M::ZERO_COPY;
     fn step_refs(&mut self, _s: &Sense, inbox: &[&Received<M>], out: &mut Outbox<M>) -> Command {
         if self.echo {
             if let Some(r) = inbox.last() {
@@ -540,6 +584,7 @@ impl Parent<'_> {
             failures: 0,
         };
         let mut sense = sense_for(0, 1, 0.0);
+        let (live, held) = (Arc::default(), transport::radio_held_per_link(&sc));
         // Tick 0: the link to robot 1 (it carries messages sent after tick 0).
         rt.begin(&sense);
         rt.step(&sense, &mut tx);
@@ -562,7 +607,7 @@ impl Parent<'_> {
                 let mut spins = 0;
                 loop {
                     if let Some(m) = sub.receive().map_err(e("radio receive"))? {
-                        rt.ingest(m.user_header(), m.payload());
+                        transport::take_radio(&mut rt, m, &live, held);
                         recv_at.set(now_ns());
                         break;
                     }
@@ -857,6 +902,7 @@ pub fn child(a: &ChildArgs) -> i32 {
     let r = match a.kind.as_str() {
         "lat-radio" => child_radio::<SeqPing>(a, mode),
         "lat-radio-bytes" => child_radio::<BytesPing>(a, mode),
+        "lat-radio-blob" => child_radio::<BlobPing>(a, mode),
         "lat-sense" => child_sense(a, mode),
         "lat-iox2" => child_iox2(a, mode),
         "lat-uds" => child_uds(a, mode),
@@ -914,6 +960,7 @@ fn child_radio<M: Payload>(a: &ChildArgs, mode: Mode) -> Result<(), String> {
         failures: 0,
     };
     let mut sense = sense_for(1, 0, 10.0);
+    let (live, held) = (Arc::default(), transport::radio_held_per_link(&sc));
     rt.begin(&sense);
     rt.step(&sense, &mut tx);
     rt.update_links(&sense);
@@ -926,7 +973,7 @@ fn child_radio<M: Payload>(a: &ChildArgs, mode: Mode) -> Result<(), String> {
         let mut spins = 0;
         loop {
             if let Some(m) = sub.receive().map_err(e("radio receive"))? {
-                rt.ingest(m.user_header(), m.payload());
+                transport::take_radio(&mut rt, m, &live, held);
                 break;
             }
             wait_parent(&barrier, mode, &mut spins, since)?;

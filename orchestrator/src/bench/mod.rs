@@ -119,7 +119,8 @@ enum BenchWhat {
 /// `orchestrator __bench-child KIND ...`: one process of a cross-process benchmark.
 #[derive(Args, Debug)]
 pub struct ChildArgs {
-    /// iox2, futex (bench tick); lat-radio, lat-sense, lat-iox2, lat-uds (bench latency);
+    /// iox2, futex (bench tick); lat-radio, lat-radio-bytes, lat-radio-blob, lat-sense,
+    /// lat-iox2, lat-uds (bench latency);
     /// tput (bench throughput)
     kind: String,
     #[arg(long)]
@@ -366,8 +367,8 @@ pub fn child(a: ChildArgs) -> i32 {
         "tput" => throughput::child(&a),
         other => {
             eprintln!(
-                "unknown bench child kind {other:?}: allowed iox2, futex, lat-radio, lat-sense, \
-                 lat-iox2, lat-uds, tput"
+                "unknown bench child kind {other:?}: allowed iox2, futex, lat-radio, \
+                 lat-radio-bytes, lat-radio-blob, lat-sense, lat-iox2, lat-uds, tput"
             );
             2
         }

@@ -20,21 +20,26 @@ use iceoryx2::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::io::Read;
+use std::sync::atomic::AtomicUsize;
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 use swarm::barrier::{TickBarrier, Wake};
 use swarm::frames::{RadioHeader, MAX_NEIGHBOURS};
 use swarm::scenario::Scenario;
 use swarm::transport::ShmTx;
-use swarm::{cleanup, transport, AgentRuntime, Behaviour, Command, Outbox, Received, Sense};
+use swarm::{cleanup, transport, AgentRuntime, Behaviour, Blob, Command, Outbox, Received, Sense};
 use world::output::percentile;
 
 /// (payload bytes, encoding): `seq` is a `Vec<u8>` as serde encodes it (element by element),
-/// `bytes` the same bytes as one byte string, `raw` raw iceoryx2 without the runtime.
-pub const CASES: [(usize, &str); 6] = [
+/// `bytes` the same bytes as one byte string, `blob` the same wire bytes received in place
+/// (`swarm::Blob`, zero-copy), `raw` raw iceoryx2 without the runtime.
+pub const CASES: [(usize, &str); 8] = [
     (64, "seq"),
     (4096, "seq"),
     (64, "bytes"),
     (4096, "bytes"),
+    (64, "blob"),
+    (4096, "blob"),
     (64, "raw"),
     (4096, "raw"),
 ];
@@ -122,13 +127,17 @@ pub fn print(rows: &[Row]) {
             100.0 * r.delivered as f64 / r.expected.max(1) as f64
         );
     }
-    for r in rows.iter().filter(|r| r.encoding == "bytes") {
+    for r in rows
+        .iter()
+        .filter(|r| r.encoding == "bytes" || r.encoding == "blob")
+    {
         if let Some(raw) = rows
             .iter()
             .find(|x| x.encoding == "raw" && x.payload_bytes == r.payload_bytes)
         {
             println!(
-                "runtime (bytes) / raw iceoryx2 tick time at {} B: {:.2}x",
+                "runtime ({}) / raw iceoryx2 tick time at {} B: {:.2}x",
+                r.encoding,
                 r.payload_bytes,
                 raw.ticks_per_s / r.ticks_per_s.max(1e-9)
             );
@@ -136,6 +145,7 @@ pub fn print(rows: &[Row]) {
     }
     println!("messages/s counts (message, receiver) pairs decoded by the receivers' runtimes (raw: taken off the links); MiB/s = messages/s x payload.");
     println!("enc: seq = the payload is a Vec<u8> (serde encodes it byte by byte), bytes = the same bytes as one byte string,");
+    println!("     blob = the same wire bytes as a swarm::Blob, received in place (zero-copy: no decode copy),");
     println!("     raw = raw iceoryx2 on the same services, barrier and link counting: loan, copy in, send; receive, drop unread.");
 }
 
@@ -238,10 +248,12 @@ fn one(n: u32, size: usize, enc: &str, ticks: u64) -> Result<Row, String> {
     r
 }
 
-/// A radio link: the sender's service and our subscription to it.
+/// A radio link: the sender's service, our subscription to it, its samples held by
+/// zero-copy views.
 type Link = (
     transport::RadioService,
     Subscriber<ipc::Service, [u8], RadioHeader>,
+    Arc<AtomicUsize>,
 );
 
 /// The next tick after `done`, or None at shutdown.
@@ -281,7 +293,7 @@ impl Ports {
                 .buffer_size(transport::radio_buffer(sc))
                 .create()
                 .map_err(|e| format!("radio subscriber: {e:?}"))?;
-            links.insert(j, (svc, sub));
+            links.insert(j, (svc, sub, Arc::default()));
         }
         Ok(Ports {
             barrier,
@@ -295,19 +307,32 @@ impl Ports {
 
 /// The broadcast payload, element by element.
 #[derive(Clone, Serialize, Deserialize)]
-struct Blob(Vec<u8>);
+struct SeqBlob(Vec<u8>);
 
 /// The broadcast payload as one byte string.
 #[derive(Clone, Serialize, Deserialize)]
 struct BytesBlob(ByteBuf);
 
 trait Make: Serialize + serde::de::DeserializeOwned + Clone + 'static {
+    /// Received in place (see `Behaviour::ZERO_COPY`).
+    const ZERO_COPY: bool = false;
     fn make(data: Vec<u8>) -> Self;
 }
 
-impl Make for Blob {
+/// The broadcast payload as a Blob, received in place.
+#[derive(Clone, Serialize, Deserialize)]
+struct BlobMsg(Blob);
+
+impl Make for BlobMsg {
+    const ZERO_COPY: bool = true;
     fn make(data: Vec<u8>) -> Self {
-        Blob(data)
+        BlobMsg(Blob::from(data))
+    }
+}
+
+impl Make for SeqBlob {
+    fn make(data: Vec<u8>) -> Self {
+        SeqBlob(data)
     }
 }
 
@@ -325,6 +350,7 @@ struct Flood<M> {
 
 impl<M: Make> Behaviour for Flood<M> {
     type Msg = M;
+    const ZERO_COPY: bool = M::ZERO_COPY;
     fn step_refs(&mut self, _s: &Sense, _inbox: &[&Received<M>], out: &mut Outbox<M>) -> Command {
         out.broadcast(M::make(self.data.clone()));
         Command::default()
@@ -351,8 +377,9 @@ fn data_len<M: Make>(size: usize) -> usize {
 pub fn child(a: &ChildArgs) -> i32 {
     let r = match a.mode.as_str() {
         "bytes" => child_run::<BytesBlob>(a),
+        "blob" => child_run::<BlobMsg>(a),
         "raw" => child_raw(a),
-        _ => child_run::<Blob>(a),
+        _ => child_run::<SeqBlob>(a),
     };
     match r {
         Ok(()) => 0,
@@ -390,6 +417,7 @@ fn child_run<M: Make>(a: &ChildArgs) -> Result<(), String> {
         sense.n_neighbours = slot as u32 + 1;
     }
     let warm = warm_for(a.rounds);
+    let held = transport::radio_held_per_link(&sc);
     let (mut delivered, mut lost, mut malformed) = (0u64, 0u64, 0u64);
     let mut done = 0;
     barrier.mark_ready(me);
@@ -397,10 +425,10 @@ fn child_run<M: Make>(a: &ChildArgs) -> Result<(), String> {
         sense.tick = k;
         rt.begin(&sense);
         if k > 0 {
-            for (&s, (_, sub)) in links.iter() {
+            for (&s, (_, sub, live)) in links.iter() {
                 for _ in 0..barrier.sent_count(s, k - 1) {
                     match sub.receive() {
-                        Ok(Some(m)) => rt.ingest(m.user_header(), m.payload()),
+                        Ok(Some(m)) => transport::take_radio(&mut rt, m, live, held),
                         _ => break,
                     }
                 }
@@ -439,7 +467,7 @@ fn child_raw(a: &ChildArgs) -> Result<(), String> {
     while let Some(k) = next_tick(barrier, done) {
         let mut got = 0u64;
         if k > 0 {
-            for (&s, (_, sub)) in links.iter() {
+            for (&s, (_, sub, _)) in links.iter() {
                 for _ in 0..barrier.sent_count(s, k - 1) {
                     match sub.receive() {
                         Ok(Some(m)) => {
