@@ -82,6 +82,13 @@ pub struct RadioParams {
     pub lingering_links: u32,
     pub max_message_bytes: u32,
     pub max_messages_per_tick: u32,
+    /// Samples per radio link that zero-copy receive may hold (`Behaviour::ZERO_COPY`).
+    #[serde(default = "default_zero_copy_held")]
+    pub zero_copy_held: u32,
+}
+
+fn default_zero_copy_held() -> u32 {
+    1
 }
 
 #[derive(Serialize, Deserialize, Clone, Copy, Debug, PartialEq, Eq)]
@@ -387,6 +394,12 @@ impl Scenario {
             self.radio.lingering_links as u64,
             0,
             crate::frames::MAX_NEIGHBOURS as u64,
+        )?;
+        range_u(
+            "radio.zero_copy_held",
+            self.radio.zero_copy_held as u64,
+            0,
+            64,
         )?;
         range_u(
             "radio.max_message_bytes",

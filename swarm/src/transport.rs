@@ -120,11 +120,11 @@ pub fn radio_buffer(sc: &Scenario) -> usize {
     2 * sc.radio.max_messages_per_tick as usize
 }
 
-/// Samples of one link that zero-copy receive may hold while Blob views refer into them: one
-/// tick's messages. Past it (a behaviour keeping views, a radio delay) messages are decoded as
-/// copies, with the same content.
+/// Samples of one link that zero-copy receive may hold while Blob views refer into them
+/// (`radio.zero_copy_held`). Past it (more messages a tick, a behaviour keeping views, a radio
+/// delay) messages are decoded as copies, with the same content.
 pub fn radio_held_per_link(sc: &Scenario) -> usize {
-    sc.radio.max_messages_per_tick as usize
+    sc.radio.zero_copy_held as usize
 }
 
 /// Samples a radio subscriber may borrow at once: those held, and the one being taken off.
