@@ -130,9 +130,13 @@ impl BehaviourVisitor for InProcess<'_> {
             })
             .collect();
         let threads = chunks.len();
+        // Zero-copy receive if the behaviours ask for it (all robots run the same one).
+        let zero_copy = chunks
+            .iter()
+            .any(|c| c.lock().expect("fresh").rts.iter().any(|r| r.zero_copy()));
         // Last tick's messages, decoded once for all their receivers.
         let mailbox: RwLock<Mailbox<B::Msg>> =
-            RwLock::new(Mailbox::new(n, sc.radio.delay_ticks as u64).zero_copy(B::ZERO_COPY));
+            RwLock::new(Mailbox::new(n, sc.radio.delay_ticks as u64).zero_copy(zero_copy));
         let mut cur = Air::default();
         let mut actions: Vec<Option<Action>> = vec![None; n];
         let mut tick_ns = Vec::with_capacity(sc.run.max_ticks.min(10_000_000) as usize);

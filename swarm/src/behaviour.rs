@@ -27,7 +27,10 @@ pub trait Behaviour {
     /// [`crate::Blob`] fields are views into the iceoryx2 sample (multi-process) or the tick's
     /// radio bytes (in-process) instead of copies. Costs one reference-counted owner per
     /// delivered message; worth it for large byte payloads. Results are the same either way.
-    const ZERO_COPY: bool = false;
+    /// Asked once, when the runtime is built.
+    fn zero_copy(&self) -> bool {
+        false
+    }
     /// One tick: read the Sense frame and the inbox (messages sent at k - 1 - delay that the
     /// radio delivered, ordered by sender and sequence), queue messages, return a command.
     /// The inbox refers to the messages: in-process, all receivers of a message share one
@@ -107,6 +110,10 @@ impl<M> Outbox<M> {
     pub fn new_for_tests(limit: usize) -> Self {
         Self::new(limit)
     }
+    /// The messages queued so far: (destination, message), `frames::BROADCAST` for all.
+    pub fn queued(&self) -> &[(u32, M)] {
+        &self.msgs
+    }
     /// Queues a message for every robot in range. Returns false if the per-tick limit is hit.
     pub fn broadcast(&mut self, msg: M) -> bool {
         self.push(BROADCAST, msg)
@@ -185,6 +192,8 @@ pub struct AgentRuntime<B: Behaviour> {
     /// The behaviour's outbox (kept to reuse its allocation).
     out: Vec<(u32, B::Msg)>,
     pub stats: RuntimeStats,
+    /// The behaviour's `zero_copy()`.
+    zero_copy: bool,
 }
 
 fn bincode_config() -> bincode::config::Configuration {
@@ -234,7 +243,6 @@ impl<B: Behaviour> AgentRuntime<B> {
     pub fn new(sc: &Scenario, robot: u32, behaviour: B) -> Self {
         AgentRuntime {
             robot,
-            behaviour,
             seed: sc.run.seed,
             radio: sc.radio.clone(),
             links: LinkSet::new(
@@ -248,7 +256,14 @@ impl<B: Behaviour> AgentRuntime<B> {
             due: Vec::new(),
             out: Vec::new(),
             stats: RuntimeStats::default(),
+            zero_copy: behaviour.zero_copy(),
+            behaviour,
         }
+    }
+
+    /// Whether delivered messages are received in place ([`Behaviour::zero_copy`]).
+    pub fn zero_copy(&self) -> bool {
+        self.zero_copy
     }
 
     pub fn behaviour(&self) -> &B {

@@ -3,7 +3,7 @@
 //!
 //! A message field of type `Blob` is encoded like `serde_bytes` (one length, then the bytes).
 //! When the runtime decodes a delivered message of a behaviour with
-//! [`crate::Behaviour::ZERO_COPY`], it tells the decoder where the message's bytes live
+//! [`crate::Behaviour::zero_copy`], it tells the decoder where the message's bytes live
 //! ([`with_source`]): in the multi-process executor the iceoryx2 sample in shared memory, in
 //! the in-process executor the tick's radio bytes. A `Blob` decoded from inside those bytes is a
 //! view into them that keeps them alive (the sample is returned to its publisher when the last
@@ -30,7 +30,8 @@ impl AsBytes for Vec<u8> {
 /// A byte payload: owned, or a view into received bytes (see the module text).
 #[derive(Clone)]
 pub struct Blob {
-    owner: Arc<dyn AsBytes>,
+    /// None for an empty blob (no allocation).
+    owner: Option<Arc<dyn AsBytes>>,
     at: usize,
     len: usize,
     view: bool,
@@ -47,11 +48,18 @@ impl Blob {
     }
 }
 
+impl Default for Blob {
+    /// An empty blob.
+    fn default() -> Blob {
+        Blob::from(Vec::new())
+    }
+}
+
 impl From<Vec<u8>> for Blob {
     fn from(v: Vec<u8>) -> Blob {
         let len = v.len();
         Blob {
-            owner: Arc::new(v),
+            owner: (len > 0).then(|| Arc::new(v) as Arc<dyn AsBytes>),
             at: 0,
             len,
             view: false,
@@ -62,7 +70,10 @@ impl From<Vec<u8>> for Blob {
 impl Deref for Blob {
     type Target = [u8];
     fn deref(&self) -> &[u8] {
-        &self.owner.as_bytes()[self.at..self.at + self.len]
+        match &self.owner {
+            Some(o) => &o.as_bytes()[self.at..self.at + self.len],
+            None => &[],
+        }
     }
 }
 
@@ -140,12 +151,15 @@ thread_local! {
 
 /// A view of `v` if it lies inside the current source's bytes.
 fn view(v: &[u8]) -> Option<Blob> {
+    if v.is_empty() {
+        return None;
+    }
     SOURCE.with(|s| {
         let s = s.borrow();
         let s = s.as_ref()?;
         let p = v.as_ptr() as usize;
         (p >= s.lo && p + v.len() <= s.hi).then(|| Blob {
-            owner: s.owner.clone(),
+            owner: Some(s.owner.clone()),
             at: p - s.lo,
             len: v.len(),
             view: true,

@@ -79,7 +79,7 @@ pub struct Mailbox<M> {
     order: Vec<u32>,
     next: Vec<u32>,
     /// Decode each tick's messages in a shared copy of its bytes, so that their Blob fields are
-    /// views into it (the behaviour's `ZERO_COPY`).
+    /// views into it (the behaviour's `zero_copy()`).
     zero_copy: bool,
 }
 
@@ -100,7 +100,7 @@ impl<M: DeserializeOwned> Mailbox<M> {
         }
     }
 
-    /// Zero-copy receive (see [`crate::Behaviour::ZERO_COPY`]): each tick's bytes are copied
+    /// Zero-copy receive (see [`crate::Behaviour::zero_copy`]): each tick's bytes are copied
     /// once into a shared buffer, and every receiver's Blob fields are views into it.
     pub fn zero_copy(mut self, on: bool) -> Mailbox<M> {
         self.zero_copy = on;

@@ -82,13 +82,13 @@ pub struct RadioParams {
     pub lingering_links: u32,
     pub max_message_bytes: u32,
     pub max_messages_per_tick: u32,
-    /// Samples per radio link that zero-copy receive may hold (`Behaviour::ZERO_COPY`).
+    /// Samples per radio link that zero-copy receive may hold (`Behaviour::zero_copy`).
     #[serde(default = "default_zero_copy_held")]
     pub zero_copy_held: u32,
 }
 
 fn default_zero_copy_held() -> u32 {
-    1
+    0
 }
 
 #[derive(Serialize, Deserialize, Clone, Copy, Debug, PartialEq, Eq)]
@@ -187,7 +187,13 @@ pub struct RoamParams {
     pub l1: f64,
     pub obstacle_range: f64,
     pub obstacle_weight: f64,
+    /// Bytes of bulk payload in each beacon (a `Blob`, received zero-copy); 0 = none.
+    #[serde(default)]
+    pub payload_bytes: u32,
 }
+
+/// Bytes a roam beacon adds to its payload: the position and the payload's length.
+pub const ROAM_BEACON_OVERHEAD: u32 = 16 + 5;
 
 /// Behaviours an agent can run.
 /// `faulty` roams but sends invalid commands on a schedule (fault-injection tests); `search` is
@@ -444,6 +450,18 @@ impl Scenario {
             1e7,
             false,
         )?;
+        range_u(
+            "roam.payload_bytes",
+            self.roam.payload_bytes as u64,
+            0,
+            self.radio
+                .max_message_bytes
+                .saturating_sub(ROAM_BEACON_OVERHEAD) as u64,
+        )
+        .map_err(|mut c| {
+            c.message += " (radio.max_message_bytes less the beacon's own bytes)";
+            c
+        })?;
         self.validate_faults(&e)
     }
 

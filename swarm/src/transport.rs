@@ -323,7 +323,7 @@ impl Drop for HeldSample {
 }
 
 /// Hands a radio sample taken off a link to the runtime: in place (zero-copy) if the behaviour
-/// asks for it and the link holds fewer than `radio_held_per_link` samples (`live`), else
+/// asks for it (`Behaviour::zero_copy`) and the link holds fewer than `radio_held_per_link` samples (`live`), else
 /// decoded at once and released.
 pub fn take_radio<B: Behaviour>(
     rt: &mut AgentRuntime<B>,
@@ -331,7 +331,7 @@ pub fn take_radio<B: Behaviour>(
     live: &Arc<AtomicUsize>,
     held_limit: usize,
 ) {
-    if B::ZERO_COPY && live.load(Ordering::Acquire) < held_limit {
+    if rt.zero_copy() && live.load(Ordering::Acquire) < held_limit {
         let h = *sample.user_header();
         rt.ingest_held(&h, HeldSample::new(sample, live));
     } else {

@@ -29,7 +29,9 @@ fn pixels(frame: u32) -> Vec<u8> {
 
 impl Behaviour for Camera {
     type Msg = Image;
-    const ZERO_COPY: bool = true;
+    fn zero_copy(&self) -> bool {
+        true
+    }
     fn step_refs(
         &mut self,
         _s: &Sense,
@@ -77,6 +79,7 @@ fn blob_fields_are_views_into_the_received_sample() {
     sc.radio.max_message_bytes = 16 * 1024;
     sc.radio.max_messages_per_tick = 1;
     sc.radio.loss = 0.0;
+    sc.radio.zero_copy_held = 1;
     {
         let config = transport::run_config(&prefix).unwrap();
         let node = transport::node(&config, "zc").unwrap();

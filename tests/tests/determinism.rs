@@ -259,3 +259,59 @@ fn robots_leaving_and_reentering_radio_reach_give_the_same_run_in_both_executors
     assert!(m["delivered"].as_u64().unwrap() > 5000, "{m}");
     assert_left_nothing(&a);
 }
+
+#[test]
+fn beacons_with_a_bulk_payload_received_in_place_give_the_same_run() {
+    let _g = serial();
+    // Roam beacons carrying 3,000 bytes each (a Blob: received zero-copy, as views into the
+    // iceoryx2 samples or the in-process tick's bytes). The payload does not steer the robots:
+    // the run must be the one without it, in both executors.
+    let dir = tmp_dir("det-blob-sc");
+    std::fs::create_dir_all(&dir).unwrap();
+    let roam_sc = std::fs::read_to_string(roam()).unwrap();
+    let with = dir.join("blob.toml");
+    std::fs::write(
+        &with,
+        roam_sc.replace(
+            "max_message_bytes = 256",
+            "max_message_bytes = 4096\nzero_copy_held = 1",
+        ) + "\n[roam]\npayload_bytes = 3000\n",
+    )
+    .unwrap();
+    let args = |sc: &str| {
+        [
+            "--scenario",
+            sc,
+            "--robots",
+            "16",
+            "--max-ticks",
+            "300",
+            "--loss",
+            "0.2",
+        ]
+        .map(String::from)
+    };
+    let a = args(with.to_str().unwrap());
+    let a: Vec<&str> = a.iter().map(|s| s.as_str()).collect();
+    let p = same_run_in_both_executors("det-blob", &a);
+    let plain = tmp_dir("det-blob-plain");
+    let b = args(roam());
+    let b: Vec<&str> = b.iter().map(|s| s.as_str()).collect();
+    let o = up(&b, &plain);
+    assert!(o.status.success(), "{}", stderr(&o));
+    // The header holds the resolved scenario (it differs); every tick record must not.
+    let ticks = |dir: &std::path::Path| {
+        let f = std::fs::File::open(dir.join("recording.bin")).unwrap();
+        swarm::recording::read_recording(std::io::BufReader::new(f))
+            .unwrap()
+            .1
+    };
+    let (tp, tq) = (ticks(&p), ticks(&plain));
+    assert_eq!(tp.len(), 300);
+    assert!(tp == tq, "the payload changed the run");
+    let m = &summary(&p)["messages"];
+    assert!(m["delivered"].as_u64().unwrap() > 5000, "{m}");
+    assert_eq!(m["malformed"].as_u64().unwrap(), 0, "{m}");
+    assert_left_nothing(&p);
+    assert_left_nothing(&plain);
+}

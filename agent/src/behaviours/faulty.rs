@@ -28,6 +28,7 @@ pub fn fault_at(tick: u64) -> Option<u64> {
 
 impl Behaviour for Faulty {
     type Msg = Beacon;
+
     fn step_refs(
         &mut self,
         s: &Sense,

@@ -38,7 +38,11 @@ pub fn resolve_defaults(sc: &mut Scenario) -> Result<(), String> {
 /// Calls `v` with the constructor of the scenario's behaviour (validated beforehand).
 pub fn dispatch<V: BehaviourVisitor>(sc: &Scenario, v: V) -> V::Out {
     match sc.run.behaviour.as_str() {
-        "roam" => v.visit(&|i| roam::Roam::new(sc, i)),
+        // Beacons with a bulk payload are their own type (received in place).
+        "roam" if sc.roam.payload_bytes > 0 => {
+            v.visit(&|i| roam::Roam::<roam::BulkBeacon>::new(sc, i))
+        }
+        "roam" => v.visit(&|i| roam::Roam::<roam::Beacon>::new(sc, i)),
         "faulty" => v.visit(&|i| faulty::Faulty::new(sc, i)),
         "search" => v.visit(&|i| search::Search::new(sc, i)),
         other => panic!("unknown behaviour {other:?} (the scenario was not validated)"),

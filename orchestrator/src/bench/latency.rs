@@ -9,7 +9,7 @@
 //!   Vec<u8> }` (serde encodes a `Vec<u8>` element by element);
 //! - `runtime radio, bytes`: the same, with the data field serialised as one byte string;
 //! - `runtime radio, blob`: the same wire bytes, the data field a `swarm::Blob` and the
-//!   behaviour `ZERO_COPY`: the receiver decodes in place and holds a view into the sample;
+//!   behaviour's `zero_copy()`: the receiver decodes in place and holds a view into the sample;
 //! - `runtime Sense`: a whole Sense frame, `loan_uninit`, written in place, sent, read in place;
 //! - `raw iceoryx2`: `[u8]` publish-subscribe, loan, copy the payload in, send, receive;
 //! - `UDS + bincode`: the bytes variant of the radio's message encoded into a buffer, written
@@ -355,7 +355,7 @@ fn cell(path: Path, size: usize, mode: Mode, rounds: u64) -> Result<Vec<u64>, St
 
 /// A radio message of the latency bench: the sender's time stamp and the payload.
 trait Payload: Serialize + DeserializeOwned + Clone + 'static {
-    /// Received in place (see `Behaviour::ZERO_COPY`).
+    /// Received in place (see `Behaviour::zero_copy`).
     const ZERO_COPY: bool = false;
     fn make(stamp: u64, data: Vec<u8>) -> Self;
     fn stamp(&self) -> u64;
@@ -452,6 +452,8 @@ fn latency_scenario(size: usize) -> Scenario {
     sc.radio.max_messages_per_tick = 1;
     sc.radio.loss = 0.0;
     sc.radio.delay_ticks = 0;
+    // The blob path's receiver holds the sample it reads in place.
+    sc.radio.zero_copy_held = 1;
     sc
 }
 
@@ -468,7 +470,9 @@ struct LatBehaviour<M> {
 
 impl<M: Payload> Behaviour for LatBehaviour<M> {
     type Msg = M;
-    const ZERO_COPY: bool = M::ZERO_COPY;
+    fn zero_copy(&self) -> bool {
+        M::ZERO_COPY
+    }
     fn step_refs(&mut self, _s: &Sense, inbox: &[&Received<M>], out: &mut Outbox<M>) -> Command {
         if self.echo {
             if let Some(r) = inbox.last() {

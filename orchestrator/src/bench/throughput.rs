@@ -71,6 +71,8 @@ fn scenario(robots: u32, size: usize) -> Scenario {
     sc.radio.max_messages_per_tick = 1;
     sc.radio.loss = 0.0;
     sc.radio.delay_ticks = 0;
+    // The blob rows' receivers hold the samples they read in place.
+    sc.radio.zero_copy_held = 1;
     sc
 }
 
@@ -314,7 +316,7 @@ struct SeqBlob(Vec<u8>);
 struct BytesBlob(ByteBuf);
 
 trait Make: Serialize + serde::de::DeserializeOwned + Clone + 'static {
-    /// Received in place (see `Behaviour::ZERO_COPY`).
+    /// Received in place (see `Behaviour::zero_copy`).
     const ZERO_COPY: bool = false;
     fn make(data: Vec<u8>) -> Self;
 }
@@ -350,7 +352,9 @@ struct Flood<M> {
 
 impl<M: Make> Behaviour for Flood<M> {
     type Msg = M;
-    const ZERO_COPY: bool = M::ZERO_COPY;
+    fn zero_copy(&self) -> bool {
+        M::ZERO_COPY
+    }
     fn step_refs(&mut self, _s: &Sense, _inbox: &[&Received<M>], out: &mut Outbox<M>) -> Command {
         out.broadcast(M::make(self.data.clone()));
         Command::default()
