@@ -115,10 +115,86 @@ where
     g.finish();
 }
 
+/// Receives in place (`zero_copy()`); only receives.
+struct InPlace;
+
+impl Behaviour for InPlace {
+    type Msg = swarm::Blob;
+    fn zero_copy(&self) -> bool {
+        true
+    }
+    fn step_refs(
+        &mut self,
+        _s: &Sense,
+        _i: &[&Received<swarm::Blob>],
+        _out: &mut Outbox<swarm::Blob>,
+    ) -> Command {
+        Command::default()
+    }
+}
+
+/// Bytes shared without copying, standing in for a held iceoryx2 sample.
+struct Shared(std::sync::Arc<Vec<u8>>);
+
+impl swarm::blob::AsBytes for Shared {
+    fn as_bytes(&self) -> &[u8] {
+        &self.0
+    }
+}
+
+/// Zero-copy receive of a `swarm::Blob` message: `ingest_held` decodes in place (the Blob is a
+/// view), then the delivering step; against `ingest-decode` of the same wire bytes.
+fn bench_in_place(c: &mut Criterion, name: &str, data: usize) {
+    let mut sc = Scenario::roam();
+    sc.radio.max_message_bytes = 65_536;
+    let wire = bincode::serde::encode_to_vec(
+        swarm::Blob::from(vec![7u8; data]),
+        bincode::config::standard(),
+    )
+    .expect("encodable");
+    let mut g = c.benchmark_group("radio");
+    g.throughput(Throughput::Bytes(wire.len() as u64));
+    let mut rx = AgentRuntime::new(&sc, 0, InPlace);
+    let s0 = sense(0, 1, 0, 0.0);
+    rx.begin(&s0);
+    rx.update_links(&s0);
+    let mut sink = Buf {
+        header: RadioHeader::default(),
+        bytes: Vec::new(),
+    };
+    let mut h = RadioHeader {
+        sender: 1,
+        len: wire.len() as u32,
+        sender_pos: [10.0, 0.0],
+        ..Default::default()
+    };
+    let wire = std::sync::Arc::new(wire);
+    let mut k = 1u64;
+    let mut s = sense(0, 1, 1, 0.0);
+    g.bench_function(BenchmarkId::new("ingest-in-place", name), |b| {
+        b.iter(|| {
+            h.tick = k;
+            h.seq = k as u32;
+            s.tick = k;
+            rx.begin(&s);
+            rx.ingest_held(black_box(&h), Shared(wire.clone()));
+            k += 1;
+            s.tick = k;
+            rx.begin(&s);
+            rx.step(&s, &mut sink)
+        })
+    });
+    g.finish();
+}
+
 fn bench_radio_all(c: &mut Criterion) {
     bench_radio(c, "beacon-16B", Beacon { pos: [1.5, -2.0] }, 16);
     bench_radio(c, "blob-64B", Blob(vec![7; 62]), 64);
     bench_radio(c, "blob-4KiB", Blob(vec![7; 4093]), 4096);
+    bench_radio(c, "bytes-4KiB", swarm::Blob::from(vec![7; 4093]), 4096);
+    bench_in_place(c, "bytes-4KiB", 4093);
+    bench_radio(c, "bytes-64KiB", swarm::Blob::from(vec![7; 65_530]), 65_536);
+    bench_in_place(c, "bytes-64KiB", 65_530);
 }
 
 fn bench_sense(c: &mut Criterion) {
