@@ -66,6 +66,19 @@ fn sense(robot: u32, other: u32, tick: u64, x: f64) -> Box<Sense> {
     s
 }
 
+/// Robot 0 running `b`, linked to robot 1 at tick 0, and a buffer for what it sends.
+fn linked_receiver<B: Behaviour>(sc: &Scenario, b: B) -> (AgentRuntime<B>, Buf) {
+    let mut rx = AgentRuntime::new(sc, 0, b);
+    let s0 = sense(0, 1, 0, 0.0);
+    rx.begin(&s0);
+    rx.update_links(&s0);
+    let sink = Buf {
+        header: RadioHeader::default(),
+        bytes: Vec::new(),
+    };
+    (rx, sink)
+}
+
 fn bench_radio<M>(c: &mut Criterion, name: &str, msg: M, bytes: u64)
 where
     M: Serialize + for<'de> Deserialize<'de> + Clone + 'static,
@@ -88,14 +101,7 @@ where
     // Decode: ingest of the encoded message by a linked receiver, then its next step (which
     // moves it to the inbox), so pending messages do not pile up.
     drop(msg);
-    let mut rx = AgentRuntime::new(&sc, 0, Quiet::<M>(std::marker::PhantomData));
-    let s0 = sense(0, 1, 0, 0.0);
-    rx.begin(&s0);
-    rx.update_links(&s0);
-    let mut sink = Buf {
-        header: RadioHeader::default(),
-        bytes: Vec::new(),
-    };
+    let (mut rx, mut sink) = linked_receiver(&sc, Quiet::<M>(std::marker::PhantomData));
     let mut h = buf.header;
     let payload = buf.bytes.clone();
     let mut k = 1u64;
@@ -154,14 +160,7 @@ fn bench_in_place(c: &mut Criterion, name: &str, data: usize) {
     .expect("encodable");
     let mut g = c.benchmark_group("radio");
     g.throughput(Throughput::Bytes(wire.len() as u64));
-    let mut rx = AgentRuntime::new(&sc, 0, InPlace);
-    let s0 = sense(0, 1, 0, 0.0);
-    rx.begin(&s0);
-    rx.update_links(&s0);
-    let mut sink = Buf {
-        header: RadioHeader::default(),
-        bytes: Vec::new(),
-    };
+    let (mut rx, mut sink) = linked_receiver(&sc, InPlace);
     let mut h = RadioHeader {
         sender: 1,
         len: wire.len() as u32,
