@@ -281,8 +281,8 @@ fn beacons_with_a_bulk_payload_received_in_place_give_the_same_run() {
     // With a radio delay, messages wait on their links past the per-link hold limit: later
     // ones arrive as copies, with the same run.
     for delay in ["0", "2"] {
-        let args = |sc: &str| {
-            [
+        let args = |sc| {
+            vec![
                 "--scenario",
                 sc,
                 "--robots",
@@ -294,14 +294,11 @@ fn beacons_with_a_bulk_payload_received_in_place_give_the_same_run() {
                 "--delay",
                 delay,
             ]
-            .map(String::from)
         };
-        let a = args(with.to_str().unwrap());
-        let a: Vec<&str> = a.iter().map(|s| s.as_str()).collect();
-        let p = same_run_in_both_executors(&format!("det-blob-{delay}"), &a);
+        let p =
+            same_run_in_both_executors(&format!("det-blob-{delay}"), &args(with.to_str().unwrap()));
         let plain = tmp_dir(&format!("det-blob-plain-{delay}"));
         let b = args(roam());
-        let b: Vec<&str> = b.iter().map(|s| s.as_str()).collect();
         let o = up(&b, &plain);
         assert!(o.status.success(), "{}", stderr(&o));
         // The header holds the resolved scenario (it differs); every tick record must not.
