@@ -8,7 +8,7 @@ use iceoryx2::prelude::*;
 
 /// Most robots listed in a Sense frame's neighbour list (the agent's radio links).
 pub const MAX_NEIGHBOURS: usize = 128;
-/// Most obstacle / wall boundary points in a Sense frame (nearest first).
+/// Most obstacle / wall boundary points in a Sense frame (the nearest when more are in range).
 pub const MAX_OBSTACLE_POINTS: usize = 768;
 /// Most target signals in a Sense frame.
 pub const MAX_SIGNALS: usize = 16;
@@ -54,7 +54,9 @@ pub struct Sense {
     /// most radio.max_links; when more are in reach, those of the last list first, then the
     /// nearest others).
     pub neighbours: [u32; MAX_NEIGHBOURS],
-    /// Obstacle, wall and dead-robot points within the sensing radius, nearest first.
+    /// Obstacle, wall and dead-robot points within the sensing radius, as a set: in no
+    /// particular order, but the same order for the same positions (the nearest
+    /// MAX_OBSTACLE_POINTS when more are in range).
     pub obstacle_points: [[f64; 2]; MAX_OBSTACLE_POINTS],
     pub signals: [Signal; MAX_SIGNALS],
 }

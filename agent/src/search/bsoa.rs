@@ -252,6 +252,17 @@ fn choose_j1(scan: &Scan, heading: f64, prev: Sense) -> usize {
     })
 }
 
+/// Moves the points at `i1` and `i2` (the nearest and second nearest; `i2` may be
+/// `usize::MAX` when there is one point) to places 0 and 1; the rest keep no order.
+fn to_front(pts: &mut [Vec2], i1: usize, i2: usize) {
+    pts.swap(0, i1);
+    if i2 < pts.len() {
+        // If Q2 was at place 0 it has just moved to i1.
+        let i2 = if i2 == 0 { i1 } else { i2 };
+        pts.swap(1, i2);
+    }
+}
+
 /// One BSOA step (Table 2).
 pub fn avoid(x: &Vec2, v_if: &Vec2, obstacle_points: &[Vec2], prev: Sense, p: &Params) -> Output {
     let free = Output {
@@ -260,25 +271,33 @@ pub fn avoid(x: &Vec2, v_if: &Vec2, obstacle_points: &[Vec2], prev: Sense, p: &P
         case: Case::Free,
     };
     let range = p.l_b.min(p.l_t);
-    // Obstacles within L_B and L_T (paper §3.4); nearest first, ties by input order.
-    let mut near: Vec<(f64, Vec2)> = Vec::with_capacity(obstacle_points.len());
-    near.extend(
-        obstacle_points
-            .iter()
-            .map(|b| ((b - x).norm(), *b))
-            .filter(|(d, _)| *d < range && *d > 1e-9),
-    );
-    if near.is_empty() || v_if.norm() <= 1e-12 {
+    // Obstacles within L_B and L_T (paper §3.4), as a set but for the two nearest: everything
+    // below uses the points in an order-free way (any / min / the angular scan's own sort)
+    // except Q1 and Q2, which go to the front (ties by input order).
+    let mut pts: Vec<Vec2> = Vec::with_capacity(obstacle_points.len());
+    let mut nearest = [(f64::INFINITY, usize::MAX); 2];
+    for b in obstacle_points {
+        let d = (b - x).norm();
+        if d < range && d > 1e-9 {
+            let k = pts.len();
+            if d < nearest[0].0 {
+                nearest = [(d, k), nearest[0]];
+            } else if d < nearest[1].0 {
+                nearest[1] = (d, k);
+            }
+            pts.push(*b);
+        }
+    }
+    if pts.is_empty() || v_if.norm() <= 1e-12 {
         return free; // Fig. 3(a) case 1 (or no desired motion)
     }
-    near.sort_by(|a, b| a.0.total_cmp(&b.0));
-    let pts: Vec<Vec2> = near.iter().map(|(_, b)| *b).collect();
+    to_front(&mut pts, nearest[0].1, nearest[1].1);
     if !obstacle_ahead(x, v_if, &pts, p.heading_tolerance, p.corridor_half_width) {
         return free; // Fig. 3(a) case 2; Table 2 line 16
     }
     let heading = angle_of(v_if);
     let scan = boundary::scan(x, &pts, range, &p.boundary);
-    let q1_dist = near[0].0;
+    let q1_dist = nearest[0].0;
 
     let forced = |case: Case| {
         let (a, sense) = forced_heading(x, v_if, &pts, prev, p); // eqs. (16)-(17)
@@ -555,5 +574,34 @@ mod tests {
         );
         assert_eq!(tr.crossed, None);
         assert!(tr.reached.unwrap() < 35);
+    }
+
+    #[test]
+    fn the_order_of_the_obstacle_points_does_not_matter() {
+        // The Sense frame gives the points as a set: any order must give the same step (but for
+        // exact ties of the two nearest, which the generic positions below avoid).
+        let p = Params::default();
+        let mut pts = sample_polygon_boundary(&u_shape(40.0, -30.0, 60.0, 60.0, 4.0), 2.0);
+        pts.extend(sample_polygon_boundary(
+            &rect(-50.0, 30.0, -20.0, 34.0),
+            2.0,
+        ));
+        let mut reordered = pts.clone();
+        reordered.reverse();
+        reordered.rotate_left(17);
+        let mut cases = std::collections::BTreeSet::new();
+        for i in 0..400 {
+            let a = i as f64 * 0.37 + 0.0123;
+            let x = v2(30.0 * (a * 0.7).cos(), 25.0 * (a * 1.3).sin());
+            let v_if = v2(a.cos(), a.sin()) * 10.0;
+            for prev in [Sense::None, Sense::Clockwise, Sense::CounterClockwise] {
+                let o = avoid(&x, &v_if, &pts, prev, &p);
+                let r = avoid(&x, &v_if, &reordered, prev, &p);
+                assert_eq!(format!("{o:?}"), format!("{r:?}"), "x {x:?} v_if {v_if:?}");
+                cases.insert(format!("{:?}", o.case));
+            }
+        }
+        // Every case of Table 2 was among them.
+        assert!(cases.len() >= 4, "{cases:?}");
     }
 }
