@@ -137,10 +137,34 @@ fn gap_threshold(d: f64, p: &Params) -> f64 {
     (p.gap_factor * sub).max(p.min_gap_angle)
 }
 
+/// Most angular bins a scan uses; a finer bin width (a tiny `min_gap_angle` and
+/// `gap_factor`) falls back to sorting the points.
+const MAX_BINS: usize = 4096;
+
 /// Scans the obstacle points around `x` (paper §3.4; spec §5 item 20).
 /// Only points with 0 < ‖B_s − X_i‖ < `range` count; BSOA passes
 /// min(L_B, L_T) (Table 2, line 1).
+///
+/// The points are taken in angular order (ties: nearer first). A gap is free only if it is
+/// wider than `gap_threshold` at the range, so the points are dropped into angular bins
+/// half that wide: no gap inside a bin can be free, and only each bin's first and last
+/// point (in that order) matter, which is the same scan as sorting them all, in linear
+/// time (test `binned_scan_is_the_sorted_scan`).
 pub fn scan(x: &Vec2, obstacle_points: &[Vec2], range: f64, p: &Params) -> Scan {
+    let width = gap_threshold(range, p) * 0.5;
+    let bins = TAU / width;
+    let binned = bins.is_finite() && bins >= 1.0 && bins <= MAX_BINS as f64;
+    scan_with(x, obstacle_points, range, p, binned.then_some(width))
+}
+
+/// [`scan`] by angular bins of `width` (Some) or by sorting every point (None).
+fn scan_with(
+    x: &Vec2,
+    obstacle_points: &[Vec2],
+    range: f64,
+    p: &Params,
+    width: Option<f64>,
+) -> Scan {
     // (angle, distance, point); points on the robot itself are ignored.
     let mut pts: Vec<(f64, f64, Vec2)> = Vec::with_capacity(obstacle_points.len());
     pts.extend(obstacle_points.iter().filter_map(|b| {
@@ -152,17 +176,54 @@ pub fn scan(x: &Vec2, obstacle_points: &[Vec2], range: f64, p: &Params) -> Scan 
     if n == 0 {
         return Scan::default();
     }
-    pts.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.total_cmp(&b.1)));
+    let order =
+        |a: &(f64, f64, Vec2), b: &(f64, f64, Vec2)| a.0.total_cmp(&b.0).then(a.1.total_cmp(&b.1));
+    // Runs of angularly consecutive points no free gap can split, in angular order:
+    // (first point, last point, number of points).
+    let runs: Vec<(usize, usize, usize)> = match width {
+        None => {
+            pts.sort_by(order);
+            (0..n).map(|i| (i, i, 1)).collect()
+        }
+        Some(w) => {
+            let nb = (TAU / w).ceil() as usize;
+            // Bin of an angle in [-π, π]: monotone in the angle, so bins follow the order.
+            let bin = |a: f64| (((a + PI) / w) as usize).min(nb - 1);
+            let mut by_bin = vec![(usize::MAX, usize::MAX, 0usize); nb];
+            for (i, q) in pts.iter().enumerate() {
+                let b = &mut by_bin[bin(q.0)];
+                if b.2 == 0 {
+                    *b = (i, i, 1);
+                } else {
+                    // First and last in the order; ties as a stable sort leaves them.
+                    if order(q, &pts[b.0]).is_lt() {
+                        b.0 = i;
+                    }
+                    if order(q, &pts[b.1]).is_ge() {
+                        b.1 = i;
+                    }
+                    b.2 += 1;
+                }
+            }
+            by_bin.into_iter().filter(|b| b.2 > 0).collect()
+        }
+    };
+    let m = runs.len();
 
-    // is_free[i]: the gap from point i to point i+1 (circularly) is free space.
-    let is_free: Vec<bool> = (0..n)
-        .map(|i| {
-            let (a, b) = (&pts[i], &pts[(i + 1) % n]);
-            let gap = if i + 1 == n {
-                b.0 - a.0 + TAU
-            } else {
-                b.0 - a.0
-            };
+    // gap_of(j): the angular gap after run j, to the next run (circularly).
+    let gap_of = |j: usize| {
+        let (a, b) = (&pts[runs[j].1], &pts[runs[(j + 1) % m].0]);
+        if j + 1 == m {
+            b.0 - a.0 + TAU
+        } else {
+            b.0 - a.0
+        }
+    };
+    // is_free[j]: the gap after run j is free space.
+    let is_free: Vec<bool> = (0..m)
+        .map(|j| {
+            let (a, b) = (&pts[runs[j].1], &pts[runs[(j + 1) % m].0]);
+            let gap = gap_of(j);
             // The threshold is never below min_gap_angle: most gaps (neighbouring samples)
             // are decided without its asin.
             (gap > p.min_gap_angle || p.min_gap_angle.is_nan())
@@ -171,19 +232,11 @@ pub fn scan(x: &Vec2, obstacle_points: &[Vec2], range: f64, p: &Params) -> Scan 
         .collect();
     // Canonical start: after the widest free gap (ties: first), so a frontal
     // view lists its arcs from right to left.
-    let gap_of = |i: usize| {
-        let g = pts[(i + 1) % n].0 - pts[i].0;
-        if i + 1 == n {
-            g + TAU
-        } else {
-            g
-        }
-    };
-    let widest = (0..n)
-        .filter(|&i| is_free[i])
-        .fold(None, |best: Option<usize>, i| match best {
-            Some(b) if gap_of(b) >= gap_of(i) => Some(b),
-            _ => Some(i),
+    let widest = (0..m)
+        .filter(|&j| is_free[j])
+        .fold(None, |best: Option<usize>, j| match best {
+            Some(b) if gap_of(b) >= gap_of(j) => Some(b),
+            _ => Some(j),
         });
     let Some(first_gap) = widest else {
         return Scan {
@@ -194,14 +247,14 @@ pub fn scan(x: &Vec2, obstacle_points: &[Vec2], range: f64, p: &Params) -> Scan 
     };
 
     let mut arcs = Vec::new();
-    let start = (first_gap + 1) % n;
-    let mut arc_start = start;
+    let start = (first_gap + 1) % m;
+    let mut arc_start = runs[start].0;
     let mut count = 0;
-    for step in 0..n {
-        let i = (start + step) % n;
-        count += 1;
-        if is_free[i] {
-            let (c, w) = (&pts[arc_start], &pts[i]);
+    for step in 0..m {
+        let j = (start + step) % m;
+        count += runs[j].2;
+        if is_free[j] {
+            let (c, w) = (&pts[arc_start], &pts[runs[j].1]);
             arcs.push(Arc {
                 cw_end: c.2,
                 ccw_end: w.2,
@@ -209,7 +262,7 @@ pub fn scan(x: &Vec2, obstacle_points: &[Vec2], range: f64, p: &Params) -> Scan 
                 ccw_angle: w.0,
                 n_points: count,
             });
-            arc_start = (i + 1) % n;
+            arc_start = runs[(j + 1) % m].0;
             count = 0;
         }
     }
@@ -343,5 +396,50 @@ mod tests {
         let mut pts = rect(-40.0, 20.0, -1.0, 22.0);
         pts.extend(rect(1.0, 20.0, 40.0, 22.0));
         assert!(scan(&v2(0.0, 0.0), &pts, 100.0, &Params::default()).is_continuous());
+    }
+
+    #[test]
+    fn binned_scan_is_the_sorted_scan() {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(9);
+        let p = Params::default();
+        let mut shapes: Vec<Vec<Vec2>> = Vec::new();
+        for _ in 0..300 {
+            // A few boxes and random clutter (with duplicates) around the robot.
+            let mut pts = Vec::new();
+            for _ in 0..rng.gen_range(1..4) {
+                let (x0, y0) = (rng.gen_range(-120.0..100.0), rng.gen_range(-120.0..100.0));
+                let (w, h) = (rng.gen_range(1.0..60.0), rng.gen_range(1.0..60.0));
+                pts.extend(rect(x0, y0, x0 + w, y0 + h));
+            }
+            for _ in 0..rng.gen_range(0..30) {
+                let q = v2(rng.gen_range(-100.0..100.0), rng.gen_range(-100.0..100.0));
+                pts.push(q);
+                if rng.gen_bool(0.2) {
+                    pts.push(q);
+                }
+            }
+            shapes.push(pts);
+        }
+        // Points exactly behind one another and on the ±π seam.
+        shapes.push(vec![
+            v2(-10.0, 0.0),
+            v2(-20.0, 0.0),
+            v2(-30.0, -0.0),
+            v2(5.0, 5.0),
+        ]);
+        shapes.push(rect(-50.0, -1.0, -40.0, 1.0));
+        let (mut kinds, mut binned_ran) = (std::collections::BTreeSet::new(), 0);
+        for pts in &shapes {
+            for x in [v2(0.0, 0.0), v2(0.3, -0.7)] {
+                let a = scan(&x, pts, 100.0, &p);
+                let b = scan_with(&x, pts, 100.0, &p, None);
+                assert_eq!(a, b, "x {x:?} points {pts:?}");
+                kinds.insert((a.arcs.len().min(3), a.surrounded));
+                binned_ran += 1;
+            }
+        }
+        // Empty, continuous, discontinuous and surrounded views were all compared.
+        assert!(kinds.len() >= 4, "{kinds:?} over {binned_ran} scans");
     }
 }
