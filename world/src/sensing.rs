@@ -210,12 +210,18 @@ pub fn fill_neighbours(
 ) {
     scratch.near.clear();
     let q = [pos[me][0], pos[me][1]];
+    // (squared distance, id): the distance itself is needed only when the list is full. A
+    // square below range^2 by far more than sqrt's rounding is in range without the sqrt;
+    // near the edge `within_radius` decides, as for every other radius test.
+    let inside = range * range * (1.0 - 1e-9);
     for (j, p) in pos.iter().enumerate() {
         if j == me || !alive[j] {
             continue;
         }
-        if let Some(d) = within_radius(q, [p[0], p[1]], range) {
-            scratch.near.push((d, j as u32));
+        let (dx, dy) = (q[0] - p[0], q[1] - p[1]);
+        let s = dx * dx + dy * dy;
+        if s < inside || within_radius(q, [p[0], p[1]], range).is_some() {
+            scratch.near.push((s, j as u32));
         }
     }
     // `near` is in robot-id order here, the order of the list. No nearest-first sort when
@@ -233,9 +239,10 @@ pub fn fill_neighbours(
                 *b = true;
             }
         }
+        // By distance as `within_radius` gives it (the sqrt of the same square).
         scratch
             .near
-            .sort_unstable_by_key(|&(d, j)| (!before[j as usize], d.to_bits(), j));
+            .sort_unstable_by_key(|&(s, j)| (!before[j as usize], s.sqrt().to_bits(), j));
         for &j in prev.iter() {
             if let Some(b) = before.get_mut(j as usize) {
                 *b = false;
