@@ -263,6 +263,35 @@ fn to_front(pts: &mut [Vec2], i1: usize, i2: usize) {
     }
 }
 
+/// Cases 3 and 4 of Table 2: head for boundary point j1 (eqs. 18-19) or between j1 and its
+/// gap partner j2 (eqs. 20-21).
+fn discontinuous_or_continuous(
+    x: &Vec2,
+    scan: &Scan,
+    heading: f64,
+    prev: Sense,
+    p: &Params,
+) -> (f64, Option<Sense>, Case) {
+    let j1 = choose_j1(scan, heading, prev);
+    let b1 = scan.boundary_angle(j1); // eq. (18)
+    if scan.is_continuous() || scan.gap_width(j1) > PI {
+        // eq. (19). A free gap wider than π (only possible behind the
+        // robot) would make eq. (21) bisect through the obstacles, so it
+        // is treated like the continuous case. [chosen]
+        (b1, None, Case::Continuous)
+    } else {
+        let j2 = scan.gap_partner(j1);
+        let b2 = scan.boundary_angle(j2); // eq. (20)
+        let bp = scan.boundary_points();
+        let f = p.force();
+        let f1 = virtual_force::magnitude((bp[j1] - x).norm(), p.l_b, &f);
+        let f2 = virtual_force::magnitude((bp[j2] - x).norm(), p.l_b, &f);
+        // eq. (21), with atan2
+        let a = (f1 * b1.sin() + f2 * b2.sin()).atan2(f1 * b1.cos() + f2 * b2.cos());
+        (a, None, Case::Discontinuous)
+    }
+}
+
 /// One BSOA step (Table 2).
 pub fn avoid(x: &Vec2, v_if: &Vec2, obstacle_points: &[Vec2], prev: Sense, p: &Params) -> Output {
     let free = Output {
@@ -296,35 +325,22 @@ pub fn avoid(x: &Vec2, v_if: &Vec2, obstacle_points: &[Vec2], prev: Sense, p: &P
         return free; // Fig. 3(a) case 2; Table 2 line 16
     }
     let heading = angle_of(v_if);
-    let scan = boundary::scan(x, &pts, range, &p.boundary);
     let q1_dist = nearest[0].0;
 
     let forced = |case: Case| {
         let (a, sense) = forced_heading(x, v_if, &pts, prev, p); // eqs. (16)-(17)
         (a, Some(sense), case)
     };
-    let (a, forced_sense, case) = if scan.surrounded || scan.n_p() == 0 {
-        forced(Case::Surrounded)
-    } else if q1_dist <= p.l_2 {
+    // Case 1 (Q1 within l_2) needs no boundary scan; the scan serves cases 3-4 and tells a
+    // surrounded robot (which case 1 then serves too).
+    let (a, forced_sense, case) = if q1_dist <= p.l_2 {
         forced(Case::Forced)
     } else {
-        let j1 = choose_j1(&scan, heading, prev);
-        let b1 = scan.boundary_angle(j1); // eq. (18)
-        if scan.is_continuous() || scan.gap_width(j1) > PI {
-            // eq. (19). A free gap wider than π (only possible behind the
-            // robot) would make eq. (21) bisect through the obstacles, so it
-            // is treated like the continuous case. [chosen]
-            (b1, None, Case::Continuous)
+        let scan = boundary::scan(x, &pts, range, &p.boundary);
+        if scan.surrounded || scan.n_p() == 0 {
+            forced(Case::Surrounded)
         } else {
-            let j2 = scan.gap_partner(j1);
-            let b2 = scan.boundary_angle(j2); // eq. (20)
-            let bp = scan.boundary_points();
-            let f = p.force();
-            let f1 = virtual_force::magnitude((bp[j1] - x).norm(), p.l_b, &f);
-            let f2 = virtual_force::magnitude((bp[j2] - x).norm(), p.l_b, &f);
-            // eq. (21), with atan2
-            let a = (f1 * b1.sin() + f2 * b2.sin()).atan2(f1 * b1.cos() + f2 * b2.cos());
-            (a, None, Case::Discontinuous)
+            discontinuous_or_continuous(x, &scan, heading, prev, p)
         }
     };
     let velocity = unit_from_angle(a) * p.v_max; // eq. (15)
