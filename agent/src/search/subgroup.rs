@@ -158,6 +158,18 @@ pub fn closed_loop_adjust(members: &[Member], p: &Params) -> Adjustment {
     }
 }
 
+/// Whether `members[i]` is among those [`closed_loop_adjust`] keeps (robot ids distinct):
+/// fewer than g_max members rank before it. One pass, where the full ranking sorts them all
+/// (every candidate asks this every tick, of everyone it heard).
+pub fn is_kept(members: &[Member], i: usize, p: &Params) -> bool {
+    let me = &members[i];
+    let before = members
+        .iter()
+        .filter(|m| priority(m, me) == Ordering::Less)
+        .count();
+    before < p.g_max
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -274,5 +286,39 @@ mod tests {
             Some((8, 50.0))
         );
         assert_eq!(communicating_robot(&v2(-400.0, 0.0), &ti, &p), None);
+    }
+
+    #[test]
+    fn is_kept_agrees_with_the_ranking() {
+        use rand::Rng;
+        let mut rng = ChaCha8Rng::seed_from_u64(4);
+        let p = Params::default();
+        let (mut kept, mut dropped) = (0, 0);
+        for _ in 0..500 {
+            let n = rng.gen_range(1..20);
+            let mut ids: Vec<RobotId> = (0..40).collect();
+            let members: Vec<Member> = (0..n)
+                .map(|_| {
+                    let robot = ids.swap_remove(rng.gen_range(0..ids.len()));
+                    // Coarse values, so that equal signals and distances (ties by id) occur.
+                    if rng.gen_bool(0.4) {
+                        t1(robot, rng.gen_range(0..5) as f64)
+                    } else {
+                        t2(robot, rng.gen_range(0..5) as f64 * 10.0)
+                    }
+                })
+                .collect();
+            let adj = closed_loop_adjust(&members, &p);
+            for (i, m) in members.iter().enumerate() {
+                let want = adj.kept.contains(&m.robot);
+                assert_eq!(is_kept(&members, i, &p), want, "{members:?} {i}");
+                if want {
+                    kept += 1;
+                } else {
+                    dropped += 1;
+                }
+            }
+        }
+        assert!(kept > 100 && dropped > 100, "{kept} {dropped}");
     }
 }

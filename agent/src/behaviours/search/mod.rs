@@ -414,8 +414,8 @@ impl Behaviour for Search {
                         role: role_of(c.role),
                     })
             }));
-            let adj = subgroup::closed_loop_adjust(&members, &self.p.subgroup);
-            member = adj.kept.contains(&(self.robot as usize));
+            // Table 1's ranking, of which this robot needs only its own place.
+            member = subgroup::is_kept(&members, 0, &self.p.subgroup);
         }
         // Subgroup memory (pb_i, sgb).
         let was_member_of = match self.mode {
