@@ -89,6 +89,9 @@ impl LinkSet {
 
     /// `update` for a list sorted by robot id: links listed are refreshed, new ones made.
     fn merge(&mut self, tick: u64, listed: &[u32], own: u32) {
+        if self.refresh_in_place(tick, listed, own) {
+            return;
+        }
         let mut merged = std::mem::take(&mut self.merged);
         merged.clear();
         let mut i = 0;
@@ -110,6 +113,29 @@ impl LinkSet {
         }
         merged.extend_from_slice(&self.links[i..]);
         self.merged = std::mem::replace(&mut self.links, merged);
+    }
+
+    /// The usual tick of `merge`: every robot listed already has a link, so the links are
+    /// only refreshed, in place. False (with the links listed so far refreshed, as the merge
+    /// would) when a listed robot has none.
+    fn refresh_in_place(&mut self, tick: u64, listed: &[u32], own: u32) -> bool {
+        let mut i = 0;
+        for &r in listed {
+            if r == own {
+                continue;
+            }
+            while i < self.links.len() && self.links[i].0 < r {
+                i += 1;
+            }
+            match self.links.get_mut(i) {
+                Some(l) if l.0 == r => {
+                    l.1 = tick;
+                    i += 1;
+                }
+                _ => return false,
+            }
+        }
+        true
     }
 
     /// `update` for a list in any order (duplicates, own id and ids beyond any run allowed).
@@ -314,6 +340,40 @@ mod tests {
             assert_eq!((aa, ar), (ba.to_vec(), br.to_vec()), "tick {tick}");
             assert_eq!(a.links, b.links, "tick {tick}");
         }
+    }
+
+    #[test]
+    fn refreshing_in_place_keeps_the_same_links_as_marking() {
+        // Lists that change slowly (one robot in or out every few ticks), so most updates
+        // refresh in place and some insert.
+        let (mut a, mut b) = (LinkSet::new(8, 3, 5), LinkSet::new(8, 3, 5));
+        let mut x: u64 = 777;
+        let mut on = [false; 16];
+        let (mut same, mut changed) = (0, 0);
+        for tick in 0..600u64 {
+            x = x
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            if (x >> 33).is_multiple_of(3) {
+                let r = ((x >> 40) % 16) as usize;
+                on[r] = !on[r];
+                changed += 1;
+            } else {
+                same += 1;
+            }
+            let list: Vec<u32> = (0..16u32).filter(|&r| on[r as usize]).take(8).collect();
+            let own = 15;
+            a.last_update = Some((tick, list.len() >= a.max_links));
+            a.added.clear();
+            a.removed.clear();
+            a.mark_and_insert(tick, &list, own);
+            let (aa, ar) = a.expire(tick);
+            let (aa, ar) = (aa.to_vec(), ar.to_vec());
+            let (ba, br) = b.update(tick, &list, own);
+            assert_eq!((aa, ar), (ba.to_vec(), br.to_vec()), "tick {tick}");
+            assert_eq!(a.links, b.links, "tick {tick}");
+        }
+        assert!(same > 300 && changed > 100);
     }
 
     #[test]
