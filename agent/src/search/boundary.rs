@@ -151,10 +151,26 @@ const MAX_BINS: usize = 4096;
 /// point (in that order) matter, which is the same scan as sorting them all, in linear
 /// time (test `binned_scan_is_the_sorted_scan`).
 pub fn scan(x: &Vec2, obstacle_points: &[Vec2], range: f64, p: &Params) -> Scan {
+    scan_with(x, obstacle_points, range, p, bin_width(range, p))
+}
+
+/// The bin width [`scan`] uses for `range`, if binning applies.
+fn bin_width(range: f64, p: &Params) -> Option<f64> {
     let width = gap_threshold(range, p) * 0.5;
     let bins = TAU / width;
-    let binned = bins.is_finite() && bins >= 1.0 && bins <= MAX_BINS as f64;
-    scan_with(x, obstacle_points, range, p, binned.then_some(width))
+    (bins.is_finite() && bins >= 1.0 && bins <= MAX_BINS as f64).then_some(width)
+}
+
+/// [`scan`] of points already known to lie in range: `dists[i]` = ‖points[i] − x‖, with
+/// 0 < dists[i] < `range` (BSOA has measured them). The same scan, without measuring again.
+pub fn scan_measured(x: &Vec2, points: &[Vec2], dists: &[f64], range: f64, p: &Params) -> Scan {
+    debug_assert_eq!(points.len(), dists.len());
+    let pts: Vec<(f64, f64, Vec2)> = points
+        .iter()
+        .zip(dists)
+        .map(|(b, &d)| (angle_of(&(b - x)), d, *b))
+        .collect();
+    scan_points(pts, p, bin_width(range, p))
 }
 
 /// [`scan`] by angular bins of `width` (Some) or by sorting every point (None).
@@ -172,6 +188,11 @@ fn scan_with(
         let d = r.norm();
         (d < range && d > 1e-9).then(|| (angle_of(&r), d, *b))
     }));
+    scan_points(pts, p, width)
+}
+
+/// The scan of (angle, distance, point) triples.
+fn scan_points(mut pts: Vec<(f64, f64, Vec2)>, p: &Params, width: Option<f64>) -> Scan {
     let n = pts.len();
     if n == 0 {
         return Scan::default();
@@ -435,6 +456,12 @@ mod tests {
                 let a = scan(&x, pts, 100.0, &p);
                 let b = scan_with(&x, pts, 100.0, &p, None);
                 assert_eq!(a, b, "x {x:?} points {pts:?}");
+                let (near, dists): (Vec<Vec2>, Vec<f64>) = pts
+                    .iter()
+                    .map(|q| (*q, (q - x).norm()))
+                    .filter(|(_, d)| *d < 100.0 && *d > 1e-9)
+                    .unzip();
+                assert_eq!(scan_measured(&x, &near, &dists, 100.0, &p), a);
                 kinds.insert((a.arcs.len().min(3), a.surrounded));
                 binned_ran += 1;
             }

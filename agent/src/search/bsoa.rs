@@ -254,7 +254,7 @@ fn choose_j1(scan: &Scan, heading: f64, prev: Sense) -> usize {
 
 /// Moves the points at `i1` and `i2` (the nearest and second nearest; `i2` may be
 /// `usize::MAX` when there is one point) to places 0 and 1; the rest keep no order.
-fn to_front(pts: &mut [Vec2], i1: usize, i2: usize) {
+fn to_front<T>(pts: &mut [T], i1: usize, i2: usize) {
     pts.swap(0, i1);
     if i2 < pts.len() {
         // If Q2 was at place 0 it has just moved to i1.
@@ -294,6 +294,26 @@ fn discontinuous_or_continuous(
 
 /// One BSOA step (Table 2).
 pub fn avoid(x: &Vec2, v_if: &Vec2, obstacle_points: &[Vec2], prev: Sense, p: &Params) -> Output {
+    avoid_within(
+        x,
+        v_if,
+        obstacle_points.iter().copied(),
+        f64::INFINITY,
+        prev,
+        p,
+    )
+}
+
+/// [`avoid`] counting only the obstacle points closer than `limit` (a cooperative robot's
+/// horizon; INFINITY: all), straight from the sensed points, measured once.
+pub fn avoid_within(
+    x: &Vec2,
+    v_if: &Vec2,
+    obstacle_points: impl IntoIterator<Item = Vec2>,
+    limit: f64,
+    prev: Sense,
+    p: &Params,
+) -> Output {
     let free = Output {
         velocity: *v_if,
         sense: Sense::None,
@@ -303,24 +323,28 @@ pub fn avoid(x: &Vec2, v_if: &Vec2, obstacle_points: &[Vec2], prev: Sense, p: &P
     // Obstacles within L_B and L_T (paper §3.4), as a set but for the two nearest: everything
     // below uses the points in an order-free way (any / min / the angular scan's own sort)
     // except Q1 and Q2, which go to the front (ties by input order).
-    let mut pts: Vec<Vec2> = Vec::with_capacity(obstacle_points.len());
+    let points = obstacle_points.into_iter();
+    let mut pts: Vec<Vec2> = Vec::with_capacity(points.size_hint().0);
+    let mut dists: Vec<f64> = Vec::with_capacity(points.size_hint().0);
     let mut nearest = [(f64::INFINITY, usize::MAX); 2];
-    for b in obstacle_points {
+    for b in points {
         let d = (b - x).norm();
-        if d < range && d > 1e-9 {
+        if d < range && d > 1e-9 && d < limit {
             let k = pts.len();
             if d < nearest[0].0 {
                 nearest = [(d, k), nearest[0]];
             } else if d < nearest[1].0 {
                 nearest[1] = (d, k);
             }
-            pts.push(*b);
+            pts.push(b);
+            dists.push(d);
         }
     }
     if pts.is_empty() || v_if.norm() <= 1e-12 {
         return free; // Fig. 3(a) case 1 (or no desired motion)
     }
     to_front(&mut pts, nearest[0].1, nearest[1].1);
+    to_front(&mut dists, nearest[0].1, nearest[1].1);
     if !obstacle_ahead(x, v_if, &pts, p.heading_tolerance, p.corridor_half_width) {
         return free; // Fig. 3(a) case 2; Table 2 line 16
     }
@@ -336,7 +360,7 @@ pub fn avoid(x: &Vec2, v_if: &Vec2, obstacle_points: &[Vec2], prev: Sense, p: &P
     let (a, forced_sense, case) = if q1_dist <= p.l_2 {
         forced(Case::Forced)
     } else {
-        let scan = boundary::scan(x, &pts, range, &p.boundary);
+        let scan = boundary::scan_measured(x, &pts, &dists, range, &p.boundary);
         if scan.surrounded || scan.n_p() == 0 {
             forced(Case::Surrounded)
         } else {

@@ -549,24 +549,21 @@ impl Behaviour for Search {
             }
             _ => f64::INFINITY,
         };
-        let mut pts: Vec<Vec2> = Vec::with_capacity(s.obstacle_points().len());
-        pts.extend(
-            s.obstacle_points()
-                .iter()
-                .map(|q| v2(q[0], q[1]))
-                // Without a horizon only a non-finite distance fails, and sqrt keeps finiteness.
-                .filter(|q| match horizon {
-                    f64::INFINITY => (q - me).norm_squared() < horizon,
-                    _ => (q - me).norm() < horizon,
-                }),
-        );
+        let sensed = s.obstacle_points().iter().map(|q| v2(q[0], q[1]));
         let v = match self.obstacle {
             ObstacleLayer::Bsoa => {
-                let o = bsoa::avoid(&me, &v_if, &pts, self.sf, &self.p.bsoa);
+                let o = bsoa::avoid_within(&me, &v_if, sensed, horizon, self.sf, &self.p.bsoa);
                 self.sf = o.sense;
                 o.velocity
             }
             ObstacleLayer::Svf => {
+                // Without a horizon only a non-finite distance fails, and sqrt keeps finiteness.
+                let pts: Vec<Vec2> = sensed
+                    .filter(|q| match horizon {
+                        f64::INFINITY => (q - me).norm_squared() < horizon,
+                        _ => (q - me).norm() < horizon,
+                    })
+                    .collect();
                 let o = svf::avoid(&me, &v_if, &pts, self.follow, &self.p.svf);
                 self.follow = o.follow;
                 o.velocity
