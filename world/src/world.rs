@@ -48,6 +48,8 @@ pub struct World {
     pub vel: Vec<[f64; 2]>,
     pub alive: Vec<bool>,
     grid: PointGrid,
+    /// Each obstacle's bounding box (min x, min y, max x, max y), for `clip_move`.
+    obstacle_boxes: Vec<[f64; 4]>,
     dead_points: Vec<[f64; 2]>,
     scratch: SenseScratch,
     /// Each robot's last neighbour list (kept sticky when it is full: see fill_neighbours).
@@ -93,6 +95,32 @@ pub const REJECT_NAMES: [&str; 5] = [
     "bad_radio_report",
 ];
 
+/// Margin of a step's bounding box when `clip_move` culls obstacles by box (units).
+const MOVE_BOX_MARGIN: f64 = 1e-3;
+/// Shortest step whose obstacles are culled by box: segment_hit counts an edge parallel to the
+/// step within ~1e-9 / len of its line as touched, 1e-6 units at this length.
+const MIN_CULLED_MOVE: f64 = 1e-3;
+
+/// (min x, min y, max x, max y) of a polygon.
+fn bounding_box(points: &[[f64; 2]]) -> [f64; 4] {
+    points.iter().fold(
+        [
+            f64::INFINITY,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::NEG_INFINITY,
+        ],
+        |b, p| {
+            [
+                b[0].min(p[0]),
+                b[1].min(p[1]),
+                b[2].max(p[0]),
+                b[3].max(p[1]),
+            ]
+        },
+    )
+}
+
 impl World {
     pub fn new(sc: &Scenario) -> Result<World, String> {
         let mut rng = swarm::behaviour::robot_rng(sc.run.seed, u32::MAX, 1);
@@ -113,6 +141,12 @@ impl World {
             vel: vec![[0.0; 2]; n],
             alive: vec![true; n],
             grid,
+            obstacle_boxes: sc
+                .arena
+                .obstacles
+                .iter()
+                .map(|o| bounding_box(&o.points))
+                .collect(),
             dead_points: Vec::new(),
             scratch: SenseScratch::default(),
             listed: vec![Vec::new(); n],
@@ -348,14 +382,7 @@ impl World {
         if len == 0.0 {
             return (p, false);
         }
-        let (w, h) = (self.sc.arena.width, self.sc.arena.height);
-        let walls = [[0.0, 0.0], [w, 0.0], [w, h], [0.0, h]];
-        let mut t = polygon_hit(p, v, &walls);
-        for o in &self.sc.arena.obstacles {
-            if let Some(x) = polygon_hit(p, v, &o.points) {
-                t = Some(t.map_or(x, |y: f64| y.min(x)));
-            }
-        }
+        let t = self.first_hit(p, v, len >= MIN_CULLED_MOVE);
         match t {
             None => (p + v, false),
             Some(t) => {
@@ -363,6 +390,33 @@ impl World {
                 (p + v * s, true)
             }
         }
+    }
+
+    /// Smallest t in [0, 1] at which the step p -> p + v meets a wall or an obstacle. With
+    /// `cull`, an obstacle whose bounding box the step's box (widened by MOVE_BOX_MARGIN, far
+    /// more than segment_hit's collinearity tolerance of ~1e-9 / len) misses is not tested:
+    /// it cannot be hit. Tiny steps are not culled, as that tolerance grows with 1 / len.
+    fn first_hit(&self, p: Vec2, v: Vec2, cull: bool) -> Option<f64> {
+        let (w, h) = (self.sc.arena.width, self.sc.arena.height);
+        let walls = [[0.0, 0.0], [w, 0.0], [w, h], [0.0, h]];
+        let mut t = polygon_hit(p, v, &walls);
+        let (q, m) = (p + v, MOVE_BOX_MARGIN);
+        let step = [
+            p.x.min(q.x) - m,
+            p.y.min(q.y) - m,
+            p.x.max(q.x) + m,
+            p.y.max(q.y) + m,
+        ];
+        for (o, b) in self.sc.arena.obstacles.iter().zip(&self.obstacle_boxes) {
+            let apart = b[0] > step[2] || b[2] < step[0] || b[1] > step[3] || b[3] < step[1];
+            if cull && apart {
+                continue;
+            }
+            if let Some(x) = polygon_hit(p, v, &o.points) {
+                t = Some(t.map_or(x, |y: f64| y.min(x)));
+            }
+        }
+        t
     }
 
     /// Applies the actions of the current tick (index = robot; None = no action arrived) and
@@ -638,5 +692,46 @@ mod tests {
             ),
             (2, 1, 0)
         );
+    }
+
+    #[test]
+    fn culling_obstacles_by_box_finds_the_same_first_hits() {
+        use rand::{Rng, SeedableRng};
+        let w = World::new(&Scenario::default()).expect("world");
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(8);
+        let mut hits = 0;
+        // Random steps, many starting on or next to obstacle edges and vertices, of every
+        // length from 1e-3 (the shortest culled) to 40, and along the edges themselves.
+        let corners: Vec<[f64; 2]> =
+            w.sc.arena
+                .obstacles
+                .iter()
+                .flat_map(|o| o.points.iter().copied())
+                .collect();
+        for k in 0..20000 {
+            let p = if k % 2 == 0 {
+                let c = corners[rng.gen_range(0..corners.len())];
+                v2([
+                    c[0] + rng.gen_range(-3.0..3.0),
+                    c[1] + rng.gen_range(-3.0..3.0),
+                ])
+            } else {
+                v2([rng.gen_range(0.0..1000.0), rng.gen_range(0.0..1000.0)])
+            };
+            let len = 10f64.powf(rng.gen_range(-3.0..1.6));
+            let a = if k % 5 == 0 {
+                0.0
+            } else {
+                rng.gen_range(0.0..std::f64::consts::TAU)
+            };
+            let v = v2([len * a.cos(), len * a.sin()]);
+            let culled = w.first_hit(p, v, true);
+            assert_eq!(
+                culled.map(f64::to_bits),
+                w.first_hit(p, v, false).map(f64::to_bits)
+            );
+            hits += culled.is_some() as usize;
+        }
+        assert!(hits > 500, "{hits}");
     }
 }
