@@ -315,6 +315,20 @@ mod tests {
         assert!(a.is_empty() && r.is_empty());
     }
 
+    /// One tick's list applied to `a` by marking and to `b` by `update`: the same links and the
+    /// same (added, removed).
+    fn update_both(a: &mut LinkSet, b: &mut LinkSet, tick: u64, list: &[u32], own: u32) {
+        a.last_update = Some((tick, list.len() >= a.max_links));
+        a.added.clear();
+        a.removed.clear();
+        a.mark_and_insert(tick, list, own);
+        let (aa, ar) = a.expire(tick);
+        let (aa, ar) = (aa.to_vec(), ar.to_vec());
+        let (ba, br) = b.update(tick, list, own);
+        assert_eq!((aa, ar), (ba.to_vec(), br.to_vec()), "tick {tick}");
+        assert_eq!(a.links, b.links, "tick {tick}");
+    }
+
     #[test]
     fn the_merge_of_a_sorted_list_keeps_the_same_links_as_marking() {
         let (mut a, mut b) = (LinkSet::new(6, 3, 4), LinkSet::new(6, 3, 4));
@@ -330,15 +344,7 @@ mod tests {
                 }
             }
             let own = (tick % 20) as u32;
-            a.last_update = Some((tick, list.len() >= a.max_links));
-            a.added.clear();
-            a.removed.clear();
-            a.mark_and_insert(tick, &list, own);
-            let (aa, ar) = a.expire(tick);
-            let (aa, ar) = (aa.to_vec(), ar.to_vec());
-            let (ba, br) = b.update(tick, &list, own);
-            assert_eq!((aa, ar), (ba.to_vec(), br.to_vec()), "tick {tick}");
-            assert_eq!(a.links, b.links, "tick {tick}");
+            update_both(&mut a, &mut b, tick, &list, own);
         }
     }
 
@@ -363,15 +369,7 @@ mod tests {
             }
             let list: Vec<u32> = (0..16u32).filter(|&r| on[r as usize]).take(8).collect();
             let own = 15;
-            a.last_update = Some((tick, list.len() >= a.max_links));
-            a.added.clear();
-            a.removed.clear();
-            a.mark_and_insert(tick, &list, own);
-            let (aa, ar) = a.expire(tick);
-            let (aa, ar) = (aa.to_vec(), ar.to_vec());
-            let (ba, br) = b.update(tick, &list, own);
-            assert_eq!((aa, ar), (ba.to_vec(), br.to_vec()), "tick {tick}");
-            assert_eq!(a.links, b.links, "tick {tick}");
+            update_both(&mut a, &mut b, tick, &list, own);
         }
         assert!(same > 300 && changed > 100);
     }
