@@ -27,7 +27,7 @@ fn scenario(mode: &str, robots: u32, seed: u64, max_ticks: u64) -> Scenario {
     sc.run.max_ticks = max_ticks;
     sc.search.mode = mode.into();
     sc.validate(&|_| "test".into()).expect("valid scenario");
-    agent::behaviours::validate(&sc).expect("valid search parameters");
+    agent::behaviours::validate(&sc, "test").expect("valid search parameters");
     sc
 }
 
@@ -64,12 +64,14 @@ fn run(sc: &Scenario) -> Outcome {
         world.apply(&actions);
         std::mem::swap(&mut prev, &mut cur);
         cur.clear();
-        if world.mission_complete() {
+        if world.end_reason().is_some() {
             break;
         }
     }
-    assert_eq!(world.rejected, [0; 5], "the world rejected actions");
-    let t = world.targets.as_ref().expect("search world has targets");
+    assert_eq!(world.rejected, [0; 6], "the world rejected actions");
+    let t = &world::mission::search::SearchMission::of(&world)
+        .expect("search world has targets")
+        .targets;
     Outcome {
         found: t.found.clone(),
         ticks: world.tick,

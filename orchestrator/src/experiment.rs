@@ -200,11 +200,8 @@ fn run(a: ExperimentArgs) -> Result<i32, String> {
                     ));
                 }
                 let file = a.file.display().to_string();
-                if let Err(e) = sc
-                    .validate(&|_| file.clone())
-                    .map_err(|e| e.to_string())
-                    .and_then(|_| agent::behaviours::validate(&sc))
-                    .and_then(|_| agent::behaviours::resolve_defaults(&mut sc))
+                if let Err(e) =
+                    crate::prepare::prepare_from(&mut sc, &file).map_err(|e| e.to_string())
                 {
                     if s == 0 && n == x.robots[0] {
                         unavailable.push((mode.clone(), e));

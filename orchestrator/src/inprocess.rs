@@ -104,7 +104,7 @@ impl BehaviourVisitor for InProcess<'_> {
         let sc = self.sc;
         let mut world = World::new(sc).map_err(std::io::Error::other)?;
         let mut outputs = match self.out_dir {
-            Some(d) => RunOutputs::create(d, sc)?,
+            Some(d) => RunOutputs::create(d, &world)?,
             None => RunOutputs::summary_only(),
         };
         let n = world.n;
@@ -192,7 +192,7 @@ impl BehaviourVisitor for InProcess<'_> {
                     let c = &mut *c;
                     for (j, sense) in c.senses.iter_mut().enumerate() {
                         if w.alive[c.first + j] {
-                            w.sense_signals(c.first + j, sense);
+                            w.sense_mission(c.first + j, sense);
                         }
                     }
                 }
@@ -219,12 +219,8 @@ impl BehaviourVisitor for InProcess<'_> {
                 cur.clear();
                 tick_ns.push(t_tick.elapsed().as_nanos() as u64);
                 on_tick(&w);
-                if w.mission_complete() {
-                    end = "all targets found";
-                    return Ok(());
-                }
-                if w.alive_count() == 0 {
-                    end = "all robots dead";
+                if let Some(why) = w.end_reason() {
+                    end = why;
                     return Ok(());
                 }
             })();

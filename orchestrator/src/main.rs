@@ -6,6 +6,7 @@ mod control;
 mod experiment;
 mod inprocess;
 mod phase;
+mod prepare;
 mod processes;
 mod registry;
 mod runid;

@@ -194,20 +194,13 @@ pub fn resolve(a: &UpArgs) -> Result<Scenario, ConfigError> {
             OnFault::Restart => swarm::scenario::FaultPolicy::Restart,
         };
     }
-    sc.validate(&|key: &str| {
+    crate::prepare::prepare(&mut sc, &|key: &str| {
         FLAG_KEYS
             .iter()
             .find(|(k, _)| *k == key && from_flag.contains(k))
             .map(|(_, f)| f.to_string())
             .unwrap_or_else(|| file.clone())
     })?;
-    agent::behaviours::validate(&sc)
-        .and_then(|_| agent::behaviours::resolve_defaults(&mut sc))
-        .map_err(|message| ConfigError {
-            source: file.clone(),
-            key: String::new(),
-            message,
-        })?;
     Ok(sc)
 }
 
@@ -230,10 +223,11 @@ fn bar_msg(
     delivered: u64,
     range: u64,
     loss: u64,
-    targets: (u32, u32),
+    progress: (&str, u32, u32),
 ) -> String {
-    let t = if targets.1 > 0 {
-        format!("targets found {}/{} | ", targets.0, targets.1)
+    let (label, done, total) = progress;
+    let t = if total > 0 && !label.is_empty() {
+        format!("{label} {done}/{total} | ")
     } else {
         String::new()
     };
@@ -263,22 +257,20 @@ pub fn up(a: UpArgs) -> i32 {
         .unwrap_or_else(|| Path::new("runs").join(&run_id));
     let pb = progress(&sc, a.quiet);
     let n = sc.run.robots;
+    let label = world::mission::progress_label(&sc);
     let result: Result<(), String> = match a.executor {
         Executor::Inprocess => inprocess::run(&sc, Some(&run_dir), &run_id, cores(), &mut |w| {
             pb.set_position(w.tick);
             if w.tick % 16 == 0 {
                 let r = &w.radio;
-                let t = w
-                    .targets
-                    .as_ref()
-                    .map_or((0, 0), |t| (t.found_count(), t.pos.len() as u32));
+                let (done, total) = w.mission.progress();
                 pb.set_message(bar_msg(
                     w.alive_count(),
                     n,
                     r.delivered,
                     r.dropped_range,
                     r.dropped_loss,
-                    t,
+                    (label, done, total),
                 ));
             }
         })
@@ -296,7 +288,7 @@ pub fn up(a: UpArgs) -> i32 {
                     s.delivered,
                     s.dropped_range,
                     s.dropped_loss,
-                    (s.found, s.targets),
+                    (label, s.progress_done, s.progress_total),
                 ));
             },
         })

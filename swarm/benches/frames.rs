@@ -7,7 +7,6 @@
 use criterion::{black_box, criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use serde::{Deserialize, Serialize};
 use swarm::behaviour::RadioTx;
-use swarm::frames::{MAX_NEIGHBOURS, MAX_OBSTACLE_POINTS, MAX_SIGNALS};
 use swarm::{AgentRuntime, Behaviour, Command, Outbox, RadioHeader, Received, Scenario, Sense};
 
 #[derive(Serialize, Deserialize, Clone)]
@@ -204,22 +203,16 @@ fn bench_sense(c: &mut Criterion) {
         b.iter(|| {
             let s = black_box(&mut *frame);
             // As the world does: zero the fixed part, then write every list in full.
-            // SAFETY: Sense is plain old data; the first 72 bytes are its fixed fields.
-            unsafe { std::ptr::write_bytes(s as *mut Sense as *mut u8, 0, 72) };
+            // SAFETY: Sense is plain old data; its first SENSE_FIXED_BYTES are its fixed fields.
+            unsafe {
+                std::ptr::write_bytes(
+                    s as *mut Sense as *mut u8,
+                    0,
+                    swarm::frames::SENSE_FIXED_BYTES,
+                )
+            };
             s.tick = 7;
-            s.n_neighbours = MAX_NEIGHBOURS as u32;
-            s.n_obstacle_points = MAX_OBSTACLE_POINTS as u32;
-            s.n_signals = MAX_SIGNALS as u32;
-            for (i, n) in s.neighbours.iter_mut().enumerate() {
-                *n = i as u32;
-            }
-            for (i, q) in s.obstacle_points.iter_mut().enumerate() {
-                *q = [i as f64, 1.0];
-            }
-            for (i, g) in s.signals.iter_mut().enumerate() {
-                g.target = i as u32;
-                g.intensity = 0.5;
-            }
+            s.fill_every_list(1.0);
         })
     });
     g.bench_function("read-in-place-lists", |b| {

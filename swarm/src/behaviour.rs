@@ -12,8 +12,10 @@ use crate::link::LinkSet;
 use crate::mailbox::Mailbox;
 use crate::radio::{decide, Verdict};
 use crate::scenario::Scenario;
-use rand::SeedableRng;
-use rand_chacha::ChaCha8Rng;
+use crate::wire::bincode_config;
+#[cfg(test)]
+pub(crate) use crate::wire::encode;
+pub use crate::wire::{decode, decode_in, RadioTx, Received};
 use serde::de::DeserializeOwned;
 use serde::Serialize;
 use std::collections::VecDeque;
@@ -54,35 +56,12 @@ pub trait Behaviour {
     }
 }
 
-/// A delivered radio message.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Received<M> {
-    pub from: u32,
-    pub tick: u64,
-    pub seq: u32,
-    pub sender_pos: [f64; 2],
-    pub unicast: bool,
-    pub msg: M,
-}
-
-impl<M> Received<M> {
-    /// `msg` as delivered with header `h`.
-    pub fn new(h: &RadioHeader, msg: M) -> Received<M> {
-        Received {
-            from: h.sender,
-            tick: h.tick,
-            seq: h.seq,
-            sender_pos: h.sender_pos,
-            unicast: h.dest != BROADCAST,
-            msg,
-        }
-    }
-}
-
 /// What a behaviour commands for this tick.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct Command {
-    pub vel: [f64; 2],
+    /// The motion command, read by the world as the scenario's `robot.kinematics` says: a
+    /// velocity (vx, vy) for holonomic robots, (v, w) (speed, turn rate) for unicycles.
+    pub cmd: [f64; 2],
     pub events: u32,
 }
 
@@ -132,21 +111,6 @@ impl<M> Outbox<M> {
     }
 }
 
-/// The transport's send side: loan `header.len` bytes, let `fill` write the payload in place,
-/// send it with `header`.
-pub trait RadioTx {
-    fn transmit(&mut self, header: &RadioHeader, fill: &mut dyn FnMut(&mut [u8]));
-}
-
-/// A seeded random stream for (run seed, robot, purpose). Every random draw of a behaviour
-/// comes from such a stream.
-pub fn robot_rng(seed: u64, robot: u32, stream: u64) -> ChaCha8Rng {
-    let mut r =
-        ChaCha8Rng::seed_from_u64(seed ^ 0x9e37_79b9_7f4a_7c15u64.wrapping_mul(robot as u64 + 1));
-    r.set_stream(stream);
-    r
-}
-
 // A decoded message is boxed: held inline it made every Pending as large as the behaviour's
 // message, and the in-process executor (which holds only `Posted` indices) moved those ~7 %
 // slower; unboxed, the multi-process radio gained ~3 % (bench throughput).
@@ -194,49 +158,6 @@ pub struct AgentRuntime<B: Behaviour> {
     pub stats: RuntimeStats,
     /// The behaviour's `zero_copy()`.
     zero_copy: bool,
-}
-
-fn bincode_config() -> bincode::config::Configuration {
-    bincode::config::standard()
-}
-
-/// A radio payload as every receiver decodes it: None if malformed (undecodable, or its length
-/// does not match the header).
-pub fn decode<M: DeserializeOwned>(h: &RadioHeader, payload: &[u8]) -> Option<M> {
-    exact(h, payload, |b| {
-        bincode::serde::decode_from_slice::<M, _>(b, bincode_config())
-    })
-}
-
-/// [`decode`] of the message at offset `at` of `owner`'s bytes, with `owner` as the source of
-/// [`crate::Blob`] views (zero-copy receive).
-pub fn decode_in<M: DeserializeOwned>(
-    h: &RadioHeader,
-    owner: &Arc<dyn AsBytes>,
-    at: usize,
-) -> Option<M> {
-    crate::blob::with_source(owner, |bytes| {
-        exact(h, bytes.get(at..)?, |b| {
-            bincode::serde::borrow_decode_from_slice::<M, _>(b, bincode_config())
-        })
-    })
-}
-
-/// The header's `len` bytes of `payload` decoded by `dec`, which must use all of them.
-fn exact<M>(
-    h: &RadioHeader,
-    payload: &[u8],
-    dec: impl FnOnce(&[u8]) -> Result<(M, usize), bincode::error::DecodeError>,
-) -> Option<M> {
-    let len = h.len as usize;
-    let (msg, used) = dec(payload.get(..len)?).ok()?;
-    (used == len).then_some(msg)
-}
-
-/// A payload as the runtime encodes it (for tests).
-#[cfg(test)]
-pub(crate) fn encode<M: Serialize>(msg: &M) -> Vec<u8> {
-    bincode::serde::encode_to_vec(msg, bincode_config()).expect("encodable")
 }
 
 impl<B: Behaviour> AgentRuntime<B> {
@@ -457,7 +378,7 @@ impl<B: Behaviour> AgentRuntime<B> {
         due.clear();
         self.due = due;
         self.stats.refused_sends += out.refused as u64;
-        action.vel = cmd.vel;
+        action.cmd = cmd.cmd;
         action.events = cmd.events;
         for (dest, msg) in out.msgs.iter() {
             let mut size = bincode::enc::write::SizeWriter::default();

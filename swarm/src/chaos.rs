@@ -12,7 +12,8 @@ pub fn schedule(sc: &Scenario) -> Vec<[u64; 2]> {
     let p = sc.faults.chaos_rate / 100.0;
     if p > 0.0 {
         let n = sc.run.robots as u64;
-        let mut rng = crate::behaviour::robot_rng(sc.run.seed, u32::MAX, 7);
+        let mut rng =
+            crate::streams::rng(sc.run.seed, crate::streams::WORLD, crate::streams::CHAOS);
         let drop = sc.faults.on_fault == FaultPolicy::Drop;
         let mut killed: Vec<bool> = vec![false; n as usize];
         for &[_, r] in &out {
@@ -44,7 +45,11 @@ pub fn schedule(sc: &Scenario) -> Vec<[u64; 2]> {
     if k > 0 {
         // Distinct robots, each at a uniform tick of the window (its own stream: adding a
         // fraction does not move the chaos_rate kills).
-        let mut rng = crate::behaviour::robot_rng(sc.run.seed, u32::MAX, 8);
+        let mut rng = crate::streams::rng(
+            sc.run.seed,
+            crate::streams::WORLD,
+            crate::streams::KILL_FRACTION,
+        );
         let [t0, t1] = sc.faults.kill_window;
         let mut robots: Vec<u64> = (0..sc.run.robots as u64).collect();
         for j in 0..k.min(robots.len()) {

@@ -10,8 +10,11 @@ use iceoryx2::prelude::*;
 pub const MAX_NEIGHBOURS: usize = 128;
 /// Most obstacle / wall boundary points in a Sense frame (the nearest when more are in range).
 pub const MAX_OBSTACLE_POINTS: usize = 768;
-/// Most target signals in a Sense frame.
-pub const MAX_SIGNALS: usize = 16;
+/// Most mission entities in a Sense frame (search: target signals; hunt: evaders).
+pub const MAX_ENTITIES: usize = 32;
+/// Most robots a Sense frame lists as sensed by the robot's own sensors (with positions and
+/// velocities, within `robot.neighbour_sensing_radius`; the nearest when more are in range).
+pub const MAX_NEARBY: usize = 32;
 /// Most radio messages one robot may send in one tick.
 pub const MAX_SENT: usize = 16;
 /// Destination of a broadcast.
@@ -21,18 +24,41 @@ pub const BROADCAST: u32 = u32::MAX;
 pub const RUN_RUNNING: u32 = 0;
 pub const RUN_STOPPING: u32 = 1;
 
+/// A mission entity as a robot senses it: what it is (`kind`, named by the mission), which one
+/// (`id`), and what the sensor gives: a position (`ENTITY_HAS_POS`), a value (an intensity, a
+/// distance: the mission says which), or both.
 #[derive(Debug, Clone, Copy, ZeroCopySend, PartialEq)]
-#[type_name("swarm::Signal")]
+#[type_name("swarm::Entity")]
 #[repr(C)]
-pub struct Signal {
-    pub target: u32,
-    /// SIGNAL_FOUND_BY_YOU: this robot came within the found distance of the target last tick
-    /// (the target stops emitting; this entry is its arrival sensor, intensity 0).
+pub struct Entity {
+    pub id: u32,
+    /// The mission's kind of entity (each mission names its kinds).
+    pub kind: u32,
+    /// ENTITY_DONE_BY_YOU, ENTITY_HAS_POS.
     pub flags: u32,
-    pub intensity: f64,
+    pub reserved: u32,
+    /// Where the entity is, when the sensor gives it (`flags & ENTITY_HAS_POS`).
+    pub pos: [f64; 2],
+    /// The sensed value (search: signal intensity).
+    pub value: f64,
 }
 
-pub const SIGNAL_FOUND_BY_YOU: u32 = 1;
+/// This robot completed the entity at the last move (search: came within the found distance
+/// of the target, which then stops emitting; the entry is its arrival sensor, value 0).
+pub const ENTITY_DONE_BY_YOU: u32 = 1;
+/// The entry's `pos` holds the entity's position.
+pub const ENTITY_HAS_POS: u32 = 2;
+
+/// Another robot as this robot's own sensors see it (not the radio).
+#[derive(Debug, Clone, Copy, ZeroCopySend, PartialEq)]
+#[type_name("swarm::Nearby")]
+#[repr(C)]
+pub struct Nearby {
+    pub robot: u32,
+    pub reserved: u32,
+    pub pos: [f64; 2],
+    pub vel: [f64; 2],
+}
 
 /// World -> agent i, once per tick: everything robot i may know from its own sensors.
 #[derive(Debug, Clone, Copy, ZeroCopySend)]
@@ -49,7 +75,9 @@ pub struct Sense {
     pub alive_robots: u32,
     pub n_neighbours: u32,
     pub n_obstacle_points: u32,
-    pub n_signals: u32,
+    pub n_entities: u32,
+    pub n_nearby: u32,
+    pub reserved: u32,
     /// Robots within comm_radius + link_margin, by robot id: whom the transport links to (at
     /// most radio.max_links; when more are in reach, those of the last list first, then the
     /// nearest others).
@@ -58,8 +86,15 @@ pub struct Sense {
     /// particular order, but the same order for the same positions (the nearest
     /// MAX_OBSTACLE_POINTS when more are in range).
     pub obstacle_points: [[f64; 2]; MAX_OBSTACLE_POINTS],
-    pub signals: [Signal; MAX_SIGNALS],
+    pub entities: [Entity; MAX_ENTITIES],
+    /// Live robots within `robot.neighbour_sensing_radius`, by robot id (the nearest
+    /// MAX_NEARBY when more are in range).
+    pub nearby: [Nearby; MAX_NEARBY],
 }
+
+/// Bytes of a Sense frame before its lists: what a writer zeroes before filling the lists up
+/// to their counts.
+pub const SENSE_FIXED_BYTES: usize = std::mem::offset_of!(Sense, neighbours);
 
 impl Sense {
     /// An all-zero frame (every field of a Sense is valid when zero).
@@ -72,14 +107,50 @@ impl Sense {
             Box::from_raw(p)
         }
     }
+    /// Writes every list in full with values derived from `x` (the largest frame, as the
+    /// benchmarks send it); the fixed fields other than the counts are left as they are.
+    pub fn fill_every_list(&mut self, x: f64) {
+        self.n_neighbours = MAX_NEIGHBOURS as u32;
+        self.n_obstacle_points = MAX_OBSTACLE_POINTS as u32;
+        self.n_entities = MAX_ENTITIES as u32;
+        self.n_nearby = MAX_NEARBY as u32;
+        for (i, n) in self.neighbours.iter_mut().enumerate() {
+            *n = i as u32;
+        }
+        for (i, q) in self.obstacle_points.iter_mut().enumerate() {
+            *q = [i as f64, x];
+        }
+        for (i, g) in self.entities.iter_mut().enumerate() {
+            *g = Entity {
+                id: i as u32,
+                kind: 0,
+                flags: 0,
+                reserved: 0,
+                pos: [x, i as f64],
+                value: 1.0 / (1.0 + i as f64),
+            };
+        }
+        for (i, g) in self.nearby.iter_mut().enumerate() {
+            *g = Nearby {
+                robot: i as u32,
+                reserved: 0,
+                pos: [x, i as f64],
+                vel: [1.0, 0.0],
+            };
+        }
+    }
+
     pub fn neighbours(&self) -> &[u32] {
         &self.neighbours[..(self.n_neighbours as usize).min(MAX_NEIGHBOURS)]
     }
     pub fn obstacle_points(&self) -> &[[f64; 2]] {
         &self.obstacle_points[..(self.n_obstacle_points as usize).min(MAX_OBSTACLE_POINTS)]
     }
-    pub fn signals(&self) -> &[Signal] {
-        &self.signals[..(self.n_signals as usize).min(MAX_SIGNALS)]
+    pub fn entities(&self) -> &[Entity] {
+        &self.entities[..(self.n_entities as usize).min(MAX_ENTITIES)]
+    }
+    pub fn nearby(&self) -> &[Nearby] {
+        &self.nearby[..(self.n_nearby as usize).min(MAX_NEARBY)]
     }
 }
 
@@ -90,11 +161,13 @@ impl Sense {
 pub struct Action {
     pub tick: u64,
     pub robot: u32,
-    /// Low 8 bits (STATE_MASK): the behaviour's display state (0 = roaming / default; the search
-    /// behaviour uses STATE_COOPERATIVE, STATE_DECLARED), recorded per tick and used to colour
-    /// trajectories. Higher bits: behaviour-declared event flags.
+    /// Low 8 bits (STATE_MASK): the behaviour's display state (0 = STATE_DEFAULT; each
+    /// behaviour names its own states), recorded per tick and used to colour trajectories.
+    /// Higher bits: behaviour-declared event flags.
     pub events: u32,
-    pub vel: [f64; 2],
+    /// The motion command: (vx, vy) for holonomic robots, (v, w) for unicycles
+    /// (`robot.kinematics`).
+    pub cmd: [f64; 2],
     /// Messages sent this tick and their destinations (BROADCAST or a robot id).
     pub n_sent: u32,
     /// Radio outcome of the messages due at this tick, as the receiver's transport saw them.
@@ -110,7 +183,7 @@ impl Action {
             tick,
             robot,
             events: 0,
-            vel: [0.0, 0.0],
+            cmd: [0.0, 0.0],
             n_sent: 0,
             radio_delivered: 0,
             radio_dropped_loss: 0,
@@ -121,9 +194,8 @@ impl Action {
 }
 
 pub const STATE_MASK: u32 = 0xff;
-pub const STATE_ROAMING: u32 = 0;
-pub const STATE_COOPERATIVE: u32 = 1;
-pub const STATE_DECLARED: u32 = 2;
+/// The display state every behaviour starts in.
+pub const STATE_DEFAULT: u32 = 0;
 
 /// The fixed header in front of every radio message's bincode payload.
 #[derive(Debug, Clone, Copy, ZeroCopySend, PartialEq)]
@@ -162,8 +234,10 @@ pub struct WorldStatus {
     pub dead: u32,
     pub finished: u32,
     pub restarted: u32,
-    pub targets: u32,
-    pub found: u32,
+    /// The mission's progress: `progress_done` of `progress_total` (search: targets found of
+    /// targets); the mission names what it counts.
+    pub progress_total: u32,
+    pub progress_done: u32,
     pub offered: u64,
     pub delivered: u64,
     pub dropped_range: u64,
@@ -196,9 +270,16 @@ mod tests {
         // The layout is part of the wire format between processes: pin it.
         assert_eq!(std::mem::size_of::<RadioHeader>(), 40);
         assert_eq!(std::mem::align_of::<Sense>(), 8);
+        assert_eq!(SENSE_FIXED_BYTES, 80);
+        assert_eq!(std::mem::size_of::<Entity>(), 40);
+        assert_eq!(std::mem::size_of::<Nearby>(), 40);
         assert_eq!(
             std::mem::size_of::<Sense>(),
-            72 + 4 * MAX_NEIGHBOURS + 16 * MAX_OBSTACLE_POINTS + 16 * MAX_SIGNALS
+            SENSE_FIXED_BYTES
+                + 4 * MAX_NEIGHBOURS
+                + 16 * MAX_OBSTACLE_POINTS
+                + 40 * MAX_ENTITIES
+                + 40 * MAX_NEARBY
         );
         assert_eq!(std::mem::size_of::<Action>(), 48 + 4 * MAX_SENT);
     }
@@ -208,7 +289,8 @@ mod tests {
         let s = Sense::zeroed();
         assert!(s.neighbours().is_empty());
         assert!(s.obstacle_points().is_empty());
-        assert!(s.signals().is_empty());
+        assert!(s.entities().is_empty());
+        assert!(s.nearby().is_empty());
     }
 
     #[test]

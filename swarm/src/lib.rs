@@ -19,7 +19,10 @@ pub mod mailbox;
 pub mod radio;
 pub mod recording;
 pub mod scenario;
+pub mod sections;
+pub mod streams;
 pub mod transport;
+pub mod wire;
 
 pub use behaviour::{AgentRuntime, Behaviour, Command, Outbox, Received};
 pub use blob::Blob;

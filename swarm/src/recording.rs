@@ -7,7 +7,44 @@ use crate::radio::RadioCounters;
 use serde::{Deserialize, Serialize};
 use std::io::{BufReader, BufWriter, Read, Write};
 
+/// Version 1: the header, then one [`TickRecord`] per tick.
 pub const RECORDING_VERSION: u32 = 1;
+/// Version 2: as version 1, each TickRecord followed by its [`TickExtra`]. A run writes it
+/// when it has something to put there (robots with a body); other runs keep version 1, so
+/// their recordings read as they always did.
+pub const RECORDING_VERSION_EXTRA: u32 = 2;
+
+/// Clearances of robot bodies at one tick (robots with `robot.radius` > 0).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct BodyFigures {
+    /// Smallest gap between two robots' discs (centre distance - 2r; negative: overlap),
+    /// over every pair (dead robots included: they stand where they died). Infinite with
+    /// fewer than two robots.
+    pub min_robot_clearance: f64,
+    /// Smallest gap between a robot's disc and an obstacle or wall (negative: overlap).
+    pub min_obstacle_clearance: f64,
+    /// Pairs of robots whose discs overlap (centre distance < 2r).
+    pub overlapping_pairs: u32,
+    /// Robots whose disc overlaps an obstacle or leaves the arena.
+    pub obstacle_overlaps: u32,
+}
+
+impl Default for BodyFigures {
+    fn default() -> Self {
+        BodyFigures {
+            min_robot_clearance: f64::INFINITY,
+            min_obstacle_clearance: f64::INFINITY,
+            overlapping_pairs: 0,
+            obstacle_overlaps: 0,
+        }
+    }
+}
+
+/// What a version-2 recording adds to each tick.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct TickExtra {
+    pub body: Option<BodyFigures>,
+}
 
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct RecordingHeader {
@@ -30,6 +67,8 @@ pub enum RejectReason {
     WrongTick,
     /// More destinations than radio.max_messages_per_tick, or an unknown destination id.
     BadRadioReport,
+    /// Turn rate above the unicycle's robot.kinematics.w_max.
+    TurnTooFast,
 }
 
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -42,8 +81,9 @@ pub enum Event {
     ActionRejected { robot: u32, reason: RejectReason },
     /// The robot's step would have crossed an obstacle or left the arena; it stopped short.
     MoveBlocked { robot: u32 },
-    /// A robot came within the found distance of a target (search scenario).
-    TargetFound { target: u32, robot: u32 },
+    /// The mission counts `entity` as done thanks to `robot` (search: the robot came within
+    /// the found distance of the target).
+    EntityDone { entity: u32, robot: u32 },
     /// Behaviour-declared event flags.
     Declared { robot: u32, flags: u32 },
 }
@@ -60,6 +100,9 @@ pub struct TickRecord {
     pub events: Vec<Event>,
     /// Radio outcome of the messages due at this tick, plus range drops of those sent at it.
     pub radio: RadioCounters,
+    /// Version 2 only: written after the record, not inside it.
+    #[serde(skip)]
+    pub extra: Option<TickExtra>,
 }
 
 fn cfg() -> bincode::config::Configuration {
@@ -68,6 +111,8 @@ fn cfg() -> bincode::config::Configuration {
 
 pub struct RecordingWriter<W: Write> {
     out: BufWriter<W>,
+    /// Version 2: a TickExtra follows each record.
+    extra: bool,
 }
 
 impl<W: Write> RecordingWriter<W> {
@@ -75,11 +120,19 @@ impl<W: Write> RecordingWriter<W> {
         let mut out = BufWriter::new(w);
         bincode::serde::encode_into_std_write(header, &mut out, cfg())
             .map_err(std::io::Error::other)?;
-        Ok(RecordingWriter { out })
+        Ok(RecordingWriter {
+            out,
+            extra: header.version >= RECORDING_VERSION_EXTRA,
+        })
     }
     pub fn push(&mut self, rec: &TickRecord) -> std::io::Result<()> {
         bincode::serde::encode_into_std_write(rec, &mut self.out, cfg())
             .map_err(std::io::Error::other)?;
+        if self.extra {
+            let extra = rec.extra.clone().unwrap_or_default();
+            bincode::serde::encode_into_std_write(&extra, &mut self.out, cfg())
+                .map_err(std::io::Error::other)?;
+        }
         Ok(())
     }
     pub fn finish(mut self) -> std::io::Result<()> {
@@ -92,10 +145,19 @@ pub fn read_recording<R: Read>(r: R) -> std::io::Result<(RecordingHeader, Vec<Ti
     let mut inp = BufReader::new(r);
     let header: RecordingHeader =
         bincode::serde::decode_from_std_read(&mut inp, cfg()).map_err(std::io::Error::other)?;
+    let extra = header.version >= RECORDING_VERSION_EXTRA;
     let mut ticks = Vec::new();
     loop {
         match bincode::serde::decode_from_std_read::<TickRecord, _, _>(&mut inp, cfg()) {
-            Ok(t) => ticks.push(t),
+            Ok(mut t) => {
+                if extra {
+                    t.extra = Some(
+                        bincode::serde::decode_from_std_read(&mut inp, cfg())
+                            .map_err(std::io::Error::other)?,
+                    );
+                }
+                ticks.push(t)
+            }
             Err(bincode::error::DecodeError::UnexpectedEnd { .. }) => break,
             Err(bincode::error::DecodeError::Io { inner, .. })
                 if inner.kind() == std::io::ErrorKind::UnexpectedEof =>
@@ -136,6 +198,7 @@ mod tests {
                 offered: 5,
                 ..Default::default()
             },
+            extra: None,
         };
         let mut buf = Vec::new();
         let mut w = RecordingWriter::new(&mut buf, &h).unwrap();
@@ -144,6 +207,27 @@ mod tests {
         w.finish().unwrap();
         let (h2, ts) = read_recording(&buf[..]).unwrap();
         assert_eq!(h2, h);
-        assert_eq!(ts, vec![t.clone(), t]);
+        assert_eq!(ts, vec![t.clone(), t.clone()]);
+        // Version 2: each record's extra comes back; version 1 has none to give.
+        let h2 = RecordingHeader {
+            version: RECORDING_VERSION_EXTRA,
+            ..h
+        };
+        let mut t2 = t.clone();
+        t2.extra = Some(TickExtra {
+            body: Some(BodyFigures {
+                min_robot_clearance: -0.5,
+                min_obstacle_clearance: 2.0,
+                overlapping_pairs: 1,
+                obstacle_overlaps: 0,
+            }),
+        });
+        let mut buf2 = Vec::new();
+        let mut w = RecordingWriter::new(&mut buf2, &h2).unwrap();
+        w.push(&t2).unwrap();
+        w.push(&t2).unwrap();
+        w.finish().unwrap();
+        assert_eq!(read_recording(&buf2[..]).unwrap().1, vec![t2.clone(), t2]);
+        assert!(buf2.len() > buf.len());
     }
 }

@@ -4,6 +4,9 @@ use serde::{Deserialize, Serialize};
 use std::fmt;
 use std::path::Path;
 
+pub use crate::sections::roam::{RoamParams, ROAM_BEACON_OVERHEAD};
+pub use crate::sections::search::{SearchParams, SEARCH_MODES};
+
 /// The default scenario, embedded so that `orchestrator up` needs no file.
 pub const DEFAULT_SCENARIO: &str = include_str!("../../configs/default.toml");
 /// The roaming scenario (an overlay of the default): what the transport benchmarks and the
@@ -26,7 +29,13 @@ pub struct Scenario {
 #[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct RunParams {
+    /// The agents' behaviour (the agent crate's registry lists them).
     pub behaviour: String,
+    /// The world's mission (the world crate's registry lists them). Left out: the mission the
+    /// behaviour implies (search -> search, otherwise roam, the empty one); a resolved scenario
+    /// names it only when it was set.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mission: Option<String>,
     pub robots: u32,
     pub seed: u64,
     pub max_ticks: u64,
@@ -56,6 +65,43 @@ pub struct Obstacle {
 pub struct RobotParams {
     pub v_max: f64,
     pub sensing_radius: f64,
+    /// Radius of the robot's disc body (0: point robots). With a body the world keeps discs
+    /// out of obstacles and walls, places robots apart, and measures every tick the clearances
+    /// and the overlapping pairs (summary `mission.body`, recording version 2). Left out of a
+    /// resolved scenario when 0, so point-robot scenarios read as they always did.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub radius: f64,
+    /// Other robots a robot senses itself (Sense `nearby`: positions and velocities) within
+    /// this distance; 0: none (robots learn of each other only over the radio). Left out of a
+    /// resolved scenario when 0.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub neighbour_sensing_radius: f64,
+    /// How a command moves the robot. Left out of a resolved scenario when holonomic.
+    #[serde(default, skip_serializing_if = "Kinematics::is_holonomic")]
+    pub kinematics: Kinematics,
+}
+
+/// How the world integrates a robot's command (one tick is the control step: speeds are per
+/// tick, turn rates in radians per tick).
+#[derive(Serialize, Deserialize, Clone, Copy, Debug, PartialEq, Default)]
+#[serde(tag = "model", rename_all = "kebab-case", deny_unknown_fields)]
+pub enum Kinematics {
+    /// The command is a velocity (vx, vy), |v| <= v_max; the heading follows the motion.
+    #[default]
+    Holonomic,
+    /// The command is (v, w): speed |v| <= v_max along the heading and turn rate |w| <= w_max
+    /// (spec/hunting.md eqs. 2.8-2.10: x += v cos(phi), y += v sin(phi), then phi += w).
+    Unicycle { w_max: f64 },
+}
+
+impl Kinematics {
+    pub fn is_holonomic(&self) -> bool {
+        *self == Kinematics::Holonomic
+    }
+}
+
+fn is_zero(x: &f64) -> bool {
+    *x == 0.0
 }
 
 #[derive(Serialize, Deserialize, Clone, Copy, Debug, PartialEq, Eq)]
@@ -131,29 +177,6 @@ impl RuntimeParams {
     }
 }
 
-/// The multi-target search scenario (spec/search.md): targets, their signal, the mode.
-#[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
-#[serde(deny_unknown_fields)]
-pub struct SearchParams {
-    /// Obstacle layer B (BSOA) or S (SVF), then search layer T (TPEPSO), E (EPSO), A (ARBA).
-    pub mode: String,
-    pub targets: u32,
-    pub target_region: [f64; 4],
-    pub target_clearance: f64,
-    pub signal_m: f64,
-    pub signal_q: f64,
-    pub noise_sigma: f64,
-    pub l_t: f64,
-    pub found_distance: f64,
-    pub end_when_all_found: bool,
-    /// The behaviour's own parameters (agent::search::Params), validated by the agent crate.
-    #[serde(default)]
-    pub kernels: toml::Table,
-}
-
-/// Search modes (Table 3).
-pub const SEARCH_MODES: &[&str] = &["BT", "BE", "BA", "ST", "SE", "SA"];
-
 /// What happens to a robot whose agent process dies.
 #[derive(Serialize, Deserialize, Clone, Copy, Debug, PartialEq, Eq)]
 #[serde(rename_all = "kebab-case")]
@@ -179,26 +202,6 @@ pub struct FaultParams {
     pub kill_window: [u64; 2],
 }
 
-#[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
-#[serde(deny_unknown_fields)]
-pub struct RoamParams {
-    pub l_r: f64,
-    pub c: f64,
-    pub l1: f64,
-    pub obstacle_range: f64,
-    pub obstacle_weight: f64,
-    /// Bytes of bulk payload in each beacon (a `Blob`, received zero-copy); 0 = none.
-    #[serde(default)]
-    pub payload_bytes: u32,
-}
-
-/// Bytes a roam beacon adds to its payload: the position and the payload's length.
-pub const ROAM_BEACON_OVERHEAD: u32 = 16 + 5;
-
-/// Behaviours an agent can run.
-/// `faulty` roams but sends invalid commands on a schedule (fault-injection tests); `search` is
-/// the multi-target search of spec/search.md.
-pub const BEHAVIOURS: &[&str] = &["roam", "faulty", "search"];
 /// Hard limits that come from the fixed-size frames.
 pub const MAX_ROBOTS: u32 = 4096;
 
@@ -221,6 +224,51 @@ impl fmt::Display for ConfigError {
 }
 
 impl std::error::Error for ConfigError {}
+
+/// Range checks that name the key, where its value came from and the allowed range: the
+/// scenario's own validation and every behaviour's and mission's use it.
+pub struct Check<'a> {
+    /// Where a key's value came from (a flag, or the file).
+    pub key_source: &'a dyn Fn(&str) -> String,
+}
+
+impl Check<'_> {
+    pub fn err(&self, key: &str, message: String) -> ConfigError {
+        ConfigError {
+            source: (self.key_source)(key),
+            key: key.to_string(),
+            message,
+        }
+    }
+    /// `v` in lo..=hi.
+    pub fn range_u(&self, key: &str, v: u64, lo: u64, hi: u64) -> Result<(), ConfigError> {
+        if v < lo || v > hi {
+            Err(self.err(key, format!("= {v} is out of range: allowed {lo}..={hi}")))
+        } else {
+            Ok(())
+        }
+    }
+    /// `v` finite and in [lo, hi] (or (lo, hi] with `lo_open`).
+    pub fn range_f(
+        &self,
+        key: &str,
+        v: f64,
+        lo: f64,
+        hi: f64,
+        lo_open: bool,
+    ) -> Result<(), ConfigError> {
+        let below = if lo_open { v <= lo } else { v < lo };
+        if !v.is_finite() || below || v > hi {
+            let l = if lo_open { "(" } else { "[" };
+            Err(self.err(
+                key,
+                format!("= {v} is out of range: allowed {l}{lo}, {hi}]"),
+            ))
+        } else {
+            Ok(())
+        }
+    }
+}
 
 impl Default for Scenario {
     fn default() -> Self {
@@ -269,54 +317,21 @@ impl Scenario {
         toml::to_string_pretty(self).expect("scenario serialises")
     }
 
-    /// Checks every value against its allowed range. `key_source` maps a key to where its value
-    /// came from (a flag such as `--robots`, or the file name).
+    /// Checks every value of the sections every run has against its allowed range (the
+    /// behaviour's and the mission's own sections are checked by their owners, with the same
+    /// [`Check`]). `key_source` maps a key to where its value came from (a flag such as
+    /// `--robots`, or the file name).
     pub fn validate(&self, key_source: &dyn Fn(&str) -> String) -> Result<(), ConfigError> {
-        let e = |key: &str, message: String| ConfigError {
-            source: key_source(key),
-            key: key.to_string(),
-            message,
-        };
-        let range_u = |key: &str, v: u64, lo: u64, hi: u64| {
-            if v < lo || v > hi {
-                Err(e(
-                    key,
-                    format!("= {v} is out of range: allowed {lo}..={hi}"),
-                ))
-            } else {
-                Ok(())
-            }
-        };
-        let range_f = |key: &str, v: f64, lo: f64, hi: f64, lo_open: bool| {
-            let below = if lo_open { v <= lo } else { v < lo };
-            if !v.is_finite() || below || v > hi {
-                let l = if lo_open { "(" } else { "[" };
-                Err(e(
-                    key,
-                    format!("= {v} is out of range: allowed {l}{lo}, {hi}]"),
-                ))
-            } else {
-                Ok(())
-            }
-        };
-        if !BEHAVIOURS.contains(&self.run.behaviour.as_str()) {
-            return Err(e(
-                "run.behaviour",
-                format!(
-                    "= {:?} is unknown: allowed {:?}",
-                    self.run.behaviour, BEHAVIOURS
-                ),
-            ));
-        }
-        range_u("run.robots", self.run.robots as u64, 1, MAX_ROBOTS as u64)?;
-        range_u("run.max_ticks", self.run.max_ticks, 1, 100_000_000)?;
-        range_f("arena.width", self.arena.width, 0.0, 1e7, true)?;
-        range_f("arena.height", self.arena.height, 0.0, 1e7, true)?;
+        let c = Check { key_source };
+        c.range_u("run.robots", self.run.robots as u64, 1, MAX_ROBOTS as u64)?;
+        c.range_u("run.max_ticks", self.run.max_ticks, 1, 100_000_000)?;
+        c.range_f("arena.width", self.arena.width, 0.0, 1e7, true)?;
+        c.range_f("arena.height", self.arena.height, 0.0, 1e7, true)?;
         let [x0, y0, x1, y1] = self.arena.start_region;
         if !(0.0 <= x0 && x0 < x1 && x1 <= self.arena.width && 0.0 <= y0 && y0 < y1)
             || y1 > self.arena.height
         {
-            return Err(e(
+            return Err(c.err(
                 "arena.start_region",
                 format!(
                     "= {:?} must be [x0, y0, x1, y1] with 0 <= x0 < x1 <= width and 0 <= y0 < y1 <= height",
@@ -324,7 +339,7 @@ impl Scenario {
                 ),
             ));
         }
-        range_f(
+        c.range_f(
             "arena.boundary_spacing",
             self.arena.boundary_spacing,
             0.0,
@@ -337,7 +352,7 @@ impl Scenario {
                     .iter()
                     .any(|p| !p[0].is_finite() || !p[1].is_finite())
             {
-                return Err(e(
+                return Err(c.err(
                     &format!("arena.obstacles[{i}].points"),
                     format!(
                         "(obstacle {:?}) must hold at least 3 finite [x, y] points",
@@ -346,33 +361,50 @@ impl Scenario {
                 ));
             }
         }
-        range_f("robot.v_max", self.robot.v_max, 0.0, 1e6, true)?;
-        range_f(
+        c.range_f("robot.v_max", self.robot.v_max, 0.0, 1e6, true)?;
+        c.range_f(
             "robot.sensing_radius",
             self.robot.sensing_radius,
             0.0,
             1e7,
             false,
         )?;
-        range_f("radio.comm_radius", self.radio.comm_radius, 0.0, 1e7, false)?;
-        range_f("radio.loss", self.radio.loss, 0.0, 1.0, false)?;
-        range_f(
+        c.range_f("robot.radius", self.robot.radius, 0.0, 1e6, false)?;
+        c.range_f(
+            "robot.neighbour_sensing_radius",
+            self.robot.neighbour_sensing_radius,
+            0.0,
+            1e7,
+            false,
+        )?;
+        if let Kinematics::Unicycle { w_max } = self.robot.kinematics {
+            c.range_f(
+                "robot.kinematics.w_max",
+                w_max,
+                0.0,
+                std::f64::consts::PI,
+                true,
+            )?;
+        }
+        c.range_f("radio.comm_radius", self.radio.comm_radius, 0.0, 1e7, false)?;
+        c.range_f("radio.loss", self.radio.loss, 0.0, 1.0, false)?;
+        c.range_f(
             "radio.loss_at_range",
             self.radio.loss_at_range,
             0.0,
             1.0,
             false,
         )?;
-        range_f(
+        c.range_f(
             "radio.loss_exponent",
             self.radio.loss_exponent,
             0.0,
             100.0,
             true,
         )?;
-        range_u("radio.delay_ticks", self.radio.delay_ticks as u64, 0, 1000)?;
+        c.range_u("radio.delay_ticks", self.radio.delay_ticks as u64, 0, 1000)?;
         let min_margin = 2.0 * self.robot.v_max;
-        range_f(
+        c.range_f(
             "radio.link_margin",
             self.radio.link_margin,
             min_margin,
@@ -383,86 +415,57 @@ impl Scenario {
             err.message += " (at least 2 * robot.v_max, so no in-range message is missed)";
             err
         })?;
-        range_u(
+        c.range_u(
             "radio.link_linger_ticks",
             self.radio.link_linger_ticks as u64,
             0,
             100_000,
         )?;
-        range_u(
+        c.range_u(
             "radio.max_links",
             self.radio.max_links as u64,
             1,
             crate::frames::MAX_NEIGHBOURS as u64,
         )?;
-        range_u(
+        c.range_u(
             "radio.lingering_links",
             self.radio.lingering_links as u64,
             0,
             crate::frames::MAX_NEIGHBOURS as u64,
         )?;
-        range_u(
+        c.range_u(
             "radio.zero_copy_held",
             self.radio.zero_copy_held as u64,
             0,
             64,
         )?;
-        range_u(
+        c.range_u(
             "radio.max_message_bytes",
             self.radio.max_message_bytes as u64,
             8,
             65_536,
         )?;
-        range_u(
+        c.range_u(
             "radio.max_messages_per_tick",
             self.radio.max_messages_per_tick as u64,
             1,
             crate::frames::MAX_SENT as u64,
         )?;
-        range_u(
+        c.range_u(
             "runtime.ack_deadline_ms",
             self.runtime.ack_deadline_ms,
             10,
             600_000,
         )?;
-        range_u("runtime.poll_ms", self.runtime.poll_ms, 1, 10_000)?;
-        range_f("runtime.tick_hz", self.runtime.tick_hz, 0.0, 1e6, false)?;
-        range_u(
+        c.range_u("runtime.poll_ms", self.runtime.poll_ms, 1, 10_000)?;
+        c.range_f("runtime.tick_hz", self.runtime.tick_hz, 0.0, 1e6, false)?;
+        c.range_u(
             "runtime.startup_timeout_s",
             self.runtime.startup_timeout_s,
             1,
             3600,
         )?;
-        range_f("roam.l_r", self.roam.l_r, 0.0, 1e7, true)?;
-        range_f("roam.c", self.roam.c, 0.0, 1e7, true)?;
-        range_f("roam.l1", self.roam.l1, 0.0, 1e7, true)?;
-        range_f(
-            "roam.obstacle_range",
-            self.roam.obstacle_range,
-            0.0,
-            1e7,
-            false,
-        )?;
-        range_f(
-            "roam.obstacle_weight",
-            self.roam.obstacle_weight,
-            0.0,
-            1e7,
-            false,
-        )?;
-        range_u(
-            "roam.payload_bytes",
-            self.roam.payload_bytes as u64,
-            0,
-            self.radio
-                .max_message_bytes
-                .saturating_sub(ROAM_BEACON_OVERHEAD) as u64,
-        )
-        .map_err(|mut c| {
-            c.message += " (radio.max_message_bytes less the beacon's own bytes)";
-            c
-        })?;
-        self.validate_faults(&e)
+        self.validate_faults(&|key, message| c.err(key, message))
     }
 
     fn validate_faults(&self, e: &dyn Fn(&str, String) -> ConfigError) -> Result<(), ConfigError> {
@@ -563,9 +566,6 @@ mod tests {
         let mut sc = Scenario::default();
         sc.radio.link_margin = 5.0;
         assert_eq!(sc.validate(&file).unwrap_err().key, "radio.link_margin");
-        let mut sc = Scenario::default();
-        sc.run.behaviour = "dance".into();
-        assert!(sc.validate(&file).unwrap_err().to_string().contains("roam"));
     }
 
     #[test]

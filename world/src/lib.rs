@@ -3,13 +3,15 @@
 //! `World` is a pure state machine (`sense` for every robot, then `apply` the actions); the
 //! world process drives it over iceoryx2, the in-process executor drives it directly.
 
+pub mod body;
+pub mod kinematics;
 pub mod metrics;
+pub mod mission;
 pub mod output;
 pub mod placement;
 pub mod process;
 pub mod sensing;
 pub mod svg;
-pub mod targets;
 pub mod world;
 
 pub use output::{RunOutputs, Summary, Timing};

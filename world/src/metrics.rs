@@ -1,4 +1,4 @@
-//! Mission metrics of the default (roaming) scenario: how well the swarm spread.
+//! Metrics every run has, whatever its mission: how well the swarm spread.
 
 use serde::Serialize;
 use swarm::radio::distance;
@@ -39,25 +39,13 @@ impl Coverage {
     }
 }
 
-/// The search scenario's measures (spec/search.md 4.3 and 5 item 30).
+/// The `mission` section of summary.json: the mission's own metrics under its name, the
+/// body figures when robots have a body, and how the swarm spread (every run).
 #[derive(Debug, Clone, Serialize, PartialEq)]
-pub struct SearchMetrics {
-    pub targets: u32,
-    pub found: u32,
-    /// Iteration steps until the last target was found (tick of that find + 1); None when the
-    /// run ended first (censored at max_ticks).
-    pub steps: Option<u64>,
-    /// Total energy: sum over robots and ticks of the distance moved (P_th = sum ||V_i(t)||).
-    pub energy: f64,
-    /// Per target: (tick found, robot), or None.
-    pub found_at: Vec<Option<(u64, u32)>>,
-}
-
-#[derive(Debug, Clone, Serialize, PartialEq)]
-pub struct Mission {
-    /// Search scenario only.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub search: Option<SearchMetrics>,
+pub struct MissionMetrics {
+    /// The mission's metrics, keyed by its name (search: `search`); none for roam.
+    #[serde(flatten)]
+    pub own: serde_json::Map<String, serde_json::Value>,
     /// Fraction of 20 x 20 cells any robot visited.
     pub coverage: f64,
     /// Mean distance of live robots to their centroid at the end.
@@ -66,7 +54,7 @@ pub struct Mission {
     pub mean_nearest_neighbour: f64,
 }
 
-pub fn mission(coverage: &Coverage, poses: &[[f64; 3]], alive: &[bool]) -> Mission {
+pub fn spread(coverage: &Coverage, poses: &[[f64; 3]], alive: &[bool]) -> MissionMetrics {
     let live: Vec<[f64; 2]> = poses
         .iter()
         .zip(alive)
@@ -92,8 +80,8 @@ pub fn mission(coverage: &Coverage, poses: &[[f64; 3]], alive: &[bool]) -> Missi
             .sum::<f64>()
             / n
     };
-    Mission {
-        search: None,
+    MissionMetrics {
+        own: serde_json::Map::new(),
         coverage: coverage.fraction(),
         spread,
         mean_nearest_neighbour: nn,
@@ -116,7 +104,7 @@ mod tests {
     #[test]
     fn spread_and_nearest_neighbour() {
         let c = Coverage::new(100.0, 100.0);
-        let m = mission(
+        let m = spread(
             &c,
             &[[0.0, 0.0, 0.0], [10.0, 0.0, 0.0], [500.0, 0.0, 0.0]],
             &[true, true, false],

@@ -1,14 +1,15 @@
 //! The run folder: scenario.toml, recording.bin, summary.json, run.svg.
 
-use crate::metrics::{mission, Mission};
+use crate::body::BodySummary;
+use crate::metrics::{spread, MissionMetrics};
+use crate::mission::RunFacts;
 use crate::world::{Fault, World, REJECT_NAMES};
 use serde::Serialize;
 use std::collections::BTreeMap;
 use std::fs::File;
 use std::path::{Path, PathBuf};
 use swarm::radio::RadioCounters;
-use swarm::recording::{RecordingHeader, RecordingWriter, TickRecord, RECORDING_VERSION};
-use swarm::scenario::Scenario;
+use swarm::recording::{RecordingHeader, RecordingWriter, TickRecord};
 
 /// Wall-clock facts of a run, measured by the executor.
 #[derive(Debug, Clone, Default)]
@@ -60,7 +61,10 @@ pub struct Summary {
     pub distance_travelled: f64,
     pub alive_at_end: u32,
     pub faults: Vec<Fault>,
-    pub mission: Mission,
+    /// The run's worst clearances and overlaps (robots with a body only).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub body: Option<BodySummary>,
+    pub mission: MissionMetrics,
 }
 
 /// Where a run's outputs go: the run folder, or nowhere but the returned Summary (sweeps of
@@ -71,11 +75,13 @@ pub struct RunOutputs {
 }
 
 impl RunOutputs {
-    pub fn create(dir: &Path, sc: &Scenario) -> std::io::Result<RunOutputs> {
+    /// The run folder for `world`'s run (its scenario, and its recording version).
+    pub fn create(dir: &Path, world: &World) -> std::io::Result<RunOutputs> {
+        let sc = &world.sc;
         std::fs::create_dir_all(dir)?;
         std::fs::write(dir.join("scenario.toml"), sc.to_toml())?;
         let header = RecordingHeader {
-            version: RECORDING_VERSION,
+            version: world.recording_version(),
             robots: sc.run.robots,
             seed: sc.run.seed,
             scenario: sc.to_toml(),
@@ -159,22 +165,16 @@ impl RunOutputs {
             distance_travelled: world.distance_travelled,
             alive_at_end: world.alive_count(),
             faults: world.faults.clone(),
+            body: world.body,
             mission: {
-                let mut m = mission(&world.coverage, &world.poses, &world.alive);
-                m.search = world
-                    .targets
-                    .as_ref()
-                    .map(|t| crate::metrics::SearchMetrics {
-                        targets: t.pos.len() as u32,
-                        found: t.found_count(),
-                        steps: if t.all_found() {
-                            t.found.iter().filter_map(|f| f.map(|x| x.0 + 1)).max()
-                        } else {
-                            None
-                        },
-                        energy: world.distance_travelled,
-                        found_at: t.found.clone(),
-                    });
+                let mut m = spread(&world.coverage, &world.poses, &world.alive);
+                let facts = RunFacts {
+                    ticks,
+                    distance_travelled: world.distance_travelled,
+                };
+                if let Some(own) = world.mission.metrics(&facts) {
+                    m.own.insert(world.mission.name().to_string(), own);
+                }
                 m
             },
         };

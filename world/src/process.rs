@@ -78,7 +78,7 @@ pub fn run(args: &WorldArgs) -> Result<i32> {
     let t_start = Instant::now();
     let sc = &args.scenario;
     let n = sc.run.robots;
-    let mut world = World::new(sc)?;
+    let mut world = World::new(sc).map_err(|e| e.to_string())?;
     let config = transport::run_config(&args.prefix)?;
     let node = transport::node(&config, "world")?;
     let mut robots = Vec::with_capacity(n as usize);
@@ -121,7 +121,7 @@ pub fn run(args: &WorldArgs) -> Result<i32> {
         swarm::scenario::BarrierKind::Iox2Event => Some(swarm::bell::EventBell::world(&node, n)?),
     };
     let bell = bell.as_ref();
-    let mut outputs = RunOutputs::create(&args.run_dir, sc)?;
+    let mut outputs = RunOutputs::create(&args.run_dir, &world)?;
     // Tell the orchestrator every service exists: agents may start.
     println!("READY");
     std::io::stdout().flush()?;
@@ -186,7 +186,7 @@ pub fn run(args: &WorldArgs) -> Result<i32> {
             // SAFETY: Sense is plain old data, valid when zeroed; we zero the fixed part
             // (the lists are written up to their counts) and then write through a reference.
             let s = unsafe {
-                std::ptr::write_bytes(p as *mut u8, 0, 72);
+                std::ptr::write_bytes(p as *mut u8, 0, swarm::frames::SENSE_FIXED_BYTES);
                 &mut *p
             };
             world.sense(i, s);
@@ -245,12 +245,8 @@ pub fn run(args: &WorldArgs) -> Result<i32> {
             end = "interrupted".to_string();
             break;
         }
-        if world.mission_complete() {
-            end = "all targets found".to_string();
-            break;
-        }
-        if world.alive_count() == 0 {
-            end = "all robots dead".to_string();
+        if let Some(why) = world.end_reason() {
+            end = why.to_string();
             break;
         }
     }

@@ -1,7 +1,7 @@
 //! What each robot senses: obstacle / wall boundary points within the sensing radius (a set,
 //! in a fixed order) and the robots within radio link range (by id).
 
-use swarm::frames::{Sense, MAX_NEIGHBOURS, MAX_OBSTACLE_POINTS};
+use swarm::frames::{Nearby, Sense, MAX_NEARBY, MAX_NEIGHBOURS, MAX_OBSTACLE_POINTS};
 use swarm::geometry::sample_boundary;
 use swarm::radio::within_radius;
 use swarm::scenario::Scenario;
@@ -257,6 +257,42 @@ pub fn fill_neighbours(
         prev.push(j);
     }
     out.n_neighbours = scratch.near.len() as u32;
+}
+
+/// Fills the `nearby` list of robot `me`: live robots within `range` as its own sensors see
+/// them (position and velocity), by robot id; the nearest MAX_NEARBY (ties by id) when more
+/// are in range.
+pub fn fill_nearby(
+    me: usize,
+    pos: &[[f64; 3]],
+    vel: &[[f64; 2]],
+    alive: &[bool],
+    range: f64,
+    scratch: &mut SenseScratch,
+    out: &mut Sense,
+) {
+    scratch.near.clear();
+    let q = [pos[me][0], pos[me][1]];
+    for (j, p) in pos.iter().enumerate() {
+        if j == me || !alive[j] {
+            continue;
+        }
+        if let Some(d) = within_radius(q, [p[0], p[1]], range) {
+            scratch.near.push((d, j as u32));
+        }
+    }
+    keep_nearest(&mut scratch.near, MAX_NEARBY);
+    scratch.near.sort_unstable_by_key(|&(_, j)| j);
+    for (k, &(_, j)) in scratch.near.iter().enumerate() {
+        let p = pos[j as usize];
+        out.nearby[k] = Nearby {
+            robot: j,
+            reserved: 0,
+            pos: [p[0], p[1]],
+            vel: vel[j as usize],
+        };
+    }
+    out.n_nearby = scratch.near.len() as u32;
 }
 
 #[cfg(test)]

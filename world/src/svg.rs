@@ -1,5 +1,6 @@
 //! `run.svg`: arena, obstacles, start region, trajectories, start and end positions.
 
+use crate::mission::{DisplayState, Mark};
 use crate::world::World;
 use plotters::prelude::*;
 use std::path::Path;
@@ -30,13 +31,53 @@ fn robot_colour(i: usize, n: usize) -> RGBColor {
     )
 }
 
-/// Trajectory colour of a display state: roaming blue, cooperative orange, declared green.
-fn state_colour(state: u32) -> RGBColor {
-    match state {
-        swarm::frames::STATE_COOPERATIVE => RGBColor(230, 120, 0),
-        swarm::frames::STATE_DECLARED => RGBColor(0, 150, 60),
-        _ => RGBColor(60, 90, 200),
+/// Trajectory colour of a display state, as the mission names it (the first state's colour
+/// for a state it does not name).
+fn state_colour(states: &[DisplayState], state: u32) -> RGBColor {
+    let c = states
+        .iter()
+        .find(|d| d.state as u32 == state)
+        .or(states.first())
+        .map_or([60, 90, 200], |d| d.colour);
+    rgb(c)
+}
+
+fn rgb(c: [u8; 3]) -> RGBColor {
+    RGBColor(c[0], c[1], c[2])
+}
+
+/// Draws one mark of a mission's layer at pixel `c` (`to_px` maps arena units to pixels, for
+/// the marks sized in arena units).
+fn draw_mark<DB: DrawingBackend>(
+    root: &DrawingArea<DB, plotters::coord::Shift>,
+    mark: &Mark,
+    c: (i32, i32),
+    to_px: f64,
+    path: &[(i32, i32)],
+) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
+    match mark {
+        Mark::Disc {
+            px, fill, outline, ..
+        } => {
+            root.draw(&Circle::new(c, *px, rgb(*fill).filled()))?;
+            if let Some(o) = outline {
+                root.draw(&Circle::new(c, *px, rgb(*o).stroke_width(1)))?;
+            }
+        }
+        Mark::Ring {
+            px, colour, width, ..
+        } => root.draw(&Circle::new(c, *px, rgb(*colour).stroke_width(*width)))?,
+        Mark::Circle { radius, colour, .. } => root.draw(&Circle::new(
+            c,
+            (radius * to_px).round().max(1.0) as u32,
+            rgb(*colour).stroke_width(1),
+        ))?,
+        Mark::Path { colour, .. } => root.draw(&PathElement::new(
+            path.to_vec(),
+            rgb(*colour).stroke_width(2),
+        ))?,
     }
+    Ok(())
 }
 
 /// Height of the legend strip under the arena, in pixels.
@@ -46,8 +87,9 @@ const LEGEND: u32 = 30;
 fn legend<DB: DrawingBackend>(
     root: &DrawingArea<DB, plotters::coord::Shift>,
     arena_height: u32,
-    search: bool,
+    world: &World,
 ) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
+    let states = world.mission.display_states();
     let y = arena_height as i32 + 8;
     let font = ("sans-serif", 13).into_font().color(&BLACK);
     let mut x = 12;
@@ -60,18 +102,10 @@ fn legend<DB: DrawingBackend>(
         x += 36 + 7 * label.len() as i32;
         r.and(t)
     };
-    if search {
-        line(root, state_colour(0), "roaming")?;
-        line(
-            root,
-            state_colour(swarm::frames::STATE_COOPERATIVE),
-            "cooperative",
-        )?;
-        line(
-            root,
-            state_colour(swarm::frames::STATE_DECLARED),
-            "declared",
-        )?;
+    if !states.is_empty() {
+        for d in states {
+            line(root, rgb(d.colour), d.name)?;
+        }
     } else {
         line(
             root,
@@ -84,9 +118,9 @@ fn legend<DB: DrawingBackend>(
         ("final position", 1),
         ("dead robot", 2),
     ];
-    if search {
-        marks.push(("target found", 3));
-        marks.push(("target missed", 4));
+    let mission_marks = world.mission.legend();
+    for (k, e) in mission_marks.iter().enumerate() {
+        marks.push((e.label, 3 + k as i32));
     }
     for (label, kind) in marks {
         let c = (x + 6, y + 7);
@@ -97,8 +131,7 @@ fn legend<DB: DrawingBackend>(
             ))?,
             1 => root.draw(&Circle::new(c, 4, robot_colour(0, 3).filled()))?,
             2 => root.draw(&Cross::new(c, 5, BLACK.stroke_width(2)))?,
-            3 => root.draw(&Circle::new(c, 6, GREEN.filled()))?,
-            _ => root.draw(&Circle::new(c, 6, RED.stroke_width(3)))?,
+            k => draw_mark(root, &mission_marks[(k - 3) as usize].mark, c, 1.0, &[c])?,
         }
         root.draw(&Text::new(label.to_string(), (x + 18, y), font.clone()))?;
         x += 26 + 7 * label.len() as i32;
@@ -114,7 +147,7 @@ pub fn write_svg(world: &World, path: &Path) -> Result<(), String> {
     let root = SVGBackend::new(path, (SIZE, height + LEGEND)).into_drawing_area();
     let e = |x: DrawingAreaErrorKind<std::io::Error>| format!("run.svg: {x:?}");
     root.fill(&WHITE).map_err(e)?;
-    legend(&root, height, world.targets.is_some()).map_err(e)?;
+    legend(&root, height, world).map_err(e)?;
     let area = root.margin(10, 10 + LEGEND, 10, 10);
     // Arena coordinates with y up.
     let mut chart = ChartBuilder::on(&area)
@@ -146,7 +179,8 @@ pub fn write_svg(world: &World, path: &Path) -> Result<(), String> {
             .map_err(e)?;
     }
     let n = world.n;
-    let by_state = world.targets.is_some();
+    let states = world.mission.display_states();
+    let by_state = !states.is_empty();
     for (i, traj) in world.trajectories.iter().enumerate() {
         if !by_state {
             let col = robot_colour(i, n);
@@ -157,7 +191,7 @@ pub fn write_svg(world: &World, path: &Path) -> Result<(), String> {
                 .map_err(e)?;
             continue;
         }
-        // Search: each stretch coloured by the robot's state (as in the paper's Fig. 6).
+        // Each stretch coloured by the robot's display state (search: as the paper's Fig. 6).
         let mut j = 0;
         while j + 1 < traj.len() {
             let st = traj[j + 1][2] as u32;
@@ -169,27 +203,28 @@ pub fn write_svg(world: &World, path: &Path) -> Result<(), String> {
             chart
                 .draw_series(LineSeries::new(
                     pts,
-                    state_colour(st).mix(0.7).stroke_width(1),
+                    state_colour(states, st).mix(0.7).stroke_width(1),
                 ))
                 .map_err(e)?;
         }
     }
-    if let Some(t) = &world.targets {
-        for (k, p) in t.pos.iter().enumerate() {
-            let c = (p[0], p[1]);
-            if t.found[k].is_some() {
-                chart
-                    .draw_series(std::iter::once(Circle::new(c, 7, GREEN.filled())))
-                    .map_err(e)?;
-                chart
-                    .draw_series(std::iter::once(Circle::new(c, 7, BLACK.stroke_width(1))))
-                    .map_err(e)?;
-            } else {
-                chart
-                    .draw_series(std::iter::once(Circle::new(c, 7, RED.stroke_width(3))))
-                    .map_err(e)?;
+    // The mission's layer, in pixels of the chart's area.
+    let to_px = (SIZE as f64 - 20.0) / w;
+    for mark in world.mission.layer() {
+        let (at, pts) = match &mark {
+            Mark::Disc { at, .. } | Mark::Ring { at, .. } | Mark::Circle { at, .. } => {
+                (*at, vec![])
             }
-        }
+            Mark::Path { points, .. } => {
+                (points.first().copied().unwrap_or([0.0; 2]), points.clone())
+            }
+        };
+        let c = chart.backend_coord(&(at[0], at[1]));
+        let path: Vec<(i32, i32)> = pts
+            .iter()
+            .map(|p| chart.backend_coord(&(p[0], p[1])))
+            .collect();
+        draw_mark(&root, &mark, c, to_px, &path).map_err(e)?;
     }
     for (i, s) in world.start.iter().enumerate() {
         let col = robot_colour(i, n);

@@ -1,21 +1,38 @@
 //! Ground truth and the per-tick step: senses out, actions in.
 
+use crate::body::{bounding_box, BodySummary, Statics};
+use crate::kinematics::{self, Limit};
 use crate::metrics::Coverage;
-use crate::placement::place_robots;
-use crate::sensing::{fill_neighbours, fill_obstacles, static_points, PointGrid, SenseScratch};
+use crate::mission::{self, Mission, MissionError};
+use crate::placement::{place_robots, PlacementError};
+use crate::sensing::{
+    fill_nearby, fill_neighbours, fill_obstacles, static_points, PointGrid, SenseScratch,
+};
 use std::collections::VecDeque;
 use swarm::frames::{
     Action, Sense, WorldStatus, BROADCAST, MAX_SENT, RUN_RUNNING, RUN_STOPPING, STATE_MASK,
 };
 use swarm::geometry::{polygon_hit, v2, Vec2};
 use swarm::radio::{distance, RadioCounters};
-use swarm::recording::{Event, RejectReason, TickRecord};
+use swarm::recording::{Event, RejectReason, TickExtra, TickRecord};
 use swarm::scenario::Scenario;
+
+/// Why a world could not be built from a (validated) scenario.
+#[derive(Debug, thiserror::Error)]
+pub enum WorldError {
+    #[error(transparent)]
+    Placement(#[from] PlacementError),
+    #[error(transparent)]
+    Mission(#[from] MissionError),
+}
 
 /// How far short of an obstacle or wall a blocked move stops.
 const BLOCK_BACKOFF: f64 = 0.5;
 /// Relative tolerance on the speed limit (behaviours clamp with floating-point rounding).
 const SPEED_TOLERANCE: f64 = 1e-9;
+/// Bisections that place a blocked disc robot at the last clear point of its step (the
+/// error is the step's length / 2^40).
+const DISC_BISECTIONS: u32 = 40;
 
 /// A robot that died, for the summary.
 #[derive(Debug, Clone, serde::Serialize)]
@@ -57,7 +74,7 @@ pub struct World {
     in_flight: VecDeque<InFlight>,
     pub radio: RadioCounters,
     pub faults: Vec<Fault>,
-    pub rejected: [u64; 5],
+    pub rejected: [u64; 6],
     pub blocked_moves: u64,
     pub distance_travelled: f64,
     pending_events: Vec<Event>,
@@ -73,8 +90,12 @@ pub struct World {
     /// The run's SIGKILL schedule (swarm::chaos) and the next entry due.
     kills: Vec<[u64; 2]>,
     next_kill: usize,
-    /// The search scenario's targets (None for other behaviours).
-    pub targets: Option<crate::targets::Targets>,
+    /// The paper's mission (entities, completion, metrics, its picture layer).
+    pub mission: Box<dyn Mission>,
+    /// Walls and obstacles as disc bodies meet them (robot.radius > 0).
+    statics: Statics,
+    /// The run's worst body figures (robot.radius > 0).
+    pub body: Option<BodySummary>,
 }
 
 fn reason_index(r: RejectReason) -> usize {
@@ -84,15 +105,17 @@ fn reason_index(r: RejectReason) -> usize {
         RejectReason::WrongRobot => 2,
         RejectReason::WrongTick => 3,
         RejectReason::BadRadioReport => 4,
+        RejectReason::TurnTooFast => 5,
     }
 }
 
-pub const REJECT_NAMES: [&str; 5] = [
+pub const REJECT_NAMES: [&str; 6] = [
     "not_finite",
     "too_fast",
     "wrong_robot",
     "wrong_tick",
     "bad_radio_report",
+    "turn_too_fast",
 ];
 
 /// Margin of a step's bounding box when `clip_move` culls obstacles by box (units).
@@ -101,29 +124,13 @@ const MOVE_BOX_MARGIN: f64 = 1e-3;
 /// step within ~1e-9 / len of its line as touched, 1e-6 units at this length.
 const MIN_CULLED_MOVE: f64 = 1e-3;
 
-/// (min x, min y, max x, max y) of a polygon.
-fn bounding_box(points: &[[f64; 2]]) -> [f64; 4] {
-    points.iter().fold(
-        [
-            f64::INFINITY,
-            f64::INFINITY,
-            f64::NEG_INFINITY,
-            f64::NEG_INFINITY,
-        ],
-        |b, p| {
-            [
-                b[0].min(p[0]),
-                b[1].min(p[1]),
-                b[2].max(p[0]),
-                b[3].max(p[1]),
-            ]
-        },
-    )
-}
-
 impl World {
-    pub fn new(sc: &Scenario) -> Result<World, String> {
-        let mut rng = swarm::behaviour::robot_rng(sc.run.seed, u32::MAX, 1);
+    pub fn new(sc: &Scenario) -> Result<World, WorldError> {
+        let mut rng = swarm::streams::rng(
+            sc.run.seed,
+            swarm::streams::WORLD,
+            swarm::streams::PLACEMENT,
+        );
         let start = place_robots(sc, &mut rng)?;
         let n = start.len();
         let grid = PointGrid::new(
@@ -153,7 +160,7 @@ impl World {
             in_flight: VecDeque::new(),
             radio: RadioCounters::default(),
             faults: Vec::new(),
-            rejected: [0; 5],
+            rejected: [0; 6],
             blocked_moves: 0,
             distance_travelled: 0.0,
             pending_events: Vec::new(),
@@ -169,11 +176,9 @@ impl World {
             traj_every,
             kills: swarm::chaos::schedule(sc),
             next_kill: 0,
-            targets: if sc.run.behaviour == "search" {
-                Some(crate::targets::Targets::new(sc)?)
-            } else {
-                None
-            },
+            mission: mission::create(sc)?,
+            statics: Statics::new(sc),
+            body: (sc.robot.radius > 0.0).then(|| BodySummary::new(sc.robot.radius)),
         })
     }
 
@@ -197,7 +202,7 @@ impl World {
     /// Writes robot i's Sense frame for the current tick into `out` (in place: every field the
     /// agent reads is written, lists up to their counts).
     pub fn sense(&mut self, i: usize, out: &mut Sense) {
-        self.sense_signals(i, out);
+        self.sense_mission(i, out);
         let mut listed = std::mem::take(&mut self.listed[i]);
         let mut scratch = std::mem::take(&mut self.scratch);
         self.sense_geometry(i, &mut listed, &mut scratch, out);
@@ -205,10 +210,10 @@ impl World {
         self.scratch = scratch;
     }
 
-    /// The part of [`World::sense`] that draws from the world's random stream (target signal
-    /// noise, drawn in robot order): must be called for the live robots in id order, before
-    /// their [`World::sense_geometry`].
-    pub fn sense_signals(&mut self, i: usize, out: &mut Sense) {
+    /// The part of [`World::sense`] that may draw from the mission's random streams (sensor
+    /// noise, drawn in robot order): the robot's own state and the mission's entities. Must be
+    /// called for the live robots in id order, before their [`World::sense_geometry`].
+    pub fn sense_mission(&mut self, i: usize, out: &mut Sense) {
         let p = self.poses[i];
         out.tick = self.tick;
         out.robot = i as u32;
@@ -221,10 +226,8 @@ impl World {
         out.heading = p[2];
         out.vel = self.vel[i];
         out.alive_robots = self.alive_count();
-        out.n_signals = 0;
-        if let Some(t) = self.targets.as_mut() {
-            t.sense(&self.sc, i as u32, [p[0], p[1]], out);
-        }
+        out.n_entities = 0;
+        self.mission.sense(i as u32, [p[0], p[1]], out);
     }
 
     /// The rest of [`World::sense`]: the neighbour list (`listed`: robot i's last one, see
@@ -257,6 +260,18 @@ impl World {
             scratch,
             out,
         );
+        out.n_nearby = 0;
+        if self.sc.robot.neighbour_sensing_radius > 0.0 {
+            fill_nearby(
+                i,
+                &self.poses,
+                &self.vel,
+                &self.alive,
+                self.sc.robot.neighbour_sensing_radius,
+                scratch,
+                out,
+            );
+        }
     }
 
     /// Hands out every robot's last neighbour list, for callers of
@@ -364,23 +379,26 @@ impl World {
         if a.tick != self.tick {
             return Err(RejectReason::WrongTick);
         }
-        if !a.vel[0].is_finite() || !a.vel[1].is_finite() {
+        if !a.cmd[0].is_finite() || !a.cmd[1].is_finite() {
             return Err(RejectReason::NotFinite);
         }
-        if (a.vel[0] * a.vel[0] + a.vel[1] * a.vel[1]).sqrt()
-            > self.sc.robot.v_max * (1.0 + SPEED_TOLERANCE)
-        {
-            return Err(RejectReason::TooFast);
+        let k = &self.sc.robot.kinematics;
+        match kinematics::within_limits(k, a.cmd, self.sc.robot.v_max, SPEED_TOLERANCE) {
+            Limit::Within => Ok(()),
+            Limit::TooFast => Err(RejectReason::TooFast),
+            Limit::TurnTooFast => Err(RejectReason::TurnTooFast),
         }
-        Ok(())
     }
 
     /// Where a step from p along v ends: stops short of obstacles and walls (the whole segment
-    /// is checked, not only its end point).
+    /// is checked, not only its end point; for disc robots, the disc along it).
     fn clip_move(&self, p: Vec2, v: Vec2) -> (Vec2, bool) {
         let len = v.norm();
         if len == 0.0 {
             return (p, false);
+        }
+        if self.sc.robot.radius > 0.0 {
+            return self.clip_disc_move(p, v);
         }
         let t = self.first_hit(p, v, len >= MIN_CULLED_MOVE);
         match t {
@@ -390,6 +408,43 @@ impl World {
                 (p + v * s, true)
             }
         }
+    }
+
+    /// [`World::clip_move`] for a disc of `robot.radius`: the step is walked in sub-steps of at
+    /// most half a radius; at the first sub-step whose end the disc cannot stand on, the last
+    /// clear fraction is found by bisection. A disc that starts overlapping (a scenario may
+    /// start it so) may move wherever its clearance does not shrink.
+    fn clip_disc_move(&self, p: Vec2, v: Vec2) -> (Vec2, bool) {
+        let r = self.sc.robot.radius;
+        let at = |s: f64| p + v * s;
+        let clear_at = |s: f64| {
+            let q = at(s);
+            self.statics.clearance([q.x, q.y])
+        };
+        let start = clear_at(0.0);
+        let ok = |s: f64| {
+            let c = clear_at(s);
+            c >= r || (start < r && c >= start)
+        };
+        let steps = ((v.norm() / (0.5 * r)).ceil() as usize).clamp(1, 1000);
+        let mut last = 0.0;
+        for k in 1..=steps {
+            let s = k as f64 / steps as f64;
+            if !ok(s) {
+                let (mut lo, mut hi) = (last, s);
+                for _ in 0..DISC_BISECTIONS {
+                    let mid = 0.5 * (lo + hi);
+                    if ok(mid) {
+                        lo = mid;
+                    } else {
+                        hi = mid;
+                    }
+                }
+                return (at(lo), true);
+            }
+            last = s;
+        }
+        (at(1.0), false)
     }
 
     /// Smallest t in [0, 1] at which the step p -> p + v meets a wall or an obstacle. With
@@ -508,27 +563,31 @@ impl World {
                 });
             }
             let p = Vec2::new(self.poses[i][0], self.poses[i][1]);
-            let (q, blocked) = self.clip_move(p, v2(a.vel));
+            let (step, turned) =
+                kinematics::intended(&self.sc.robot.kinematics, self.poses[i], a.cmd);
+            let (q, blocked) = self.clip_move(p, v2(step));
             if blocked {
                 self.blocked_moves += 1;
                 events.push(Event::MoveBlocked { robot: i as u32 });
             }
             let moved = q - p;
             self.distance_travelled += moved.norm();
-            let heading = if moved.norm() > 0.0 {
-                moved.y.atan2(moved.x)
-            } else {
-                self.poses[i][2]
+            let heading = match turned {
+                Some(h) => h,
+                None if moved.norm() > 0.0 => moved.y.atan2(moved.x),
+                None => self.poses[i][2],
             };
             self.poses[i] = [q.x, q.y, heading];
             self.coverage.visit([q.x, q.y]);
             self.vel[i] = [moved.x, moved.y];
         }
-        if let Some(t) = self.targets.as_mut() {
-            for (target, robot) in t.update(&self.sc, k, &self.poses, &self.alive) {
-                events.push(Event::TargetFound { target, robot });
-            }
-        }
+        self.mission
+            .update(k, &self.poses, &self.alive, &mut events);
+        let extra = self.body.as_mut().map(|summary| {
+            let f = crate::body::figures(&self.statics, &self.poses, self.sc.robot.radius);
+            summary.add(&f);
+            TickExtra { body: Some(f) }
+        });
         self.radio.add(&radio);
         if (k + 1).is_multiple_of(self.traj_every) {
             for i in 0..self.n {
@@ -547,6 +606,16 @@ impl World {
             states: self.states.clone(),
             events,
             radio,
+            extra,
+        }
+    }
+
+    /// The recording version this run writes: 2 (a TickExtra a tick) when robots have a body.
+    pub fn recording_version(&self) -> u32 {
+        if self.body.is_some() {
+            swarm::recording::RECORDING_VERSION_EXTRA
+        } else {
+            swarm::recording::RECORDING_VERSION
         }
     }
 
@@ -563,9 +632,16 @@ impl World {
         self.radio.in_flight = self.in_flight.drain(..).map(|f| f.in_range).sum();
     }
 
-    /// The mission is complete (search: every target found and search.end_when_all_found).
-    pub fn mission_complete(&self) -> bool {
-        self.sc.search.end_when_all_found && self.targets.as_ref().is_some_and(|t| t.all_found())
+    /// Why the run ends after this tick, if it does: the mission is complete, or every robot
+    /// is dead. The one place both executors ask.
+    pub fn end_reason(&self) -> Option<&'static str> {
+        if self.mission.complete() {
+            Some(self.mission.end_reason())
+        } else if self.alive_count() == 0 {
+            Some("all robots dead")
+        } else {
+            None
+        }
     }
 
     pub fn status(&self, finished: bool) -> WorldStatus {
@@ -577,8 +653,8 @@ impl World {
             dead: self.n as u32 - alive,
             finished: finished as u32,
             restarted: self.restarts() as u32,
-            targets: self.targets.as_ref().map_or(0, |t| t.pos.len() as u32),
-            found: self.targets.as_ref().map_or(0, |t| t.found_count()),
+            progress_total: self.mission.progress().1,
+            progress_done: self.mission.progress().0,
             offered: self.radio.offered,
             delivered: self.radio.delivered,
             dropped_range: self.radio.dropped_range,
@@ -602,14 +678,14 @@ mod tests {
     fn bad_actions_are_rejected_counted_and_the_world_carries_on() {
         let mut w = world();
         let mut acts: Vec<Option<Action>> = (0..5).map(|i| Some(Action::idle(0, i))).collect();
-        acts[0].as_mut().unwrap().vel = [f64::NAN, 0.0];
-        acts[1].as_mut().unwrap().vel = [f64::INFINITY, 0.0];
-        acts[2].as_mut().unwrap().vel = [1e9, 0.0];
+        acts[0].as_mut().unwrap().cmd = [f64::NAN, 0.0];
+        acts[1].as_mut().unwrap().cmd = [f64::INFINITY, 0.0];
+        acts[2].as_mut().unwrap().cmd = [1e9, 0.0];
         acts[3].as_mut().unwrap().robot = 77;
         acts[4].as_mut().unwrap().n_sent = 1000;
         let before = w.poses.clone();
         let rec = w.apply(&acts);
-        assert_eq!(w.rejected, [2, 1, 1, 0, 1]);
+        assert_eq!(w.rejected, [2, 1, 1, 0, 1, 0]);
         assert_eq!(rec.events.len(), 5);
         assert_eq!(&w.poses[..4], &before[..4]);
         assert!(w.poses.iter().all(|p| p.iter().all(|x| x.is_finite())));
@@ -624,8 +700,8 @@ mod tests {
         // Robot 1 at the wall, pushed out.
         w.poses[1] = [3.0, 50.0, 0.0];
         let mut acts: Vec<Option<Action>> = (0..5).map(|i| Some(Action::idle(0, i))).collect();
-        acts[0].as_mut().unwrap().vel = [10.0, 0.0];
-        acts[1].as_mut().unwrap().vel = [-10.0, 0.0];
+        acts[0].as_mut().unwrap().cmd = [10.0, 0.0];
+        acts[1].as_mut().unwrap().cmd = [-10.0, 0.0];
         w.apply(&acts);
         // The block's left edge crosses y = 260 at x = 294.545...: the robot stops 0.5 short.
         assert!(
@@ -651,7 +727,7 @@ mod tests {
         let acts: Vec<Option<Action>> = (0..5)
             .map(|i| {
                 let mut a = Action::idle(0, i);
-                a.vel = [1.0, 0.0];
+                a.cmd = [1.0, 0.0];
                 Some(a)
             })
             .collect();

@@ -6,6 +6,17 @@ use super::roam::{Beacon, Roam};
 use swarm::scenario::Scenario;
 use swarm::{Behaviour, Command, Outbox, Received, Sense};
 
+/// The registry's name of this behaviour.
+pub const NAME: &str = "faulty";
+
+/// Roam's section and checks.
+pub use super::roam::{resolve, validate};
+
+/// Calls `v` with the faulty robot's constructor.
+pub fn dispatch<V: crate::BehaviourVisitor>(sc: &Scenario, v: V) -> V::Out {
+    v.visit(&|i| Faulty::new(sc, i))
+}
+
 /// Every this many ticks the robot misbehaves once (cycling through the faults).
 pub const FAULT_PERIOD: u64 = 10;
 
@@ -37,9 +48,9 @@ impl Behaviour for Faulty {
     ) -> Command {
         let mut c = self.inner.step_refs(s, inbox, out);
         match fault_at(s.tick) {
-            Some(0) => c.vel = [f64::NAN, 1.0],
-            Some(1) => c.vel = [f64::INFINITY, 0.0],
-            Some(_) => c.vel = [1e6, 1e6],
+            Some(0) => c.cmd = [f64::NAN, 1.0],
+            Some(1) => c.cmd = [f64::INFINITY, 0.0],
+            Some(_) => c.cmd = [1e6, 1e6],
             None => {}
         }
         c

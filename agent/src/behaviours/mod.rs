@@ -1,10 +1,15 @@
-//! Behaviours, chosen by the scenario's `run.behaviour`.
+//! Behaviours, chosen by the scenario's `run.behaviour`, and their registry.
+//!
+//! A behaviour is a folder or file here with a `NAME`, a `validate` of its scenario section, a
+//! `resolve` that writes its defaults into the scenario (a no-op for most) and a `dispatch`
+//! that calls a [`BehaviourVisitor`] with its constructor; adding one is adding its file and
+//! its line in `registry!` below.
 
 pub mod faulty;
 pub mod roam;
 pub mod search;
 
-use swarm::scenario::Scenario;
+use swarm::scenario::{Check, ConfigError, Scenario};
 use swarm::Behaviour;
 
 /// Something to do with the scenario's behaviour type (run it in a process, or in-process).
@@ -15,41 +20,73 @@ pub trait BehaviourVisitor {
         B::Msg: Send + Sync;
 }
 
-/// Checks the behaviour's own parameters (beyond what swarm::scenario validates).
-pub fn validate(sc: &Scenario) -> Result<(), String> {
-    match sc.run.behaviour.as_str() {
-        "search" => search_validate(sc),
-        _ => Ok(()),
-    }
-}
+/// The registry: one line per behaviour module. Generates the list of names, and
+/// `validate` / `resolve_defaults` / `dispatch` by name.
+macro_rules! registry {
+    ($($m:ident),* $(,)?) => {
+        /// Every behaviour an agent can run.
+        pub const BEHAVIOURS: &[&str] = &[$($m::NAME),*];
 
-/// Writes every parameter of the behaviour into the scenario, defaults included, so the run's
-/// resolved scenario.toml lists each value the algorithms use (the search kernels' defaults
-/// live in code, with their sources, in behaviours/search/params.rs and search/*.rs).
-pub fn resolve_defaults(sc: &mut Scenario) -> Result<(), String> {
-    if sc.run.behaviour == "search" {
-        let p = search::parse_params(sc)?;
-        sc.search.kernels =
-            toml::Table::try_from(&p).map_err(|e| format!("search.kernels: {e}"))?;
-    }
-    Ok(())
-}
-
-/// Calls `v` with the constructor of the scenario's behaviour (validated beforehand).
-pub fn dispatch<V: BehaviourVisitor>(sc: &Scenario, v: V) -> V::Out {
-    match sc.run.behaviour.as_str() {
-        // Beacons with a bulk payload are their own type (received in place).
-        "roam" if sc.roam.payload_bytes > 0 => {
-            v.visit(&|i| roam::Roam::<roam::BulkBeacon>::new(sc, i))
+        /// Checks that `run.behaviour` names a behaviour and that its section is valid.
+        pub fn validate_with(sc: &Scenario, c: &Check) -> Result<(), ConfigError> {
+            $(if sc.run.behaviour == $m::NAME {
+                return $m::validate(sc, c);
+            })*
+            Err(c.err(
+                "run.behaviour",
+                format!("= {:?} is unknown: allowed {:?}", sc.run.behaviour, BEHAVIOURS),
+            ))
         }
-        "roam" => v.visit(&|i| roam::Roam::<roam::Beacon>::new(sc, i)),
-        "faulty" => v.visit(&|i| faulty::Faulty::new(sc, i)),
-        "search" => v.visit(&|i| search::Search::new(sc, i)),
-        other => panic!("unknown behaviour {other:?} (the scenario was not validated)"),
-    }
+
+        /// Writes every parameter of the behaviour into the scenario, defaults included, so
+        /// the run's resolved scenario.toml lists each value the algorithms use.
+        pub fn resolve_defaults(sc: &mut Scenario) -> Result<(), ConfigError> {
+            $(if sc.run.behaviour == $m::NAME {
+                return $m::resolve(sc);
+            })*
+            Ok(())
+        }
+
+        /// Calls `v` with the constructor of the scenario's behaviour (validated beforehand).
+        pub fn dispatch<V: BehaviourVisitor>(sc: &Scenario, v: V) -> V::Out {
+            $(if sc.run.behaviour == $m::NAME {
+                return $m::dispatch(sc, v);
+            })*
+            panic!("unknown behaviour {:?} (the scenario was not validated)", sc.run.behaviour)
+        }
+    };
 }
 
-/// The search behaviour's parameters (`search.kernels`) and mode.
-fn search_validate(sc: &Scenario) -> Result<(), String> {
-    search::validate_search(sc)
+registry!(roam, faulty, search);
+
+/// [`validate_with`], errors naming the scenario file (`source`) as where every key came from.
+pub fn validate(sc: &Scenario, source: &str) -> Result<(), ConfigError> {
+    validate_with(
+        sc,
+        &Check {
+            key_source: &|_| source.to_string(),
+        },
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn unknown_behaviour_is_named_with_the_allowed_ones() {
+        let mut sc = Scenario::default();
+        sc.run.behaviour = "dance".into();
+        let e = validate(&sc, "t.toml").unwrap_err();
+        assert_eq!(e.key, "run.behaviour");
+        assert!(
+            e.to_string().contains("roam") && e.to_string().contains("search"),
+            "{e}"
+        );
+        for name in BEHAVIOURS {
+            let mut sc = Scenario::default();
+            sc.run.behaviour = name.to_string();
+            validate(&sc, "t.toml").unwrap();
+        }
+    }
 }

@@ -4,8 +4,8 @@
 
 use rand::Rng;
 use serde::{Deserialize, Serialize};
-use swarm::behaviour::robot_rng;
-use swarm::scenario::{RoamParams, Scenario};
+use swarm::scenario::{Check, ConfigError, RoamParams, Scenario, ROAM_BEACON_OVERHEAD};
+use swarm::streams;
 use swarm::{Behaviour, Blob, Command, Outbox, Received, Sense};
 
 /// The position beacon every roaming robot broadcasts.
@@ -54,6 +54,45 @@ impl BeaconMsg for BulkBeacon {
     }
 }
 
+/// The registry's name of this behaviour.
+pub const NAME: &str = "roam";
+
+/// Checks the `[roam]` section.
+pub fn validate(sc: &Scenario, c: &Check) -> Result<(), ConfigError> {
+    let r = &sc.roam;
+    c.range_f("roam.l_r", r.l_r, 0.0, 1e7, true)?;
+    c.range_f("roam.c", r.c, 0.0, 1e7, true)?;
+    c.range_f("roam.l1", r.l1, 0.0, 1e7, true)?;
+    c.range_f("roam.obstacle_range", r.obstacle_range, 0.0, 1e7, false)?;
+    c.range_f("roam.obstacle_weight", r.obstacle_weight, 0.0, 1e7, false)?;
+    c.range_u(
+        "roam.payload_bytes",
+        r.payload_bytes as u64,
+        0,
+        sc.radio
+            .max_message_bytes
+            .saturating_sub(ROAM_BEACON_OVERHEAD) as u64,
+    )
+    .map_err(|mut e| {
+        e.message += " (radio.max_message_bytes less the beacon's own bytes)";
+        e
+    })
+}
+
+/// Nothing to resolve: the `[roam]` section lists every value.
+pub fn resolve(_sc: &mut Scenario) -> Result<(), ConfigError> {
+    Ok(())
+}
+
+/// Beacons with a bulk payload are their own type (received in place).
+pub fn dispatch<V: crate::BehaviourVisitor>(sc: &Scenario, v: V) -> V::Out {
+    if sc.roam.payload_bytes > 0 {
+        v.visit(&|i| Roam::<BulkBeacon>::new(sc, i))
+    } else {
+        v.visit(&|i| Roam::<Beacon>::new(sc, i))
+    }
+}
+
 pub struct Roam<M = Beacon> {
     p: RoamParams,
     v_max: f64,
@@ -66,7 +105,7 @@ pub struct Roam<M = Beacon> {
 
 impl<M: BeaconMsg> Roam<M> {
     pub fn new(sc: &Scenario, robot: u32) -> Roam<M> {
-        let mut rng = robot_rng(sc.run.seed, robot, 2);
+        let mut rng = streams::rng(sc.run.seed, robot, streams::ROAM_HEADING);
         Roam {
             p: sc.roam.clone(),
             v_max: sc.robot.v_max,
@@ -125,7 +164,7 @@ impl<M: BeaconMsg> Behaviour for Roam<M> {
         }
         // V_if(t+1) = V_max (cos angle(f), sin angle(f)).
         Command {
-            vel: [
+            cmd: [
                 self.v_max * self.heading.cos(),
                 self.v_max * self.heading.sin(),
             ],
@@ -169,7 +208,13 @@ mod tests {
         assert_eq!(&sent[0].1.payload[..], &[3u8; 3000][..]);
         // It must fit in a radio message.
         sc.roam.payload_bytes = 4090;
-        let e = sc.validate(&|k| k.to_string()).unwrap_err();
+        let e = validate(
+            &sc,
+            &Check {
+                key_source: &|k| k.to_string(),
+            },
+        )
+        .unwrap_err();
         assert!(e.to_string().contains("roam.payload_bytes"), "{e}");
     }
 
@@ -186,13 +231,13 @@ mod tests {
         ];
         let mut out = Outbox::new_for_tests(4);
         let c = r.step(&s, &inbox, &mut out);
-        let speed = (c.vel[0].powi(2) + c.vel[1].powi(2)).sqrt();
+        let speed = (c.cmd[0].powi(2) + c.cmd[1].powi(2)).sqrt();
         assert!((speed - 10.0).abs() < 1e-9);
         // Away from (490,500) and (500,490): up and to the right, at 45 degrees.
         assert!(
-            (c.vel[0] - c.vel[1]).abs() < 1e-9 && c.vel[0] > 0.0,
+            (c.cmd[0] - c.cmd[1]).abs() < 1e-9 && c.cmd[0] > 0.0,
             "{:?}",
-            c.vel
+            c.cmd
         );
     }
 

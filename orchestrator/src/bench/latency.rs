@@ -38,7 +38,7 @@ use std::rc::Rc;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 use swarm::barrier::{TickBarrier, Wake};
-use swarm::frames::{Action, MAX_NEIGHBOURS, MAX_OBSTACLE_POINTS, MAX_SIGNALS};
+use swarm::frames::{Action, MAX_NEIGHBOURS};
 use swarm::scenario::Scenario;
 use swarm::transport::ShmTx;
 use swarm::{cleanup, transport, AgentRuntime, Behaviour, Blob, Command, Outbox, Received, Sense};
@@ -1024,12 +1024,10 @@ fn child_sense(a: &ChildArgs, mode: Mode) -> Result<(), String> {
         let p = sample.payload_mut().as_mut_ptr();
         // SAFETY: Sense is plain old data, valid when zeroed. As the world does, the fixed part
         // is zeroed and then every field is written through a reference; here every list is
-        // written in full (the largest frame), the signal entries zeroed first.
+        // written in full (the largest frame).
         let s = unsafe {
-            std::ptr::write_bytes(p as *mut u8, 0, 72);
-            let s = &mut *p;
-            std::ptr::write_bytes(s.signals.as_mut_ptr(), 0, MAX_SIGNALS);
-            s
+            std::ptr::write_bytes(p as *mut u8, 0, swarm::frames::SENSE_FIXED_BYTES);
+            &mut *p
         };
         s.tick = stamp;
         s.robot = 0;
@@ -1037,19 +1035,7 @@ fn child_sense(a: &ChildArgs, mode: Mode) -> Result<(), String> {
         s.heading = 0.5;
         s.vel = [1.0, 0.0];
         s.alive_robots = MAX_NEIGHBOURS as u32;
-        s.n_neighbours = MAX_NEIGHBOURS as u32;
-        s.n_obstacle_points = MAX_OBSTACLE_POINTS as u32;
-        s.n_signals = MAX_SIGNALS as u32;
-        for (i, n) in s.neighbours.iter_mut().enumerate() {
-            *n = i as u32;
-        }
-        for (i, q) in s.obstacle_points.iter_mut().enumerate() {
-            *q = [i as f64, r as f64];
-        }
-        for (i, g) in s.signals.iter_mut().enumerate() {
-            g.target = i as u32;
-            g.intensity = 1.0 / (1.0 + i as f64);
-        }
+        s.fill_every_list(r as f64);
         // SAFETY: every byte written above.
         let sample = unsafe { sample.assume_init() };
         sample.send().map_err(e("sense send"))?;

@@ -32,9 +32,7 @@ fn scenario(robots: u32, mode: &str, seed: u64) -> Result<Scenario, String> {
     sc.run.robots = robots;
     sc.run.seed = seed;
     sc.search.mode = mode.to_string();
-    sc.validate(&|_| "bench search".into())
-        .map_err(|e| e.to_string())?;
-    agent::behaviours::validate(&sc)?;
+    crate::prepare::prepare_from(&mut sc, "bench search").map_err(|e| e.to_string())?;
     Ok(sc)
 }
 

@@ -136,7 +136,7 @@ pub fn bench_tick(sizes: &[u32], ticks: u64) -> Result<Vec<Row>, String> {
             let mut sc = Scenario::default();
             sc.run.robots = n;
             sc.run.max_ticks = ticks;
-            agent::behaviours::resolve_defaults(&mut sc)?;
+            crate::prepare::prepare_from(&mut sc, "bench tick").map_err(|e| e.to_string())?;
             Some(run_stats(&sc)?)
         } else {
             None

@@ -3,7 +3,7 @@
 //! inbox only.
 //!
 //! Per tick (messages heard were sent at the previous tick):
-//! 1. A robot whose arrival sensor fired (SIGNAL_FOUND_BY_YOU) declares: it broadcasts the find
+//! 1. A robot whose arrival sensor fired (ENTITY_DONE_BY_YOU) declares: it broadcasts the find
 //!    for `declare_ticks` ticks and stands still for good (spec 5 item 8).
 //! 2. Found targets (own find, `Found` messages, and the gossiped found lists) are excluded.
 //! 3. Type I: own signals above I_min, roulette of eqs. (2)-(3) keeping the previous choice.
@@ -60,20 +60,56 @@ use rand_chacha::ChaCha8Rng;
 use std::collections::BTreeMap;
 use std::collections::BTreeSet;
 use std::sync::{Arc, Mutex};
-use swarm::behaviour::robot_rng;
-use swarm::frames::{SIGNAL_FOUND_BY_YOU, STATE_COOPERATIVE, STATE_DECLARED, STATE_ROAMING};
+use swarm::frames::{ENTITY_DONE_BY_YOU, STATE_DEFAULT as STATE_ROAMING};
 use swarm::scenario::Scenario;
+use swarm::scenario::{Check, ConfigError};
+use swarm::sections::search::{STATE_COOPERATIVE, STATE_DECLARED};
+use swarm::streams::rng as robot_rng;
 use swarm::{Behaviour, Command, Outbox, Received, Sense};
+
+/// The registry's name of this behaviour.
+pub const NAME: &str = "search";
+
+/// Checks the search behaviour's mode and kernels (`search.mode`, `search.kernels`) against
+/// the scenario.
+pub fn validate(sc: &Scenario, c: &Check) -> Result<(), ConfigError> {
+    validate_search(sc).map_err(|message| {
+        let key = if message.starts_with("search.kernels") {
+            "search.kernels"
+        } else {
+            "search.mode"
+        };
+        c.err(key, message)
+    })
+}
+
+/// Writes every kernel parameter into `search.kernels`, defaults included, so the run's
+/// resolved scenario.toml lists each value the algorithms use (the kernels' defaults live in
+/// code, with their sources, in params.rs and search/*.rs).
+pub fn resolve(sc: &mut Scenario) -> Result<(), ConfigError> {
+    let bad = |message: String| ConfigError {
+        source: "search behaviour".into(),
+        key: "search.kernels".into(),
+        message,
+    };
+    let p = parse_params(sc).map_err(bad)?;
+    sc.search.kernels = toml::Table::try_from(&p).map_err(|e| bad(e.to_string()))?;
+    Ok(())
+}
+
+/// Calls `v` with the search robot's constructor.
+pub fn dispatch<V: crate::BehaviourVisitor>(sc: &Scenario, v: V) -> V::Out {
+    v.visit(&|i| Search::new(sc, i))
+}
 
 /// Event flag (above the display-state byte) set on the tick a robot declares a find.
 pub const EVENT_TARGET_DECLARED: u32 = 1 << 8;
 
-/// Random streams of `robot_rng` used by this behaviour.
-const STREAM_HEADING: u64 = 20;
-const STREAM_CALIBRATION: u64 = 21;
-const STREAM_ROULETTE: u64 = 22;
-const STREAM_PSO: u64 = 23;
-const STREAM_BAT: u64 = 24;
+/// Random streams used by this behaviour (swarm::streams names every stream of a run).
+use swarm::streams::{
+    SEARCH_BAT as STREAM_BAT, SEARCH_CALIBRATION as STREAM_CALIBRATION,
+    SEARCH_HEADING as STREAM_HEADING, SEARCH_PSO as STREAM_PSO, SEARCH_ROULETTE as STREAM_ROULETTE,
+};
 
 /// The robot's state (paper 2.3, Fig. 1).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -200,7 +236,7 @@ impl Search {
         }
         self.last_vel = Vec2::zeros();
         Command {
-            vel: [0.0, 0.0],
+            cmd: [0.0, 0.0],
             events: STATE_DECLARED | events,
         }
     }
@@ -343,15 +379,15 @@ impl Behaviour for Search {
         }
         // 1. Arrival sensor: this robot found a target at the last move.
         if let Some(t) = s
-            .signals()
+            .entities()
             .iter()
-            .filter(|g| g.flags & SIGNAL_FOUND_BY_YOU != 0)
-            .map(|g| g.target)
+            .filter(|g| g.flags & ENTITY_DONE_BY_YOU != 0)
+            .map(|g| g.id)
             .min()
         {
-            for g in s.signals() {
-                if g.flags & SIGNAL_FOUND_BY_YOU != 0 {
-                    self.found.insert(g.target);
+            for g in s.entities() {
+                if g.flags & ENTITY_DONE_BY_YOU != 0 {
+                    self.found.insert(g.id);
                 }
             }
             self.mode = Mode::Declared { target: t };
@@ -391,10 +427,10 @@ impl Behaviour for Search {
         let i_min = self.p.subgroup.i_min;
         // 3. Own signals of targets not known to be found.
         let signals: Vec<(usize, f64)> = s
-            .signals()
+            .entities()
             .iter()
-            .filter(|g| g.flags == 0 && !self.found.contains(&g.target))
-            .map(|g| (g.target as usize, g.intensity))
+            .filter(|g| g.flags == 0 && !self.found.contains(&g.id))
+            .map(|g| (g.id as usize, g.value))
             .collect();
         let cand = self.candidacy(&me, &signals, &heard);
 
@@ -580,7 +616,7 @@ impl Behaviour for Search {
             .filter(|(_, i)| *i > i_min)
             .map(|(t, i)| (*t as u32, *i as f32))
             .collect();
-        detections.truncate(swarm::frames::MAX_SIGNALS);
+        detections.truncate(swarm::sections::search::MAX_SIGNALS);
         let status = Status {
             pos: pack(s.pos),
             detections,
@@ -601,7 +637,7 @@ impl Behaviour for Search {
         out.broadcast(Msg::Status(status.clone()));
         self.last_status = Some(status);
         Command {
-            vel: [v.x, v.y],
+            cmd: [v.x, v.y],
             events: if member {
                 STATE_COOPERATIVE
             } else {

@@ -144,10 +144,10 @@ pub fn parse_params(sc: &Scenario) -> Result<Params, String> {
 }
 
 /// An upper bound of the encoded size of one status message (bincode, varint integers):
-/// position 8, up to 16 detections of (target <= 5, f32 4), the candidacy <= 40, the found list
+/// position 8, up to MAX_SIGNALS detections of (target <= 5, f32 4), the candidacy <= 40, the found list
 /// (length <= 5, each id <= 5), enum tags and lengths.
 pub fn status_size_bound(targets: u32) -> usize {
-    8 + 5 + 16 * 9 + 40 + 5 + 5 * targets as usize + 8
+    8 + 5 + 9 * swarm::sections::search::MAX_SIGNALS + 40 + 5 + 5 * targets as usize + 8
 }
 
 /// Checks the search behaviour's parameters and mode against the scenario.

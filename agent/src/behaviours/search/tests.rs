@@ -1,5 +1,5 @@
 use super::*;
-use swarm::frames::Signal;
+use swarm::frames::Entity;
 
 fn scenario(mode: &str) -> Scenario {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../configs/search.toml");
@@ -12,13 +12,16 @@ fn sense(pos: [f64; 2], signals: &[(u32, u32, f64)]) -> Box<Sense> {
     let mut s = Sense::zeroed();
     s.pos = pos;
     for (k, &(target, flags, intensity)) in signals.iter().enumerate() {
-        s.signals[k] = Signal {
-            target,
+        s.entities[k] = Entity {
+            id: target,
+            kind: swarm::sections::search::ENTITY_SIGNAL,
             flags,
-            intensity,
+            reserved: 0,
+            pos: [0.0; 2],
+            value: intensity,
         };
     }
-    s.n_signals = signals.len() as u32;
+    s.n_entities = signals.len() as u32;
     s
 }
 
@@ -43,7 +46,7 @@ fn rx(from: u32, msg: Msg) -> Received<Msg> {
 }
 
 fn speed(c: &Command) -> f64 {
-    (c.vel[0].powi(2) + c.vel[1].powi(2)).sqrt()
+    (c.cmd[0].powi(2) + c.cmd[1].powi(2)).sqrt()
 }
 
 fn signal_at(d: f64) -> f64 {
@@ -79,7 +82,7 @@ fn type1_robot_picks_its_target_and_heads_for_the_estimate() {
     }
     let est = r.last_estimate().expect("three detectors give T_est");
     assert!((est - v2(target[0], target[1])).norm() < 3.0, "{est:?}");
-    let v = v2(c.vel[0], c.vel[1]);
+    let v = v2(c.cmd[0], c.cmd[1]);
     let to = v2(target[0] - me[0], target[1] - me[1]);
     assert!(
         v.norm() > 0.0 && v.dot(&to) / (v.norm() * to.norm()) > 0.99,
@@ -207,12 +210,12 @@ fn declaration_stops_the_robot_for_good() {
     let c = r.step(
         &sense(
             [400.0, 400.0],
-            &[(6, SIGNAL_FOUND_BY_YOU, 0.0), (1, 0, 50.0)],
+            &[(6, ENTITY_DONE_BY_YOU, 0.0), (1, 0, 50.0)],
         ),
         &[],
         &mut Outbox::new_for_tests(8),
     );
-    assert_eq!(c.vel, [0.0, 0.0]);
+    assert_eq!(c.cmd, [0.0, 0.0]);
     assert_eq!(c.events & 0xff, STATE_DECLARED);
     assert_ne!(c.events & EVENT_TARGET_DECLARED, 0);
     assert_eq!(r.mode(), Mode::Declared { target: 6 });
@@ -227,7 +230,7 @@ fn declaration_stops_the_robot_for_good() {
             )],
             &mut Outbox::new_for_tests(8),
         );
-        assert_eq!(c.vel, [0.0, 0.0]);
+        assert_eq!(c.cmd, [0.0, 0.0]);
         assert_eq!(c.events, STATE_DECLARED);
     }
 }
@@ -336,9 +339,9 @@ fn roaming_is_repelled_by_the_two_nearest_robots_heard_and_keeps_heading_otherwi
     );
     assert!((speed(&c) - 10.0).abs() < 1e-9);
     assert!(
-        (c.vel[0] - c.vel[1]).abs() < 1e-9 && c.vel[0] > 0.0,
+        (c.cmd[0] - c.cmd[1]).abs() < 1e-9 && c.cmd[0] > 0.0,
         "{:?}",
-        c.vel
+        c.cmd
     );
     // Nothing heard: same heading.
     let c2 = r.step(
@@ -346,7 +349,7 @@ fn roaming_is_repelled_by_the_two_nearest_robots_heard_and_keeps_heading_otherwi
         &[],
         &mut Outbox::new_for_tests(8),
     );
-    assert!((c2.vel[0] - c.vel[0]).abs() < 1e-9 && (c2.vel[1] - c.vel[1]).abs() < 1e-9);
+    assert!((c2.cmd[0] - c.cmd[0]).abs() < 1e-9 && (c2.cmd[1] - c.cmd[1]).abs() < 1e-9);
 }
 
 #[test]
@@ -373,7 +376,7 @@ fn obstacle_layer_applies_while_roaming() {
         &[rx(1, status([495.0, 500.0], &[], None))],
         &mut Outbox::new_for_tests(8),
     );
-    assert!(c.vel[1].abs() > 1.0, "deflected: {:?}", c.vel);
+    assert!(c.cmd[1].abs() > 1.0, "deflected: {:?}", c.cmd);
     assert!(speed(&c) <= 10.0 + 1e-9);
 }
 
@@ -423,7 +426,7 @@ fn same_seed_same_commands() {
                     [300.0 + k as f64, 300.0],
                     &[(1, 0, 3.0 + (k % 3) as f64), (2, 0, 2.5)],
                 );
-                v.push(r.step(&s, &[], &mut Outbox::new_for_tests(8)).vel);
+                v.push(r.step(&s, &[], &mut Outbox::new_for_tests(8)).cmd);
             }
             v
         };
@@ -462,7 +465,7 @@ fn arba_robot_flies_to_the_subgroup_best_heard_on_the_radio() {
         );
         // At rest, it either flies by frequency (f_i (X* − X_i)) or walks to within A_i V_max
         // of X*, 55 away: either way towards X*, at most V_max.
-        let v = v2(c.vel[0], c.vel[1]);
+        let v = v2(c.cmd[0], c.cmd[1]);
         let to = v2(best[0] - me[0], best[1] - me[1]);
         assert!(
             speed(&c) > 0.0 && speed(&c) <= sc.robot.v_max + 1e-9,

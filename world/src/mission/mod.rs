@@ -1,0 +1,200 @@
+//! Missions: what is particular to one paper's world, beside the mission-free core
+//! (`world.rs`: physics, sensing of robots and obstacles, radio accounting, faults, recording).
+//!
+//! A mission owns its entities (targets, evaders, pattern slots), how they move, what robots
+//! sense of them (Sense `entities`), when it is complete, its metrics for `summary.json`, its
+//! layer of `run.svg` and its events in `recording.bin`. Adding one is adding its file and its
+//! line in [`MISSIONS`].
+
+pub mod roam;
+pub mod search;
+
+use serde::Serialize;
+use swarm::frames::Sense;
+use swarm::recording::Event;
+use swarm::scenario::{Check, ConfigError, Scenario};
+
+/// Why a mission could not be set up for a scenario that passed validation.
+#[derive(Debug, thiserror::Error)]
+pub enum MissionError {
+    /// The scenario's key `key` admits no setup (e.g. no free place for a target).
+    #[error("{key}: {message}")]
+    Setup { key: String, message: String },
+}
+
+/// A display state as its mission names it: the state byte of an Action, and how pictures
+/// colour a robot in it.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct DisplayState {
+    pub state: u8,
+    pub name: &'static str,
+    pub colour: [u8; 3],
+}
+
+/// One mark of a mission's layer of a picture, in arena coordinates (sizes in pixels).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub enum Mark {
+    /// A filled disc with an outline (`outline` None: none).
+    Disc {
+        at: [f64; 2],
+        px: u32,
+        fill: [u8; 3],
+        outline: Option<[u8; 3]>,
+    },
+    /// A ring (circle outline) `width` pixels wide.
+    Ring {
+        at: [f64; 2],
+        px: u32,
+        colour: [u8; 3],
+        width: u32,
+    },
+    /// A circle of `radius` arena units (a range, a body).
+    Circle {
+        at: [f64; 2],
+        radius: f64,
+        colour: [u8; 3],
+    },
+    /// A polyline.
+    Path {
+        points: Vec<[f64; 2]>,
+        colour: [u8; 3],
+    },
+}
+
+/// A legend entry: how the mark looks and what it means.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LegendEntry {
+    pub mark: Mark,
+    pub label: &'static str,
+}
+
+/// Facts of the run the core measured, for a mission's metrics.
+#[derive(Debug, Clone, Copy)]
+pub struct RunFacts {
+    /// Ticks run.
+    pub ticks: u64,
+    /// Total distance the robots moved.
+    pub distance_travelled: f64,
+}
+
+/// The world side of one paper's mission.
+pub trait Mission: Send + Sync {
+    /// The registry's name.
+    fn name(&self) -> &'static str;
+    /// Writes what robot `robot` at `pos` senses of the mission's entities into
+    /// `out.entities` (and `n_entities`, which the core sets to 0 before). Called for the live
+    /// robots in id order each tick, so a mission may draw sensor noise from its own stream.
+    fn sense(&mut self, robot: u32, pos: [f64; 2], out: &mut Sense);
+    /// After the moves of tick `tick`: the entities move and the mission judges progress,
+    /// pushing its events.
+    fn update(&mut self, tick: u64, poses: &[[f64; 3]], alive: &[bool], events: &mut Vec<Event>);
+    /// (done, total) of what the mission counts (search: targets found of targets; what it
+    /// counts is its registry entry's `progress_label`).
+    fn progress(&self) -> (u32, u32);
+    /// The run ends now; `end_reason` says why.
+    fn complete(&self) -> bool;
+    /// How a run ended by `complete` is reported ("all targets found").
+    fn end_reason(&self) -> &'static str;
+    /// The mission's metrics for summary.json (under `mission.<name>`), None for none.
+    fn metrics(&self, facts: &RunFacts) -> Option<serde_json::Value>;
+    /// The mission itself, for tests and tools that know which one it is
+    /// (`downcast_ref::<search::SearchMission>()`).
+    fn as_any(&self) -> &dyn std::any::Any;
+    /// The display states its behaviours use; empty: pictures colour robots by id.
+    fn display_states(&self) -> &'static [DisplayState] {
+        &[]
+    }
+    /// Its layer of run.svg (drawn over the trajectories, under the robots).
+    fn layer(&self) -> Vec<Mark> {
+        Vec::new()
+    }
+    /// Legend entries for its layer.
+    fn legend(&self) -> Vec<LegendEntry> {
+        Vec::new()
+    }
+}
+
+/// A registry line: a mission's name, the behaviours that imply it when `run.mission` is left
+/// out, the check of its scenario section, and its constructor.
+pub struct MissionEntry {
+    pub name: &'static str,
+    /// What its progress counts, for progress bars ("targets found"); empty: nothing.
+    pub progress_label: &'static str,
+    pub implied_by: &'static [&'static str],
+    pub validate: fn(&Scenario, &Check) -> Result<(), ConfigError>,
+    pub new: fn(&Scenario) -> Result<Box<dyn Mission>, MissionError>,
+}
+
+/// Every mission. The first is the default (roam: no entities, never complete).
+pub const MISSIONS: &[MissionEntry] = &[roam::ENTRY, search::ENTRY];
+
+/// The scenario's mission: `run.mission`, or the one its behaviour implies, or roam.
+pub fn entry_for(sc: &Scenario) -> Option<&'static MissionEntry> {
+    match &sc.run.mission {
+        Some(name) => MISSIONS.iter().find(|m| m.name == name),
+        None => Some(
+            MISSIONS
+                .iter()
+                .find(|m| m.implied_by.contains(&sc.run.behaviour.as_str()))
+                .unwrap_or(&MISSIONS[0]),
+        ),
+    }
+}
+
+/// What the scenario's mission's progress counts ("" for none or an unknown mission).
+pub fn progress_label(sc: &Scenario) -> &'static str {
+    entry_for(sc).map_or("", |m| m.progress_label)
+}
+
+/// Checks that `run.mission` names a mission, and the mission's section.
+pub fn validate_with(sc: &Scenario, c: &Check) -> Result<(), ConfigError> {
+    let Some(m) = entry_for(sc) else {
+        let names: Vec<&str> = MISSIONS.iter().map(|m| m.name).collect();
+        return Err(c.err(
+            "run.mission",
+            format!("= {:?} is unknown: allowed {names:?}", sc.run.mission),
+        ));
+    };
+    (m.validate)(sc, c)
+}
+
+/// [`validate_with`], errors naming `source` as where every key came from.
+pub fn validate(sc: &Scenario, source: &str) -> Result<(), ConfigError> {
+    validate_with(
+        sc,
+        &Check {
+            key_source: &|_| source.to_string(),
+        },
+    )
+}
+
+/// The scenario's mission, set up (the scenario validated beforehand).
+pub fn create(sc: &Scenario) -> Result<Box<dyn Mission>, MissionError> {
+    let m = entry_for(sc).ok_or_else(|| MissionError::Setup {
+        key: "run.mission".into(),
+        message: format!(
+            "{:?} is unknown (the scenario was not validated)",
+            sc.run.mission
+        ),
+    })?;
+    (m.new)(sc)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_behaviour_implies_the_mission_unless_one_is_named() {
+        let sc = Scenario::default();
+        assert_eq!(entry_for(&sc).unwrap().name, "search");
+        assert_eq!(entry_for(&Scenario::roam()).unwrap().name, "roam");
+        let mut sc = Scenario::roam();
+        sc.run.mission = Some("search".into());
+        assert_eq!(entry_for(&sc).unwrap().name, "search");
+        sc.run.mission = Some("chess".into());
+        let e = validate(&sc, "t.toml").unwrap_err();
+        assert_eq!(e.key, "run.mission");
+        assert!(e.to_string().contains("search"), "{e}");
+    }
+}
