@@ -810,4 +810,113 @@ mod tests {
         }
         assert!(hits > 500, "{hits}");
     }
+
+    #[test]
+    fn a_unicycle_turning_at_its_limit_traces_the_arc_of_eqs_2_8_to_2_10() {
+        let mut sc = Scenario::roam();
+        sc.run.robots = 1;
+        sc.arena.obstacles.clear();
+        let w_max = 0.2;
+        sc.robot.kinematics = swarm::scenario::Kinematics::Unicycle { w_max };
+        let mut w = World::new(&sc).unwrap();
+        let (x0, y0, phi0) = (500.0, 500.0, 0.3);
+        w.poses[0] = [x0, y0, phi0];
+        let v = sc.robot.v_max;
+        // Eqs. (2.8)-(2.10) with constant (v, w): every step is a chord of length v turning by
+        // w, so the positions are vertices of a regular polygon on the circle of radius
+        // R = v / (2 sin(w / 2)), centred on the perpendicular bisector of the first chord,
+        // (v / 2) / tan(w / 2) to its left.
+        let big_r = v / (2.0 * (w_max / 2.0).sin());
+        let d = v / 2.0 / (w_max / 2.0).tan();
+        let centre = [
+            x0 + v / 2.0 * (phi0).cos() + d * (phi0 + std::f64::consts::FRAC_PI_2).cos(),
+            y0 + v / 2.0 * (phi0).sin() + d * (phi0 + std::f64::consts::FRAC_PI_2).sin(),
+        ];
+        for k in 0..40 {
+            let mut act = Action::idle(w.tick, 0);
+            act.cmd = [v, w_max];
+            w.apply(&[Some(act)]);
+            let p = w.poses[0];
+            let r = ((p[0] - centre[0]).powi(2) + (p[1] - centre[1]).powi(2)).sqrt();
+            assert!((r - big_r).abs() < 1e-9, "tick {k}: {r} vs {big_r}");
+            let heading = crate::kinematics::wrap(phi0 + (k + 1) as f64 * w_max);
+            assert!((p[2] - heading).abs() < 1e-9, "tick {k}: heading {}", p[2]);
+        }
+        // Over the limit: rejected, the robot stands still.
+        let before = w.poses[0];
+        let mut act = Action::idle(w.tick, 0);
+        act.cmd = [v, w_max * 1.01];
+        w.apply(&[Some(act)]);
+        assert_eq!(w.poses[0], before);
+        assert_eq!(w.rejected[reason_index(RejectReason::TurnTooFast)], 1);
+    }
+
+    #[test]
+    fn disc_robots_stop_at_their_radius_and_their_overlaps_are_counted() {
+        let mut sc = Scenario::roam();
+        sc.run.robots = 3;
+        sc.robot.radius = 2.0;
+        let mut w = World::new(&sc).unwrap();
+        assert_eq!(
+            w.recording_version(),
+            swarm::recording::RECORDING_VERSION_EXTRA
+        );
+        // Robot 0 heads right into the convex block's left edge (x = 294.545 at y = 260):
+        // its centre stops 2 (the radius) short, not 0.5 as a point robot does.
+        w.poses[0] = [285.0, 260.0, 0.0];
+        // Robots 1 and 2 overlap (centres 3 apart, radius 2: clearance -1).
+        w.poses[1] = [50.0, 50.0, 0.0];
+        w.poses[2] = [53.0, 50.0, 0.0];
+        let mut acts: Vec<Option<Action>> = (0..3).map(|i| Some(Action::idle(0, i))).collect();
+        acts[0].as_mut().unwrap().cmd = [10.0, 0.0];
+        let rec = w.apply(&acts);
+        let edge_x = 300.0 - 600.0 / 110.0;
+        let gap = edge_x - w.poses[0][0];
+        // The distance to the slanted edge is the horizontal gap times cos of its slope.
+        let clearance = w.statics.clearance([w.poses[0][0], w.poses[0][1]]);
+        assert!(
+            clearance >= 2.0 - 1e-9 && clearance < 2.0 + 1e-6,
+            "{clearance} (gap {gap})"
+        );
+        assert_eq!(w.blocked_moves, 1);
+        let f = rec
+            .extra
+            .and_then(|e| e.body)
+            .expect("body figures every tick");
+        assert!((f.min_robot_clearance + 1.0).abs() < 1e-12, "{f:?}");
+        assert_eq!(f.overlapping_pairs, 1);
+        assert_eq!(f.obstacle_overlaps, 0);
+        let b = w.body.expect("summary figures");
+        assert_eq!((b.max_overlapping_pairs, b.ticks_with_overlap), (1, 1));
+        // A point-robot world writes no figures and keeps recording version 1.
+        let w = World::new(&Scenario::roam()).unwrap();
+        assert!(w.body.is_none());
+        assert_eq!(w.recording_version(), swarm::recording::RECORDING_VERSION);
+    }
+
+    #[test]
+    fn robots_sense_nearby_robots_with_positions_and_velocities_only_within_range() {
+        let mut sc = Scenario::roam();
+        sc.run.robots = 4;
+        sc.robot.neighbour_sensing_radius = 20.0;
+        let mut w = World::new(&sc).unwrap();
+        w.poses[0] = [100.0, 100.0, 0.0];
+        w.poses[1] = [110.0, 100.0, 0.0];
+        w.poses[2] = [100.0, 125.0, 0.0];
+        w.poses[3] = [90.0, 95.0, 0.0];
+        w.vel[1] = [1.0, 2.0];
+        let mut s = Sense::zeroed();
+        w.sense(0, &mut s);
+        let ids: Vec<u32> = s.nearby().iter().map(|n| n.robot).collect();
+        assert_eq!(ids, vec![1, 3]);
+        assert_eq!(s.nearby()[0].pos, [110.0, 100.0]);
+        assert_eq!(s.nearby()[0].vel, [1.0, 2.0]);
+        w.mark_dead(3, "test", None, None);
+        w.sense(0, &mut s);
+        assert_eq!(s.nearby().len(), 1);
+        // Off by default: robots learn of each other over the radio only.
+        let mut w = World::new(&Scenario::roam()).unwrap();
+        w.sense(0, &mut s);
+        assert!(s.nearby().is_empty());
+    }
 }

@@ -59,6 +59,18 @@ macro_rules! registry {
 
 registry!(roam, faulty, search);
 
+/// For behaviours whose commands are velocities (vx, vy): refuses unicycle kinematics.
+pub fn require_holonomic(sc: &Scenario, c: &Check, behaviour: &str) -> Result<(), ConfigError> {
+    if sc.robot.kinematics.is_holonomic() {
+        Ok(())
+    } else {
+        Err(c.err(
+            "robot.kinematics",
+            format!("= {:?}: the {behaviour} behaviour commands velocities (vx, vy) and needs model = \"holonomic\"", sc.robot.kinematics),
+        ))
+    }
+}
+
 /// [`validate_with`], errors naming the scenario file (`source`) as where every key came from.
 pub fn validate(sc: &Scenario, source: &str) -> Result<(), ConfigError> {
     validate_with(

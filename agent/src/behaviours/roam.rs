@@ -59,6 +59,7 @@ pub const NAME: &str = "roam";
 
 /// Checks the `[roam]` section.
 pub fn validate(sc: &Scenario, c: &Check) -> Result<(), ConfigError> {
+    super::require_holonomic(sc, c, &sc.run.behaviour)?;
     let r = &sc.roam;
     c.range_f("roam.l_r", r.l_r, 0.0, 1e7, true)?;
     c.range_f("roam.c", r.c, 0.0, 1e7, true)?;

@@ -73,6 +73,7 @@ pub const NAME: &str = "search";
 /// Checks the search behaviour's mode and kernels (`search.mode`, `search.kernels`) against
 /// the scenario.
 pub fn validate(sc: &Scenario, c: &Check) -> Result<(), ConfigError> {
+    crate::behaviours::require_holonomic(sc, c, NAME)?;
     validate_search(sc).map_err(|message| {
         let key = if message.starts_with("search.kernels") {
             "search.kernels"
