@@ -30,6 +30,12 @@ impl Hungarian {
         Self::default()
     }
 
+    /// The column potential v_j of the last solve: the dual solution satisfies
+    /// u_i + v_j <= cost(i, j) for all (i, j), with equality on the assignment.
+    pub fn column_potential(&self, column: usize) -> f64 {
+        self.v[column + 1]
+    }
+
     /// Minimum-cost perfect assignment of an n x n cost given as a function of (row, column).
     /// Writes `assignment[row] = column` and returns the total cost. Costs must be finite
     /// (not checked here, for speed; [`solve`] checks). Ties go to the lowest column index.
@@ -246,6 +252,22 @@ mod tests {
                 assert_eq!(by_dot, by_sq);
             }
         }
+    }
+
+    #[test]
+    fn potentials_are_dual_feasible_and_tight() {
+        let mut rng = ChaCha8Rng::seed_from_u64(19);
+        let n = 8;
+        let cost: Vec<f64> = (0..n * n).map(|_| rng.gen_range(-5.0..5.0)).collect();
+        let mut h = Hungarian::new();
+        let mut a = Vec::new();
+        let total = h.solve_with(n, |i, j| cost[i * n + j], &mut a);
+        // u_i = min_j (c_ij - v_j) is then dual feasible; the dual value must equal the cost.
+        let dual: f64 = (0..n)
+            .map(|i| (0..n).map(|j| cost[i * n + j] - h.column_potential(j)).fold(f64::INFINITY, f64::min))
+            .sum::<f64>()
+            + (0..n).map(|j| h.column_potential(j)).sum::<f64>();
+        assert!((dual - total).abs() < 1e-9, "{dual} vs {total}");
     }
 
     #[test]

@@ -24,6 +24,8 @@ pub mod template;
 
 #[cfg(test)]
 mod sim_tests;
+#[cfg(test)]
+mod test_support;
 
 pub use params::{FormationParams, ObstacleConstraint, OptimiserParams, TransformReading};
 pub use template::{Template, Transform};
