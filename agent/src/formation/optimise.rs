@@ -1,0 +1,556 @@
+//! Pattern optimisation, eqs. (1)-(14): choose the scale parameter alpha, translation d,
+//! rotation theta and the assignment sigma jointly, minimising the sum of squared robot-target
+//! distances (eq. 1, 4, 7) under the box (eq. 9), obstacle (eq. 10 or 12) and separation
+//! (eq. 13) constraints, to the GLOBAL optimum by spatial branch-and-bound (the paper's solver,
+//! its ref. [17]), with the assignment solved exactly (Hungarian) inside every bound.
+//!
+//! # Change of variables
+//! Write the transform as q_j = A s_j + d with A = [[a, -b], [b, a]] (see [`super::template`]),
+//! centre the template (s~_j = s_j - s_bar) and the starts (p~_i = p_i - p_bar), and let
+//! c = A s_bar + d be the pattern's centroid. Since sum_i s_sigma(i) = sum_j s_j for every
+//! permutation, the objective splits exactly (the cross terms vanish because the centred sums
+//! are zero):
+//!
+//! ```text
+//! f(alpha, theta, c, sigma) = sum_i ||p_i - A s_sigma(i) - d||^2
+//!                           = g(a, b, sigma) + n ||p_bar - c||^2,
+//! g(a, b, sigma) = P2 + (a^2 + b^2) S2 - 2 (a D(sigma) + b X(sigma)),
+//! ```
+//!
+//! with P2 = sum ||p~_i||^2, S2 = sum ||s~_j||^2, D(sigma) = sum_i p~_i . s~_sigma(i) and
+//! X(sigma) = sum_i s~_sigma(i) x p~_i (2-D cross product). We branch over the box
+//! (alpha, theta, c_1, c_2), which is (alpha, theta, d) under the bijection d = c - A s_bar; the
+//! root c box is the allowed area of eq. (9) (the centroid of targets inside a convex area is
+//! inside it).
+//!
+//! # The lower bound of a node (valid for every feasible point in it)
+//! Let [a] x [b] be an outer interval box of {(a(alpha, theta), b(alpha, theta))} over the
+//! node (exact interval extensions of cos and sin).
+//! 1. (a^2 + b^2) >= L2 := max(min over [a] x [b] of a^2 + b^2, lambda_sep^2), since every
+//!    feasible point has lambda >= lambda_sep (eq. 13 is lambda ||s_i - s_j|| >= 2r + margin,
+//!    so lambda_sep = (2r + margin) / min spacing of S).
+//! 2. a D(sigma) + b X(sigma) is linear in (a, b), so over the rectangle it is at most its
+//!    value at one of the 4 corners; hence for every sigma it is at most
+//!    M := max over corners (a_k, b_k) of max_sigma (a_k D(sigma) + b_k X(sigma)), and each
+//!    inner max is one Hungarian solve with cost -(a_k p~_i . s~_j + b_k s~_j x p~_i).
+//! 3. n ||p_bar - c||^2 >= n dist^2(p_bar, [c_1] x [c_2]).
+//!
+//! 4. A second bound on g with second-order accuracy (bounds 1-2 are only first-order, which
+//!    makes the search crawl near the optimum): let sigma0 be the optimal assignment at the
+//!    rectangle's centre and V its column duals (max-form: U_i + V_j >= a0 D_ij + b0 X_ij).
+//!    By weak duality, for every (a, b) and sigma, a D(sigma) + b X(sigma) <= sum_j V_j +
+//!    sum_i max_j (l_ij(a, b) - V_j), l_ij = a p~_i.s~_j + b s~_j x p~_i, and each max_j is at
+//!    most l_i,sigma0(i) - V_sigma0(i) + e_i with e_i = max_j max over the rectangle's corners of
+//!    the linear (l_ij - V_j) - (l_i,sigma0(i) - V_sigma0(i)), clipped at 0. Summing, a D + b X
+//!    <= a D(sigma0) + b X(sigma0) + E, E = sum e_i, so g >= P2 + min over the rectangle of the
+//!    convex quadratic S2 (a^2 + b^2) - 2 (a D(sigma0) + b X(sigma0)) - 2 E (the minimum is at
+//!    the projection of (D, X) / S2). Once sigma0 wins throughout a small rectangle, E = 0 and
+//!    this is exact.
+//!
+//! So LB = max(bound 1-2, bound 4) + n dist^2(p_bar, [c]) <= f at every feasible point of the
+//! node (not clipped at 0, so that best-first order still ranks nodes whose bound is negative). The constraints prune too: a node is dropped when lambda_max < lambda_sep, or when the
+//! interval box of some target q_j = [a] s~_j - [b] s~_j^perp + [c] misses the area or lies
+//! wholly inside an obstacle's forbidden region. As a node shrinks, [a] x [b] shrinks to a point,
+//! the corner maxima to the point's Hungarian value and the c term to the exact one, so LB tends
+//! to f and the search converges.
+//!
+//! # Upper bound (incumbent)
+//! Every node evaluates its (alpha, theta) midpoint: sigma by Hungarian (for fixed A and c the
+//! constraints do not depend on sigma, so this sigma is optimal there), and two centroids, the
+//! unconstrained best c = p_bar clamped to the node, and the node's centre; a candidate meeting
+//! every constraint becomes the incumbent if it is better.
+//!
+//! # Stopping rule and certificate
+//! Best-first order: the node popped has the least LB of all open nodes, so when its LB is
+//! within max(gap_abs, gap_rel * UB) of the incumbent, no point anywhere is better by more than
+//! that. The reported lower bound is the minimum over the open nodes and the nodes pruned by
+//! bound, so `cost - lower_bound = gap` is a certificate even when the node budget runs out.
+
+use super::constraints::{PatternConstraints, SLACK};
+use super::hungarian::Hungarian;
+use super::params::{FormationParams, TransformReading};
+use super::template::{matrix, Template, Transform};
+use super::FormationError;
+use std::cmp::Ordering;
+use std::collections::BinaryHeap;
+use std::f64::consts::{PI, TAU};
+use swarm::geometry::Vec2;
+
+/// The optimiser's answer.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Solution {
+    /// The optimal pattern parameters (alpha*, d*, theta*), in the scenario's reading of eq. (5).
+    pub transform: Transform,
+    /// The targets G* = q_1..q_n.
+    pub targets: Vec<Vec2>,
+    /// sigma*: robot i -> target `assignment[i]`.
+    pub assignment: Vec<usize>,
+    /// The objective at the solution: sum_i ||p_i - q_sigma(i)||^2.
+    pub cost: f64,
+    /// A proven lower bound on the optimum over the search domain.
+    pub lower_bound: f64,
+    /// cost - lower_bound (>= 0): how far from optimal the solution can be.
+    pub gap: f64,
+    /// Whether the gap met the stopping tolerance (false: the node budget ran out first).
+    pub proven: bool,
+    /// Branch-and-bound nodes bounded.
+    pub nodes: usize,
+}
+
+/// Solve eq. (14) over the scenario's domain (`params.optimiser`).
+pub fn optimise(
+    starts: &[Vec2],
+    template: &Template,
+    params: &FormationParams,
+) -> Result<Solution, FormationError> {
+    let o = &params.optimiser;
+    optimise_in(starts, template, params, o.alpha_range, o.theta_range)
+}
+
+/// The no-rotation model of ref. [10], the paper's baseline: theta fixed at 0.
+pub fn optimise_without_rotation(
+    starts: &[Vec2],
+    template: &Template,
+    params: &FormationParams,
+) -> Result<Solution, FormationError> {
+    optimise_in(starts, template, params, params.optimiser.alpha_range, [0.0, 0.0])
+}
+
+/// Solve eq. (14) with alpha in `alpha_range` and theta in `theta_range` (lo == hi fixes it;
+/// section 3.4 / Table 3 restricts it to keep a letter readable).
+pub fn optimise_in(
+    starts: &[Vec2],
+    template: &Template,
+    params: &FormationParams,
+    alpha_range: [f64; 2],
+    theta_range: [f64; 2],
+) -> Result<Solution, FormationError> {
+    for (name, r) in [("alpha_range", alpha_range), ("theta_range", theta_range)] {
+        if !(r[0].is_finite() && r[1].is_finite()) {
+            return Err(FormationError::NonFinite(name));
+        }
+        if r[0] > r[1] {
+            return Err(FormationError::EmptyRange { name, lo: r[0], hi: r[1] });
+        }
+    }
+    let problem = Problem::new(starts, template, params)?;
+    problem.solve(alpha_range, theta_range, params)
+}
+
+/// A box of the search space: alpha, theta, and the pattern centroid c.
+#[derive(Debug, Clone, Copy)]
+struct Node {
+    alpha: [f64; 2],
+    theta: [f64; 2],
+    c: [[f64; 2]; 2],
+    lb: f64,
+}
+
+impl PartialEq for Node {
+    fn eq(&self, other: &Self) -> bool {
+        self.lb.total_cmp(&other.lb) == Ordering::Equal
+    }
+}
+impl Eq for Node {}
+impl PartialOrd for Node {
+    fn partial_cmp(&self, other: &Self) -> Option<Ordering> {
+        Some(self.cmp(other))
+    }
+}
+impl Ord for Node {
+    /// Reversed, so that the max-heap pops the least lower bound (best first).
+    fn cmp(&self, other: &Self) -> Ordering {
+        other.lb.total_cmp(&self.lb)
+    }
+}
+
+/// The best feasible point found so far.
+#[derive(Debug, Clone)]
+struct Incumbent {
+    cost: f64,
+    alpha: f64,
+    theta: f64,
+    c: Vec2,
+    assignment: Vec<usize>,
+}
+
+/// The data of one instance, centred (see the module comment).
+struct Problem {
+    n: usize,
+    reading: TransformReading,
+    constraints: PatternConstraints,
+    starts: Vec<Vec2>,
+    template: Template,
+    s_tilde: Vec<Vec2>,
+    s_bar: Vec2,
+    p_bar: Vec2,
+    p2: f64,
+    s2: f64,
+    /// dot[i * n + j] = p~_i . s~_j.
+    dot: Vec<f64>,
+    /// cross[i * n + j] = s~_j x p~_i.
+    cross: Vec<f64>,
+    lambda_sep2: f64,
+    s_max: f64,
+}
+
+impl Problem {
+    fn new(
+        starts: &[Vec2],
+        template: &Template,
+        params: &FormationParams,
+    ) -> Result<Self, FormationError> {
+        let n = starts.len();
+        if template.len() != n {
+            return Err(FormationError::SizeMismatch { template: template.len(), robots: n });
+        }
+        if n == 0 {
+            return Err(FormationError::SizeMismatch { template: 0, robots: 0 });
+        }
+        let s = template.vectors();
+        if starts.iter().chain(&s).any(|p| !(p.x.is_finite() && p.y.is_finite())) {
+            return Err(FormationError::NonFinite("starts or template"));
+        }
+        let s_bar = s.iter().sum::<Vec2>() / n as f64;
+        let p_bar = starts.iter().sum::<Vec2>() / n as f64;
+        let s_tilde: Vec<Vec2> = s.iter().map(|x| x - s_bar).collect();
+        let p_tilde: Vec<Vec2> = starts.iter().map(|x| x - p_bar).collect();
+        let mut dot = vec![0.0; n * n];
+        let mut cross = vec![0.0; n * n];
+        for i in 0..n {
+            for j in 0..n {
+                dot[i * n + j] = p_tilde[i].dot(&s_tilde[j]);
+                cross[i * n + j] = s_tilde[j].x * p_tilde[i].y - s_tilde[j].y * p_tilde[i].x;
+            }
+        }
+        let constraints = PatternConstraints::new(params);
+        let spacing = template.min_spacing();
+        let lambda_sep = if spacing.is_finite() { constraints.min_separation / spacing } else { 0.0 };
+        Ok(Self {
+            n,
+            reading: params.transform_reading,
+            constraints,
+            starts: starts.to_vec(),
+            template: template.clone(),
+            s_max: s_tilde.iter().map(|v| v.norm()).fold(0.0, f64::max),
+            p2: p_tilde.iter().map(|v| v.norm_squared()).sum(),
+            s2: s_tilde.iter().map(|v| v.norm_squared()).sum(),
+            s_tilde,
+            s_bar,
+            p_bar,
+            dot,
+            cross,
+            lambda_sep2: lambda_sep * lambda_sep,
+        })
+    }
+
+    /// max over sigma of a D(sigma) + b X(sigma), and the maximising sigma.
+    fn best_alignment(&self, a: f64, b: f64, h: &mut Hungarian, sigma: &mut Vec<usize>) -> f64 {
+        let n = self.n;
+        -h.solve_with(n, |i, j| -(a * self.dot[i * n + j] + b * self.cross[i * n + j]), sigma)
+    }
+
+    /// Outer interval box of (a, b) over an (alpha, theta) box.
+    fn ab_box(&self, alpha: [f64; 2], theta: [f64; 2]) -> ([f64; 2], [f64; 2]) {
+        let cos = cos_range(theta);
+        let sin = sin_range(theta);
+        match self.reading {
+            TransformReading::Literal => ([alpha[0] - 1.0 + cos[0], alpha[1] - 1.0 + cos[1]], sin),
+            TransformReading::Similarity => (mul(alpha, cos), mul(alpha, sin)),
+        }
+    }
+
+    /// The node's lower bound, or None when no point of it can be feasible.
+    fn bound(&self, node: &Node, h: &mut Hungarian, sigma: &mut Vec<usize>) -> Option<f64> {
+        let (ar, br) = self.ab_box(node.alpha, node.theta);
+        let lam2_max = sq_max(ar) + sq_max(br);
+        if lam2_max < self.lambda_sep2 * (1.0 - 1e-12) - SLACK {
+            return None;
+        }
+        for s in &self.s_tilde {
+            let x = add(sub(scale(ar, s.x), scale(br, s.y)), node.c[0]);
+            let y = add(add(scale(br, s.x), scale(ar, s.y)), node.c[1]);
+            if self.constraints.box_outside_area(x, y)
+                || self.constraints.box_inside_an_obstacle(x, y)
+            {
+                return None;
+            }
+        }
+        let lam2 = (sq_min(ar) + sq_min(br)).max(self.lambda_sep2);
+        let mut m = f64::NEG_INFINITY;
+        let a_corners: &[f64] = if ar[0] == ar[1] { &ar[..1] } else { &ar };
+        let b_corners: &[f64] = if br[0] == br[1] { &br[..1] } else { &br };
+        for &a in a_corners {
+            for &b in b_corners {
+                m = m.max(self.best_alignment(a, b, h, sigma));
+            }
+        }
+        let b2 = self.dual_bound(ar, br, h, sigma);
+        let dc = Vec2::new(
+            dist_to_interval(self.p_bar.x, node.c[0]),
+            dist_to_interval(self.p_bar.y, node.c[1]),
+        );
+        let b1 = self.p2 + lam2 * self.s2 - 2.0 * m;
+        Some(b1.max(b2) + self.n as f64 * dc.norm_squared())
+    }
+
+    /// The second bound on min g over the rectangle (module comment, bound 4): duals V of the
+    /// assignment at the rectangle's centre give, for every (a, b) in it and every sigma',
+    /// a D(sigma') + b X(sigma') <= a D(sigma) + b X(sigma) + E, sigma the centre's optimum;
+    /// then g >= P2 + min over the rectangle of [S2 (a^2 + b^2) - 2 (a D + b X)] - 2 E.
+    fn dual_bound(
+        &self,
+        ar: [f64; 2],
+        br: [f64; 2],
+        h: &mut Hungarian,
+        sigma: &mut Vec<usize>,
+    ) -> f64 {
+        let n = self.n;
+        let (a0, b0) = (0.5 * (ar[0] + ar[1]), 0.5 * (br[0] + br[1]));
+        self.best_alignment(a0, b0, h, sigma);
+        // The maximisation's column duals are the negated potentials of the minimisation.
+        let big_v = |j: usize| -h.column_potential(j);
+        let (mut d, mut x, mut e) = (0.0, 0.0, 0.0);
+        for (i, &k) in sigma.iter().enumerate() {
+            let (dk, xk, vk) = (self.dot[i * n + k], self.cross[i * n + k], big_v(k));
+            d += dk;
+            x += xk;
+            let mut worst: f64 = 0.0;
+            for j in 0..n {
+                if j == k {
+                    continue;
+                }
+                let (dd, dx, dv) = (self.dot[i * n + j] - dk, self.cross[i * n + j] - xk, big_v(j) - vk);
+                // A linear function of (a, b): its maximum over the rectangle is at a corner.
+                let at = |a: f64, b: f64| a * dd + b * dx - dv;
+                worst = worst.max(at(ar[0], br[0])).max(at(ar[0], br[1]));
+                worst = worst.max(at(ar[1], br[0])).max(at(ar[1], br[1]));
+            }
+            e += worst;
+        }
+        // S2 |(a, b)|^2 - 2 (a D + b X) is least at the projection of (D, X) / S2.
+        let pa = (d / self.s2).clamp(ar[0], ar[1]);
+        let pb = (x / self.s2).clamp(br[0], br[1]);
+        self.p2 + self.s2 * (pa * pa + pb * pb) - 2.0 * (pa * d + pb * x) - 2.0 * e
+    }
+
+    /// Whether the pattern with matrix (a, b) and centroid c meets C1-C3.
+    fn feasible(&self, a: f64, b: f64, c: Vec2) -> bool {
+        if a * a + b * b < self.lambda_sep2 - SLACK {
+            return false;
+        }
+        self.s_tilde.iter().all(|s| {
+            let q = Vec2::new(a * s.x - b * s.y, b * s.x + a * s.y) + c;
+            self.constraints.in_box(q) && self.constraints.clear_of_obstacles(q)
+        })
+    }
+
+    /// Try the node's midpoint as a new incumbent.
+    fn try_incumbent(
+        &self,
+        node: &Node,
+        h: &mut Hungarian,
+        sigma: &mut Vec<usize>,
+        best: &mut Option<Incumbent>,
+    ) {
+        let alpha = 0.5 * (node.alpha[0] + node.alpha[1]);
+        let theta = 0.5 * (node.theta[0] + node.theta[1]);
+        let (a, b) = matrix(alpha, theta, self.reading);
+        if a * a + b * b < self.lambda_sep2 - SLACK {
+            return;
+        }
+        let g = self.p2 + (a * a + b * b) * self.s2 - 2.0 * self.best_alignment(a, b, h, sigma);
+        let clamp = |v: f64, r: [f64; 2]| v.clamp(r[0], r[1]);
+        let candidates = [
+            Vec2::new(clamp(self.p_bar.x, node.c[0]), clamp(self.p_bar.y, node.c[1])),
+            Vec2::new(0.5 * (node.c[0][0] + node.c[0][1]), 0.5 * (node.c[1][0] + node.c[1][1])),
+        ];
+        for c in candidates {
+            let f = g + self.n as f64 * (self.p_bar - c).norm_squared();
+            if best.as_ref().is_some_and(|b| b.cost <= f) || !self.feasible(a, b, c) {
+                continue;
+            }
+            *best = Some(Incumbent { cost: f, alpha, theta, c, assignment: sigma.clone() });
+        }
+    }
+
+    /// Split a node in two along its widest dimension, measured by how far it moves targets.
+    fn split(&self, node: &Node) -> [Node; 2] {
+        let widths = [
+            (node.alpha[1] - node.alpha[0]) * self.s_max,
+            (node.theta[1] - node.theta[0]) * self.s_max * node.alpha[1].abs().max(1.0),
+            node.c[0][1] - node.c[0][0],
+            node.c[1][1] - node.c[1][0],
+        ];
+        let mut k = 0;
+        for i in 1..4 {
+            if widths[i] > widths[k] {
+                k = i;
+            }
+        }
+        let (mut lo, mut hi) = (*node, *node);
+        let halve = |r: [f64; 2]| 0.5 * (r[0] + r[1]);
+        match k {
+            0 => {
+                let m = halve(node.alpha);
+                lo.alpha[1] = m;
+                hi.alpha[0] = m;
+            }
+            1 => {
+                let m = halve(node.theta);
+                lo.theta[1] = m;
+                hi.theta[0] = m;
+            }
+            axis => {
+                let m = halve(node.c[axis - 2]);
+                lo.c[axis - 2][1] = m;
+                hi.c[axis - 2][0] = m;
+            }
+        }
+        [lo, hi]
+    }
+
+    fn solve(
+        &self,
+        alpha: [f64; 2],
+        theta: [f64; 2],
+        params: &FormationParams,
+    ) -> Result<Solution, FormationError> {
+        let opts = &params.optimiser;
+        let mut h = Hungarian::new();
+        let mut sigma = Vec::with_capacity(self.n);
+        let mut best: Option<Incumbent> = None;
+        let cons = &self.constraints;
+        let mut root = Node { alpha, theta, c: [cons.x_range, cons.y_range], lb: 0.0 };
+        let mut heap = BinaryHeap::new();
+        let mut nodes = 1;
+        // The least lower bound among nodes discarded by bound (not by infeasibility).
+        let mut pruned_lb = f64::INFINITY;
+        if let Some(lb) = self.bound(&root, &mut h, &mut sigma) {
+            root.lb = lb;
+            self.try_incumbent(&root, &mut h, &mut sigma, &mut best);
+            heap.push(root);
+        }
+        // Without an incumbent (ub infinite) nothing is pruned by bound.
+        let tolerance = |ub: f64| if ub.is_finite() { opts.gap_abs.max(opts.gap_rel * ub) } else { 0.0 };
+        let mut proven = true;
+        while let Some(node) = heap.pop() {
+            let ub = best.as_ref().map_or(f64::INFINITY, |b| b.cost);
+            if node.lb >= ub - tolerance(ub) {
+                pruned_lb = pruned_lb.min(node.lb);
+                break;
+            }
+            if nodes >= opts.max_nodes {
+                proven = false;
+                heap.push(node);
+                break;
+            }
+            for mut child in self.split(&node) {
+                nodes += 1;
+                let Some(lb) = self.bound(&child, &mut h, &mut sigma) else { continue };
+                child.lb = lb.max(node.lb);
+                self.try_incumbent(&child, &mut h, &mut sigma, &mut best);
+                let ub = best.as_ref().map_or(f64::INFINITY, |b| b.cost);
+                if child.lb < ub - tolerance(ub) {
+                    heap.push(child);
+                } else {
+                    pruned_lb = pruned_lb.min(child.lb);
+                }
+            }
+        }
+        let best = best.ok_or(FormationError::Infeasible)?;
+        let open_lb = heap.peek().map_or(f64::INFINITY, |n| n.lb);
+        let lower_bound = open_lb.min(pruned_lb).min(best.cost);
+        let (a, b) = matrix(best.alpha, best.theta, self.reading);
+        let a_s_bar = Vec2::new(a * self.s_bar.x - b * self.s_bar.y, b * self.s_bar.x + a * self.s_bar.y);
+        let d = best.c - a_s_bar;
+        let transform = Transform { alpha: best.alpha, d: [d.x, d.y], theta: best.theta };
+        let targets = transform.targets(self.reading, &self.template);
+        let cost = (0..self.n)
+            .map(|i| (self.starts[i] - targets[best.assignment[i]]).norm_squared())
+            .sum::<f64>();
+        Ok(Solution {
+            transform,
+            targets,
+            assignment: best.assignment,
+            cost,
+            lower_bound,
+            gap: (cost - lower_bound).max(0.0),
+            proven,
+            nodes,
+        })
+    }
+}
+
+fn mul(x: [f64; 2], y: [f64; 2]) -> [f64; 2] {
+    let p = [x[0] * y[0], x[0] * y[1], x[1] * y[0], x[1] * y[1]];
+    [p.iter().copied().fold(f64::INFINITY, f64::min), p.iter().copied().fold(f64::NEG_INFINITY, f64::max)]
+}
+
+fn scale(x: [f64; 2], k: f64) -> [f64; 2] {
+    if k >= 0.0 {
+        [x[0] * k, x[1] * k]
+    } else {
+        [x[1] * k, x[0] * k]
+    }
+}
+
+fn add(x: [f64; 2], y: [f64; 2]) -> [f64; 2] {
+    [x[0] + y[0], x[1] + y[1]]
+}
+
+fn sub(x: [f64; 2], y: [f64; 2]) -> [f64; 2] {
+    [x[0] - y[1], x[1] - y[0]]
+}
+
+/// min of v^2 over v in the interval.
+fn sq_min(x: [f64; 2]) -> f64 {
+    if x[0] > 0.0 {
+        x[0] * x[0]
+    } else if x[1] < 0.0 {
+        x[1] * x[1]
+    } else {
+        0.0
+    }
+}
+
+/// max of v^2 over v in the interval.
+fn sq_max(x: [f64; 2]) -> f64 {
+    (x[0] * x[0]).max(x[1] * x[1])
+}
+
+fn dist_to_interval(v: f64, r: [f64; 2]) -> f64 {
+    if v < r[0] {
+        r[0] - v
+    } else if v > r[1] {
+        v - r[1]
+    } else {
+        0.0
+    }
+}
+
+/// The exact range of cos over [lo, hi].
+fn cos_range(t: [f64; 2]) -> [f64; 2] {
+    let (c0, c1) = (t[0].cos(), t[1].cos());
+    let mut lo = c0.min(c1);
+    let mut hi = c0.max(c1);
+    // A maximum at 2 pi k, a minimum at pi + 2 pi k inside the interval.
+    if (t[0] / TAU).ceil() * TAU <= t[1] {
+        hi = 1.0;
+    }
+    if ((t[0] - PI) / TAU).ceil() * TAU + PI <= t[1] {
+        lo = -1.0;
+    }
+    [lo, hi]
+}
+
+/// The exact range of sin over [lo, hi] (sin t = cos(t - pi/2)).
+fn sin_range(t: [f64; 2]) -> [f64; 2] {
+    let shifted = cos_range([t[0] - PI / 2.0, t[1] - PI / 2.0]);
+    // Rounding of the shift must not lose the endpoint values themselves.
+    let (s0, s1) = (t[0].sin(), t[1].sin());
+    [shifted[0].min(s0.min(s1)), shifted[1].max(s0.max(s1))]
+}
+
+#[cfg(test)]
+mod tests;

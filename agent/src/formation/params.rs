@@ -1,0 +1,167 @@
+//! Every number the formation kernels use, with where it comes from. The paper (spec section 3)
+//! publishes the world (24 x 24 box, 9 robots of radius 1, 2 obstacles of radius 2) and nothing
+//! of the controller (V_p, a, tau, K_a, epsilon, the ORCA horizon): those are our calibration
+//! choices, made so that one step moves about 0.25 units (spec 3: "V_p tau ~ 0.2-0.3"), and are
+//! named here so that a scenario file can override each of them.
+
+use serde::{Deserialize, Serialize};
+use std::f64::consts::PI;
+
+/// How the obstacle constraint C2 is imposed on the targets.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum ObstacleConstraint {
+    /// The paper's implemented form, eqs. (11)-(12): the target lies outside the axis-aligned
+    /// square of half-side r_o + r around the obstacle centre (conservative: it implies (10)).
+    #[default]
+    Square,
+    /// The exact form, eq. (10): ||q_j - o_m|| >= r_o + r.
+    Circle,
+}
+
+/// Which reading of the transform, eq. (5), the parameters (alpha, d, theta) mean (spec 6 item 3).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum TransformReading {
+    /// The paper as printed, eqs. (5), (6), (8): q = alpha s + d + s r(theta) with
+    /// r(theta) = R(theta) - I, i.e. q = (alpha - 1) s + R(theta) s + d. Chosen as the default:
+    /// Table 2's (alpha, d, r) values and Table 3's theta ranges are in this parameterisation.
+    #[default]
+    Literal,
+    /// The conventional similarity q = alpha R(theta) s + d (alpha is then the true scale).
+    Similarity,
+}
+
+/// The pattern optimiser's search domain and stopping rule (the paper gives none of them).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct OptimiserParams {
+    /// Search range of the "scale parameter" alpha. Chosen: [0.5, 2.0], wide enough for the
+    /// paper's optima (0.83 to 1.13, Table 2) and for the separation bound (lambda >= ~1.02
+    /// for our templates).
+    pub alpha_range: [f64; 2],
+    /// Search range of theta in radians. [-pi, pi] is the proposed model (free rotation); the
+    /// baseline of ref. [10] is [0, 0]; section 3.4 restricts it (Table 3).
+    pub theta_range: [f64; 2],
+    /// Absolute optimality gap at which the branch-and-bound stops (squared units).
+    pub gap_abs: f64,
+    /// Relative optimality gap (of the incumbent cost) at which the branch-and-bound stops.
+    /// The stop rule is: upper - lower <= max(gap_abs, gap_rel * upper).
+    pub gap_rel: f64,
+    /// Node budget: when it is spent the solver stops and reports the gap it has proved.
+    pub max_nodes: usize,
+}
+
+impl Default for OptimiserParams {
+    fn default() -> Self {
+        Self {
+            alpha_range: [0.5, 2.0],
+            theta_range: [-PI, PI],
+            gap_abs: 1e-3,
+            gap_rel: 1e-4,
+            max_nodes: 400_000,
+        }
+    }
+}
+
+/// The formation scenario's world and controller numbers.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct FormationParams {
+    /// Lower-left corner of the application area (X_min, Y_min). The paper's 24 x 24 square
+    /// (section 3.1) has no published origin; we put it at (0, 0).
+    pub box_min: [f64; 2],
+    /// Upper-right corner of the area (X_max, Y_max) = (24, 24), section 3.1.
+    pub box_max: [f64; 2],
+    /// Robot radius r = 1 (section 3.1).
+    pub robot_radius: f64,
+    /// Obstacle radius r_o = 2 (section 3.1).
+    pub obstacle_radius: f64,
+    /// Obstacle centres. Unpublished; chosen mid-box (spec 7 step 1), off the diagonal so the
+    /// un-optimised pattern can hit them (the Fig. 6 analogue).
+    pub obstacle_centres: Vec<[f64; 2]>,
+    /// Extra spacing added to eq. (13)'s 2r: targets touching at exactly 2r let robots parked
+    /// within epsilon overlap (spec 6 item 7). Chosen 0.2.
+    pub separation_margin: f64,
+    /// Extra clearance added to eq. (10)/(12)'s r_o + r for the targets. Chosen 0.1.
+    pub obstacle_margin: f64,
+    /// Which form of constraint C2 the optimiser imposes.
+    pub obstacle_constraint: ObstacleConstraint,
+    /// Which reading of eq. (5) the parameters use.
+    pub transform_reading: TransformReading,
+    /// Maximum speed V_p (eq. 16, 24). Unpublished; chosen 1 unit/s.
+    pub max_speed: f64,
+    /// Maximum acceleration a (eq. 24), units/s^2; None drops the limit. Chosen 4, so that
+    /// a tau = V_p: a robot can stop (or reach full speed) in one step, which keeps v = 0 inside
+    /// the feasible set AV_i and so keeps ORCA's obstacle half-planes satisfiable.
+    pub max_accel: Option<f64>,
+    /// Sides of the regular polygon circumscribing the acceleration disc ||v - v_i|| <= a tau,
+    /// which the linear program takes as half-planes (it has only one disc, the speed one).
+    pub accel_polygon_sides: usize,
+    /// Step tau of eqs. (23), (27), seconds. Chosen 0.25 (so V_p tau = 0.25 units).
+    pub time_step: f64,
+    /// ORCA time horizon against robots (eq. 18's tau, which the paper reuses for the step);
+    /// chosen 2 s, spec 3's suggestion of 2-5 s at V_p ~ 1.
+    pub time_horizon: f64,
+    /// ORCA time horizon against obstacles (RVO2 keeps a separate one; the paper has none).
+    /// Chosen 1 s: obstacles are static, a shorter horizon lets robots pass close by.
+    pub obstacle_time_horizon: f64,
+    /// Neighbours farther than this are left out of ORCA. The paper intersects over all robots;
+    /// robots farther than 2r + 2 V_p tau_h = 6 cannot collide within the horizon, so 10 leaves
+    /// out nobody who matters.
+    pub neighbour_dist: f64,
+    /// Gain K_a of eq. (16): the speed falls linearly to 0 within K_a of the target. Chosen 1.
+    pub k_a: f64,
+    /// Arrival tolerance epsilon: the formation is complete when every robot is within it of
+    /// its assigned target. Chosen 0.05 (spec 3 guesses 0.05-0.1).
+    pub epsilon: f64,
+    /// Iteration cap of the controller loop (spec 7 step 4 suggests 1000).
+    pub max_iterations: usize,
+    /// The pattern optimiser's domain and stopping rule.
+    pub optimiser: OptimiserParams,
+}
+
+impl Default for FormationParams {
+    fn default() -> Self {
+        Self {
+            box_min: [0.0, 0.0],
+            box_max: [24.0, 24.0],
+            robot_radius: 1.0,
+            obstacle_radius: 2.0,
+            obstacle_centres: vec![[9.0, 14.0], [15.0, 9.0]],
+            separation_margin: 0.2,
+            obstacle_margin: 0.1,
+            obstacle_constraint: ObstacleConstraint::Square,
+            transform_reading: TransformReading::Literal,
+            max_speed: 1.0,
+            max_accel: Some(4.0),
+            accel_polygon_sides: 16,
+            time_step: 0.25,
+            time_horizon: 2.0,
+            obstacle_time_horizon: 1.0,
+            neighbour_dist: 10.0,
+            k_a: 1.0,
+            epsilon: 0.05,
+            max_iterations: 1000,
+            optimiser: OptimiserParams::default(),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn params_round_trip_through_toml_and_fill_defaults() {
+        let p = FormationParams::default();
+        let text = toml::to_string(&p).unwrap();
+        let back: FormationParams = toml::from_str(&text).unwrap();
+        assert_eq!(p, back);
+        let partial: FormationParams =
+            toml::from_str("max_speed = 2.0\nobstacle_constraint = \"circle\"\n").unwrap();
+        assert_eq!(partial.max_speed, 2.0);
+        assert_eq!(partial.obstacle_constraint, ObstacleConstraint::Circle);
+        assert_eq!(partial.k_a, 1.0);
+    }
+}
