@@ -4,6 +4,7 @@
 //! their unit tests; the hunt behaviour, the auctioneer process and the world mission wire them.
 //! The evader's escape (eq. 2.17) is world-side: `world::mission::hunt_escape`.
 
+pub mod apf;
 pub mod model;
 pub mod params;
 pub mod scenario;
