@@ -4,6 +4,7 @@
 //! world process drives it over iceoryx2, the in-process executor drives it directly.
 
 pub mod metrics;
+pub mod mission;
 pub mod output;
 pub mod placement;
 pub mod process;

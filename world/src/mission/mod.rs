@@ -1,0 +1,3 @@
+//! Mission kernels (world side).
+
+pub mod hunt_escape;
