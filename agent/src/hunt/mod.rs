@@ -5,6 +5,8 @@
 //! The evader's escape (eq. 2.17) is world-side: `world::mission::hunt_escape`.
 
 pub mod apf;
+pub mod auction;
+pub mod cost;
 pub mod model;
 pub mod params;
 pub mod scenario;
