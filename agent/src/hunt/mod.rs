@@ -7,6 +7,8 @@
 pub mod apf;
 pub mod auction;
 pub mod cost;
+#[cfg(test)]
+mod example_3a;
 pub mod model;
 pub mod params;
 pub mod scenario;
