@@ -10,6 +10,7 @@ pub mod cost;
 #[cfg(test)]
 mod example_3a;
 pub mod model;
+pub mod parallel_auction;
 pub mod params;
 pub mod scenario;
 
