@@ -9,6 +9,7 @@ pub mod auction;
 pub mod cost;
 #[cfg(test)]
 mod example_3a;
+pub mod hunting_points;
 pub mod model;
 pub mod parallel_auction;
 pub mod params;
