@@ -13,6 +13,7 @@ pub mod hunting_points;
 pub mod model;
 pub mod parallel_auction;
 pub mod params;
+pub mod replan;
 pub mod scenario;
 
 pub use params::HuntParams;
