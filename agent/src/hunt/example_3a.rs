@@ -7,6 +7,7 @@
 use crate::hunt::auction::{run_auction, AuctionOutcome};
 use crate::hunt::model::{coalition_covers, Robot, Task, TaskId};
 use crate::hunt::params::HuntParams;
+use crate::hunt::replan::{apply_swaps, assist, free_robots, new_target, Hunt, World};
 use crate::hunt::scenario::tests::example_3a;
 use std::collections::{BTreeMap, BTreeSet};
 
@@ -80,6 +81,21 @@ fn report(out: &AuctionOutcome, tasks: &[Task]) -> String {
         "C (3.13) = {:.1}, Y (3.14) = {:.1}\n",
         out.auctioneer_cost, out.total_utility
     );
+    s += "reward trend (ours | thesis Fig. 3.6):\n";
+    for t in tasks {
+        let z: Vec<f64> = out
+            .rounds
+            .iter()
+            .filter_map(|r| r.rewards.get(&t.id).copied())
+            .collect();
+        let trend = match (z.first(), z.last()) {
+            (Some(a), Some(b)) if b > a => "rises",
+            (Some(a), Some(b)) if b < a => "falls",
+            _ => "flat",
+        };
+        let thesis = if t.id <= 2 { "falls" } else { "rises" };
+        s += &format!("  T{}: {trend} | {thesis}\n", t.id);
+    }
     s
 }
 
@@ -134,4 +150,132 @@ fn example_3a_initial_auction() {
         report(&out, &tasks)
     );
     check(&out, &tasks, &robots);
+}
+
+#[test]
+fn example_3a_replanning_after_t5() {
+    // The thesis re-plans when T5 appears mid-run; these kernels have no motion, so the rules are
+    // evaluated at the initial positions (the wired mission evaluates them where the robots are).
+    let h = example_3a();
+    let p = HuntParams::default();
+    let robots: BTreeMap<u32, Robot> = h.robots().into_iter().map(|r| (r.id, r)).collect();
+    let tasks: BTreeMap<TaskId, Task> = h.tasks().into_iter().map(|t| (t.id, t)).collect();
+    let w = World {
+        robots: &robots,
+        tasks: &tasks,
+    };
+    let initial = run_auction(&h.tasks_at(0.0), &h.robots(), &p);
+    let hunts: Vec<Hunt> = initial
+        .coalitions
+        .values()
+        .map(|c| Hunt {
+            task: c.award.task,
+            members: c.award.members.clone(),
+            reward: c.award.reward,
+            captured: false,
+            since: 0.0,
+        })
+        .collect();
+    let out = new_target(&w, &hunts, 5, 5.0, &p);
+    let mut s = String::from("Example 3-A, T5 appears:\n");
+    s += &format!(
+        "  coalitions preferring T5 by (3.21): {:?} (thesis: only Phi4 fits)\n",
+        out.interested
+    );
+    let split = out
+        .award
+        .as_ref()
+        .map(|a| ids(&a.members))
+        .unwrap_or("-".into());
+    s += &format!("  Phi5 = {{{split}}} | thesis {{R10, R11, R14}}\n");
+    for r in &out.rounds {
+        s += &format!(
+            "  round {}: z5 = {:.1}, bids {}\n",
+            r.round, r.rewards[&5], r.bids[&5]
+        );
+    }
+    s += "  after T5 (ours):\n";
+    for hunt in &out.hunts {
+        s += &format!("    T{}: {{{}}}\n", hunt.task, ids(&hunt.members));
+    }
+    s += &format!(
+        "  paid for T5: {} | Table 3.3: 1450 | cap 1600\n",
+        out.award
+            .as_ref()
+            .map(|a| format!("{:.1}", a.reward))
+            .unwrap_or("-".into())
+    );
+    // The thesis's own state after T5 (Phi4 = {R3, R5}, Phi5 = {R10, R11, R14}), to exercise the
+    // swap and assistance rules where the thesis does, still at the initial positions.
+    let thesis_after: Vec<Hunt> = [
+        (1, vec![1, 2, 15]),
+        (2, vec![4, 6, 7]),
+        (3, vec![8, 9, 12, 13]),
+        (4, vec![3, 5]),
+        (5, vec![10, 11, 14]),
+    ]
+    .into_iter()
+    .map(|(task, members)| Hunt {
+        task,
+        members,
+        reward: p.alpha * tasks[&task].reward_cap,
+        captured: false,
+        since: 0.0,
+    })
+    .collect();
+    let mut swapped = thesis_after.clone();
+    let swaps = apply_swaps(&w, &mut swapped, &BTreeMap::new(), &p);
+    s += "  from the thesis's post-T5 coalitions, at z = alpha z_max:\n";
+    s += &format!(
+        "    swaps (thesis: R15 <-> R9): {:?}\n",
+        swaps
+            .iter()
+            .map(|x| (
+                x.i,
+                x.from_task,
+                x.k,
+                x.to_task,
+                (x.gain * 100.0).round() / 100.0
+            ))
+            .collect::<Vec<_>>()
+    );
+    for hunt in swapped.iter_mut() {
+        hunt.captured = hunt.task != 4;
+    }
+    let t4 = swapped.iter().find(|h| h.task == 4).unwrap().clone();
+    let help = assist(&w, &t4, &free_robots(&w, &swapped), robots.len(), &p);
+    s += &format!(
+        "    T4 {{{}}} assisted by {{{}}}, z4 {:.1} -> {:.1} (thesis: R15, R12 join R3, R5)\n",
+        ids(&t4.members),
+        ids(&help.recruits),
+        t4.reward,
+        help.reward
+    );
+    for hunt in &swapped {
+        for i in &hunt.members {
+            assert!(
+                !help.recruits.contains(i) || hunt.captured,
+                "recruits come from finished coalitions"
+            );
+        }
+    }
+    println!("{s}");
+    // What holds for the rules: winners gained by moving, the coalitions stay disjoint, T5's
+    // coalition meets L_5 and E_5, and its reward stays under the cap.
+    if let Some(a) = &out.award {
+        let t5 = &tasks[&5];
+        assert_eq!(a.members.len(), t5.required_robots);
+        assert!(coalition_covers(
+            a.members.iter().map(|i| &robots[i].resources),
+            &t5.resources
+        ));
+        assert!(a.reward < t5.reward_cap);
+    }
+    let mut seen = BTreeSet::new();
+    for hunt in &out.hunts {
+        for i in &hunt.members {
+            assert!(seen.insert(*i), "R{i} twice");
+        }
+    }
+    assert_eq!(seen.len(), 15, "nobody lost by the split");
 }
