@@ -10,6 +10,7 @@ pub mod cost;
 #[cfg(test)]
 mod example_3a;
 pub mod hunting_points;
+pub mod instance;
 pub mod model;
 pub mod parallel_auction;
 pub mod params;

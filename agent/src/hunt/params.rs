@@ -153,6 +153,15 @@ mod tests {
     }
 
     #[test]
+    fn escape_defaults_mirror_the_world_side() {
+        // The evader's escape lives in the world crate; its defaults must agree with these.
+        let p = HuntParams::default();
+        let e = world::mission::hunt_escape::EscapeParams::default();
+        assert_eq!(p.evader_sensing_radius, e.sensing_radius);
+        assert_eq!(p.encirclement_slowdown, e.encirclement_slowdown);
+    }
+
+    #[test]
     fn effective_range_shrinks_with_required_robots() {
         let p = HuntParams::default();
         assert!((p.effective_range(3) - 1.0).abs() < 1e-12);
