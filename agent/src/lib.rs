@@ -2,6 +2,7 @@
 
 pub mod behaviours;
 pub mod formation;
+pub mod hunt;
 pub mod process;
 pub mod search;
 

@@ -10,7 +10,7 @@ use iceoryx2::prelude::*;
 pub const MAX_NEIGHBOURS: usize = 128;
 /// Most obstacle / wall boundary points in a Sense frame (the nearest when more are in range).
 pub const MAX_OBSTACLE_POINTS: usize = 768;
-/// Most mission entities in a Sense frame (search: target signals; hunt: evaders).
+/// Most mission entities in a Sense frame (whatever the mission lets a robot sense).
 pub const MAX_ENTITIES: usize = 32;
 /// Most robots a Sense frame lists as sensed by the robot's own sensors (with positions and
 /// velocities, within `robot.neighbour_sensing_radius`; the nearest when more are in range).
@@ -39,12 +39,12 @@ pub struct Entity {
     pub reserved: u32,
     /// Where the entity is, when the sensor gives it (`flags & ENTITY_HAS_POS`).
     pub pos: [f64; 2],
-    /// The sensed value (search: signal intensity).
+    /// The sensed value (an intensity, a distance: the mission says which).
     pub value: f64,
 }
 
-/// This robot completed the entity at the last move (search: came within the found distance
-/// of the target, which then stops emitting; the entry is its arrival sensor, value 0).
+/// This robot completed the entity at the last move (reached it, took it: the mission says
+/// what completing means); a one-off entry, the robot's arrival sensor.
 pub const ENTITY_DONE_BY_YOU: u32 = 1;
 /// The entry's `pos` holds the entity's position.
 pub const ENTITY_HAS_POS: u32 = 2;
@@ -234,8 +234,8 @@ pub struct WorldStatus {
     pub dead: u32,
     pub finished: u32,
     pub restarted: u32,
-    /// The mission's progress: `progress_done` of `progress_total` (search: targets found of
-    /// targets); the mission names what it counts.
+    /// The mission's progress: `progress_done` of `progress_total`; the mission names what it
+    /// counts.
     pub progress_total: u32,
     pub progress_done: u32,
     pub offered: u64,

@@ -412,7 +412,7 @@ impl World {
 
     /// [`World::clip_move`] for a disc of `robot.radius`: the step is walked in sub-steps of at
     /// most half a radius; at the first sub-step whose end the disc cannot stand on, the last
-    /// clear fraction is found by bisection. A disc that starts overlapping (a scenario may
+    /// clear fraction comes from a bisection. A disc that starts overlapping (a scenario may
     /// start it so) may move wherever its clearance does not shrink.
     fn clip_disc_move(&self, p: Vec2, v: Vec2) -> (Vec2, bool) {
         let r = self.sc.robot.radius;

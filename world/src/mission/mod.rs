@@ -6,6 +6,7 @@
 //! layer of `run.svg` and its events in `recording.bin`. Adding one is adding its file and its
 //! line in [`MISSIONS`].
 
+pub mod hunt_escape;
 pub mod roam;
 pub mod search;
 

@@ -1,0 +1,300 @@
+//! The `[hunt]` section of a scenario file: the robots (`[[hunt.robots]]`, Table 3.2), the
+//! evaders (`[[hunt.evaders]]`, Table 3.1) and the tunables (`[hunt.params]`). The lead adds it
+//! to the scenario struct; `configs/hunt-example-3a.toml` is Example 3-A.
+
+use crate::hunt::model::{Resources, Robot, RobotId, Task, TaskId};
+use crate::hunt::params::HuntParams;
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeSet;
+use swarm::geometry::Vec2;
+
+/// A scenario's `[hunt]` section is malformed.
+#[derive(Debug, thiserror::Error)]
+pub enum HuntConfigError {
+    #[error("hunt section does not parse: {0}")]
+    Parse(#[from] toml::de::Error),
+    #[error("robot id {0} appears twice")]
+    DuplicateRobot(RobotId),
+    #[error("evader id {0} appears twice")]
+    DuplicateEvader(TaskId),
+    #[error("{what} {id}: {field} = {value} is out of range")]
+    OutOfRange {
+        what: &'static str,
+        id: u32,
+        field: &'static str,
+        value: f64,
+    },
+}
+
+/// One `[[hunt.robots]]` row (Table 3.2 plus the columns the thesis does not print).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RobotSpec {
+    pub id: RobotId,
+    /// (x_i, y_i), km.
+    pub position: [f64; 2],
+    /// Initial heading, rad.
+    #[serde(default)]
+    pub heading: f64,
+    /// g_i for T1..T_n (Table 3.2).
+    pub matching: Vec<f64>,
+    /// E_i', exactly 6 entries (2.4).
+    #[serde(deserialize_with = "six_resources")]
+    pub resources: Resources,
+    /// v_i, km/min.
+    pub speed: f64,
+    /// w_max, rad/min.
+    pub turn_rate: f64,
+    /// d^c_max,i (2.5), km; absent = unlimited.
+    #[serde(default)]
+    pub max_mileage: Option<f64>,
+}
+
+/// One `[[hunt.evaders]]` row (Table 3.1 plus the columns the thesis does not print).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct EvaderSpec {
+    pub id: TaskId,
+    /// (x_j, y_j), km.
+    pub position: [f64; 2],
+    /// L_j.
+    pub required_robots: usize,
+    /// z_jmax.
+    pub reward_cap: f64,
+    /// E_j, exactly 6 entries (2.3).
+    #[serde(deserialize_with = "six_resources")]
+    pub resources: Resources,
+    /// v_j, km/min.
+    pub speed: f64,
+    /// Speed-capability threshold on the robots, km/min.
+    #[serde(default)]
+    pub min_robot_speed: f64,
+    /// When the target appears, minutes (T5 appears mid-run in Example 3-A). 0 = at the start.
+    #[serde(default)]
+    pub appears_at: f64,
+}
+
+/// The `[hunt]` section.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct HuntSection {
+    #[serde(default)]
+    pub params: HuntParams,
+    #[serde(default)]
+    pub robots: Vec<RobotSpec>,
+    #[serde(default)]
+    pub evaders: Vec<EvaderSpec>,
+}
+
+#[derive(Deserialize)]
+struct File {
+    hunt: HuntSection,
+}
+
+impl HuntSection {
+    /// Parse the `[hunt]` section of a whole scenario file (other sections are ignored) and
+    /// validate it.
+    pub fn from_scenario_toml(text: &str) -> Result<Self, HuntConfigError> {
+        let f: File = toml::from_str(text)?;
+        f.hunt.validate()?;
+        Ok(f.hunt)
+    }
+
+    /// Ids unique, speeds, caps and counts in range.
+    pub fn validate(&self) -> Result<(), HuntConfigError> {
+        let mut seen = BTreeSet::new();
+        for r in &self.robots {
+            if !seen.insert(r.id) {
+                return Err(HuntConfigError::DuplicateRobot(r.id));
+            }
+            positive("robot", r.id, "speed", r.speed)?;
+            positive("robot", r.id, "turn_rate", r.turn_rate)?;
+            if r.resources.iter().any(|x| *x < 0.0)
+                || r.matching.iter().any(|g| !(0.0..=1.0).contains(g))
+            {
+                return Err(HuntConfigError::OutOfRange {
+                    what: "robot",
+                    id: r.id,
+                    field: "resources/matching",
+                    value: f64::NAN,
+                });
+            }
+        }
+        let mut seen = BTreeSet::new();
+        for e in &self.evaders {
+            if !seen.insert(e.id) {
+                return Err(HuntConfigError::DuplicateEvader(e.id));
+            }
+            positive("evader", e.id, "speed", e.speed)?;
+            positive("evader", e.id, "reward_cap", e.reward_cap)?;
+            positive("evader", e.id, "required_robots", e.required_robots as f64)?;
+        }
+        Ok(())
+    }
+
+    /// The robots as kernel types.
+    pub fn robots(&self) -> Vec<Robot> {
+        self.robots
+            .iter()
+            .map(|r| Robot {
+                id: r.id,
+                position: Vec2::new(r.position[0], r.position[1]),
+                heading: r.heading,
+                resources: r.resources,
+                matching: r.matching.clone(),
+                speed: r.speed,
+                turn_rate: r.turn_rate,
+                max_mileage: r.max_mileage.unwrap_or(f64::INFINITY),
+                travelled: 0.0,
+            })
+            .collect()
+    }
+
+    /// The tasks (targets) present at time `t` minutes, as kernel types.
+    pub fn tasks_at(&self, t: f64) -> Vec<Task> {
+        self.evaders
+            .iter()
+            .filter(|e| e.appears_at <= t)
+            .map(task_of)
+            .collect()
+    }
+
+    /// Every task, whenever it appears.
+    pub fn tasks(&self) -> Vec<Task> {
+        self.evaders.iter().map(task_of).collect()
+    }
+}
+
+/// A resource row must have exactly z = 6 entries (serde's fixed arrays ignore extra ones).
+fn six_resources<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Resources, D::Error> {
+    let v = Vec::<f64>::deserialize(d)?;
+    Resources::try_from(v.as_slice()).map_err(|_| {
+        serde::de::Error::invalid_length(v.len(), &"exactly 6 resource entries (eq. 2.4)")
+    })
+}
+
+fn task_of(e: &EvaderSpec) -> Task {
+    Task {
+        id: e.id,
+        position: Vec2::new(e.position[0], e.position[1]),
+        resources: e.resources,
+        required_robots: e.required_robots,
+        reward_cap: e.reward_cap,
+        speed: e.speed,
+        min_robot_speed: e.min_robot_speed,
+    }
+}
+
+fn positive(
+    what: &'static str,
+    id: u32,
+    field: &'static str,
+    value: f64,
+) -> Result<(), HuntConfigError> {
+    if value > 0.0 && value.is_finite() {
+        Ok(())
+    } else {
+        Err(HuntConfigError::OutOfRange {
+            what,
+            id,
+            field,
+            value,
+        })
+    }
+}
+
+#[cfg(test)]
+pub(crate) mod tests {
+    use super::*;
+
+    pub(crate) fn example_3a() -> HuntSection {
+        let text = include_str!("../../../configs/hunt-example-3a.toml");
+        HuntSection::from_scenario_toml(text).expect("configs/hunt-example-3a.toml parses")
+    }
+
+    #[test]
+    fn example_3a_is_tables_3_1_and_3_2() {
+        let h = example_3a();
+        assert_eq!(h.robots.len(), 15);
+        assert_eq!(h.evaders.len(), 5);
+        // Table 3.1 row 1 and row 4.
+        let t1 = &h.evaders[0];
+        assert_eq!(
+            (t1.id, t1.position, t1.required_robots, t1.reward_cap),
+            (1, [1.94, 9.11], 3, 520.0)
+        );
+        assert_eq!(t1.resources, [10.0, 9.0, 14.0, 15.0, 18.0, 15.0]);
+        let t4 = &h.evaders[3];
+        assert_eq!(
+            (t4.position, t4.required_robots, t4.reward_cap),
+            ([7.21, 5.36], 5, 1350.0)
+        );
+        // T5: only z_5max = 1600 is printed (Table 3.3); it appears mid-run.
+        assert_eq!(h.evaders[4].reward_cap, 1600.0);
+        assert!(h.evaders[4].appears_at > 0.0);
+        assert_eq!(h.tasks_at(0.0).len(), 4);
+        // Table 3.2 rows 1, 10 and 14 (R14's trailing 7th resource dropped, spec 12 item 14).
+        let r = h.robots();
+        assert_eq!(r[0].position, Vec2::new(1.54, 6.88));
+        assert_eq!(r[0].matching, vec![0.4, 0.1, 0.3, 0.1, 0.1]);
+        assert_eq!(r[9].resources, [3.0, 4.0, 5.0, 4.0, 3.0, 2.0]);
+        assert_eq!(r[13].resources, [2.0, 3.0, 7.0, 8.0, 5.0, 3.0]);
+        // The g rows of R8, R9, R12, R13 sum to 0.8 as printed (spec 10.1): kept.
+        for (i, row) in r.iter().enumerate() {
+            let s: f64 = row.matching.iter().sum();
+            let expect = if [8, 9, 12, 13].contains(&(i + 1)) {
+                0.8
+            } else {
+                1.0
+            };
+            assert!((s - expect).abs() < 1e-9, "R{} g sums to {s}", i + 1);
+        }
+        // R10 fails T3's speed capability (sec. 3.3), every other robot meets it.
+        let t3 = &h.tasks()[2];
+        for robot in &r {
+            assert_eq!(
+                crate::hunt::model::speed_capable(robot.speed, t3),
+                robot.id != 10,
+                "R{}",
+                robot.id
+            );
+        }
+    }
+
+    #[test]
+    fn seven_resources_are_rejected() {
+        let text = r#"
+            [hunt]
+            [[hunt.robots]]
+            id = 14
+            position = [5.89, 7.82]
+            matching = [0.1, 0.1, 0.5, 0.2, 0.1]
+            resources = [2, 3, 7, 8, 5, 3, 2]
+            speed = 0.7
+            turn_rate = 6.0
+        "#;
+        assert!(matches!(
+            HuntSection::from_scenario_toml(text),
+            Err(HuntConfigError::Parse(_))
+        ));
+    }
+
+    #[test]
+    fn duplicate_ids_and_bad_speeds_are_rejected() {
+        let row = |id: u32, speed: f64| {
+            format!(
+                "[[hunt.robots]]\nid = {id}\nposition = [1, 1]\nmatching = [1.0]\nresources = [1,1,1,1,1,1]\nspeed = {speed}\nturn_rate = 6.0\n"
+            )
+        };
+        let text = format!("[hunt]\n{}{}", row(1, 0.8), row(1, 0.8));
+        assert!(matches!(
+            HuntSection::from_scenario_toml(&text),
+            Err(HuntConfigError::DuplicateRobot(1))
+        ));
+        let text = format!("[hunt]\n{}", row(2, 0.0));
+        assert!(matches!(
+            HuntSection::from_scenario_toml(&text),
+            Err(HuntConfigError::OutOfRange { .. })
+        ));
+    }
+}
