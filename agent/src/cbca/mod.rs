@@ -5,8 +5,12 @@
 //! (sec. 4.2.2), loyalty and compensation (4.18)-(4.22) and the local-vision re-planning of
 //! sec. 4.2.5. No I/O: the runtime carries the messages.
 
+pub mod bundle;
+pub mod dag;
 pub mod model;
 pub mod params;
+pub mod score;
+pub mod winners;
 pub mod scenario;
 
 pub use model::{Resources, Robot, RobotId, Task, TaskBook, TaskId, RESOURCE_TYPES};
