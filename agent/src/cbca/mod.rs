@@ -6,6 +6,7 @@
 //! sec. 4.2.5. No I/O: the runtime carries the messages.
 
 pub mod bundle;
+pub mod consensus;
 pub mod dag;
 pub mod model;
 pub mod params;
