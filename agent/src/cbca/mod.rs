@@ -16,3 +16,8 @@ pub mod scenario;
 
 pub use model::{Resources, Robot, RobotId, Task, TaskBook, TaskId, RESOURCE_TYPES};
 pub use params::{CbcaParams, Consumption, LoyaltyParams};
+
+#[cfg(test)]
+mod proptests;
+#[cfg(test)]
+pub(crate) mod testdriver;
