@@ -8,8 +8,11 @@
 pub mod bundle;
 pub mod consensus;
 pub mod dag;
+pub mod grouping;
+pub mod loyalty;
 pub mod model;
 pub mod params;
+pub mod replan;
 pub mod score;
 pub mod winners;
 pub mod scenario;
