@@ -52,7 +52,11 @@ pub enum Candidate {
     /// The best bid is not positive.
     NoGain { bid: f64 },
     /// Full, and the bid does not beat the weakest winner (4.16): h_ij = 0.
-    Outbid { bid: f64, weakest: RobotId, weakest_bid: f64 },
+    Outbid {
+        bid: f64,
+        weakest: RobotId,
+        weakest_bid: f64,
+    },
     /// Full; the bid beats the weakest, but it carries no type the weakest carries.
     NoSubstitute { bid: f64, weakest: RobotId },
     /// Open: h_ij = 1 with this bid, displacing `displaces` if the coalition is full.
@@ -266,12 +270,29 @@ pub(crate) mod tests {
         // R1 (0, 1), gamma 1: T1 d = 1 -> 99; T2 d = sqrt(17) = 4.1231 -> 55.8769. Takes T1 (99).
         // Then T2 after T1 (leg 4): 155 - 99 = 56; before T1: (60 - 4.1231) + (100 - 4) - 99
         // = 52.8769. Appends T2 with bid min(56, 99) = 56.
-        let a = build_bundle(&robots[0], &mut plans[0], &mut winners, &book, &known, &params);
+        let a = build_bundle(
+            &robots[0],
+            &mut plans[0],
+            &mut winners,
+            &book,
+            &known,
+            &params,
+        );
         assert_eq!(
             a,
             vec![
-                Added { task: 0, position: 0, bid: 99.0, displaced: None },
-                Added { task: 1, position: 1, bid: 56.0, displaced: None },
+                Added {
+                    task: 0,
+                    position: 0,
+                    bid: 99.0,
+                    displaced: None
+                },
+                Added {
+                    task: 1,
+                    position: 1,
+                    bid: 56.0,
+                    displaced: None
+                },
             ]
         );
         assert_eq!(plans[0].path, vec![0, 1]);
@@ -279,23 +300,59 @@ pub(crate) mod tests {
         // R2 (0, 2), gamma 1: T1 -> 98 (room: 1 < 2), T2 alone 60 - sqrt(20) = 55.5279 < 56
         // (T2 full, h = 0). Takes T1 (98). Then T2 after T1: 154 - 98 = 56 = R1's 56: the tie
         // goes to the smaller id, R1, so h = 0 and the bundle stops at [T1].
-        let b = build_bundle(&robots[1], &mut plans[1], &mut winners, &book, &known, &params);
-        assert_eq!(b, vec![Added { task: 0, position: 0, bid: 98.0, displaced: None }]);
+        let b = build_bundle(
+            &robots[1],
+            &mut plans[1],
+            &mut winners,
+            &book,
+            &known,
+            &params,
+        );
+        assert_eq!(
+            b,
+            vec![Added {
+                task: 0,
+                position: 0,
+                bid: 98.0,
+                displaced: None
+            }]
+        );
         assert_eq!(
             evaluate(&robots[1], &plans[1], 1, &winners, &book, &known, &params),
-            Candidate::Outbid { bid: 56.0, weakest: 0, weakest_bid: 56.0 }
+            Candidate::Outbid {
+                bid: 56.0,
+                weakest: 0,
+                weakest_bid: 56.0
+            }
         );
         known.paths[1] = plans[1].path.clone();
         // R3 (0, 3), gamma 0.5: T1 -> 100 - 1.5 = 98.5 > the weakest winner R2's 98: displaces
         // R2. T2 alone 60 - 2.5 = 57.5. Takes T1 (98.5 > 57.5), displacing R2. Then T2 after T1:
         // 60 - 0.5 * 4 = 58; before: (60 - 2.5) + (100 - 2) - 98.5 = 57. Bid min(58, 98.5) = 58
         // > R1's 56 on the full T2: displaces R1.
-        let c = build_bundle(&robots[2], &mut plans[2], &mut winners, &book, &known, &params);
+        let c = build_bundle(
+            &robots[2],
+            &mut plans[2],
+            &mut winners,
+            &book,
+            &known,
+            &params,
+        );
         assert_eq!(
             c,
             vec![
-                Added { task: 0, position: 0, bid: 98.5, displaced: Some(1) },
-                Added { task: 1, position: 1, bid: 58.0, displaced: Some(0) },
+                Added {
+                    task: 0,
+                    position: 0,
+                    bid: 98.5,
+                    displaced: Some(1)
+                },
+                Added {
+                    task: 1,
+                    position: 1,
+                    bid: 58.0,
+                    displaced: Some(0)
+                },
             ]
         );
         // R3's beliefs: T1 = {R1 99, R3 98.5}, T2 = {R3 58}; never more than L_j.
@@ -339,7 +396,10 @@ pub(crate) mod tests {
             paths: vec![vec![], vec![1, 0], vec![]],
         };
         let mut winners = Winners::new(3, 2);
-        let plan = Plan { bundle: vec![0], path: vec![0] };
+        let plan = Plan {
+            bundle: vec![0],
+            path: vec![0],
+        };
         winners.set(0, 0, 99.0);
         match evaluate(&robots[0], &plan, 1, &winners, &book, &known, &params) {
             Candidate::Open { insertion, .. } => assert_eq!(insertion.position, 0),
@@ -350,7 +410,10 @@ pub(crate) mod tests {
             resources: known.resources.clone(),
             paths: vec![vec![], vec![1, 0], vec![0, 1]],
         };
-        let plan = Plan { bundle: vec![0], path: vec![0] };
+        let plan = Plan {
+            bundle: vec![0],
+            path: vec![0],
+        };
         assert_eq!(
             evaluate(&robots[0], &plan, 1, &winners, &book, &both, &params),
             Candidate::Deadlock
@@ -363,14 +426,28 @@ pub(crate) mod tests {
         robots[2].resources = [0.0, 0.0, 0.0, 0.0, 0.0, 1.0];
         let mut resources: Vec<Resources> = robots.iter().map(|r| r.resources).collect();
         resources[1] = [1.0, 0.0, 0.0, 0.0, 0.0, 0.0];
-        let known = Known { resources, paths: vec![vec![]; 3] };
+        let known = Known {
+            resources,
+            paths: vec![vec![]; 3],
+        };
         let mut winners = Winners::new(3, 2);
         winners.set(0, 0, 99.0);
         winners.set(1, 0, 98.0);
         // R3 outbids R2 on T1 (98.5 > 98) but shares no type with R2's {1,0,0,0,0,0}.
         assert_eq!(
-            evaluate(&robots[2], &Plan::default(), 0, &winners, &book, &known, &params),
-            Candidate::NoSubstitute { bid: 98.5, weakest: 1 }
+            evaluate(
+                &robots[2],
+                &Plan::default(),
+                0,
+                &winners,
+                &book,
+                &known,
+                &params
+            ),
+            Candidate::NoSubstitute {
+                bid: 98.5,
+                weakest: 1
+            }
         );
     }
 }

@@ -14,6 +14,7 @@
 //!   beats n*'s (ties: the smaller id) and E_m ∩ E_n* != ∅; if n* = i, i loses j and every task
 //!   it added to b_i after j (CBBA's release), and Algorithm 1 runs again next iteration.
 //! - leave: otherwise nothing changes. Robot i alone writes its own entries (m = i).
+//!
 //! Then s_ik <- max(s_ik, send time) and s_im <- max(s_im, s_km) for m != i, k (the stamp
 //! propagation spec 4.6 adds). The thesis sets s_ik to the receive time; with delays a late
 //! message would then claim to be fresher than it is, so the send time is used. Each robot's
@@ -396,9 +397,9 @@ impl CbcaRobot {
                 }
             }
         }
-        for m in 0..n_r {
+        for (m, (s, theirs)) in self.stamps.iter_mut().zip(&sk).enumerate() {
             if m != me {
-                self.stamps[m] = self.stamps[m].max(sk[m]);
+                *s = s.max(*theirs);
             }
         }
         // Release the first lost task of the bundle and everything added after it.
@@ -439,13 +440,24 @@ mod tests {
         .into_iter()
         .collect();
         let p = CbcaParams::default();
-        let a = CbcaRobot::new(robot(0, [0.0, 1.0], [5.0; 6]), 3, 2, book.clone(), p.clone());
+        let a = CbcaRobot::new(
+            robot(0, [0.0, 1.0], [5.0; 6]),
+            3,
+            2,
+            book.clone(),
+            p.clone(),
+        );
         let b = CbcaRobot::new(robot(1, [0.0, 2.0], [5.0; 6]), 3, 2, book, p);
         (a, b)
     }
 
     /// A crafted message from `sender` with these entries and stamps.
-    fn msg(sender: RobotId, sent_at: f64, winners: &[(RobotId, TaskId, f64)], stamps: [f64; 3]) -> CbcaMessage {
+    fn msg(
+        sender: RobotId,
+        sent_at: f64,
+        winners: &[(RobotId, TaskId, f64)],
+        stamps: [f64; 3],
+    ) -> CbcaMessage {
         CbcaMessage {
             sender,
             sent_at,
@@ -502,7 +514,10 @@ mod tests {
     fn rule_b_learns_a_winner_while_there_is_room() {
         let (mut a, _) = pair();
         // T1 (L = 2) holds R1 itself; R2 reports R3 on T1 with newer news: room, R3 joins.
-        a.plan = Plan { bundle: vec![0], path: vec![0] };
+        a.plan = Plan {
+            bundle: vec![0],
+            path: vec![0],
+        };
         a.winners.set(0, 0, 9.0);
         a.receive(&msg(1, 1.0, &[(2, 0, 3.0)], [0.0, 0.0, 0.5]));
         assert_eq!(a.winners.winners_of(0), vec![(0, 9.0), (2, 3.0)]);
@@ -510,7 +525,9 @@ mod tests {
 
     #[test]
     fn rule_b_newcomer_outbids_the_weakest() {
-        let book: TaskBook = [(0, task(0, [0.0, 0.0], [1.0; 6], 2))].into_iter().collect();
+        let book: TaskBook = [(0, task(0, [0.0, 0.0], [1.0; 6], 2))]
+            .into_iter()
+            .collect();
         let p = CbcaParams::default();
         let mut a = CbcaRobot::new(robot(0, [0.0, 1.0], [5.0; 6]), 4, 1, book, p);
         a.winners.set(1, 0, 6.0);
@@ -520,8 +537,16 @@ mod tests {
             sender: 1,
             sent_at: 3.0,
             winners: vec![
-                WinnerEntry { robot: 1, task: 0, bid: 6.0 },
-                WinnerEntry { robot: 3, task: 0, bid },
+                WinnerEntry {
+                    robot: 1,
+                    task: 0,
+                    bid: 6.0,
+                },
+                WinnerEntry {
+                    robot: 3,
+                    task: 0,
+                    bid,
+                },
             ],
             stamps: vec![0.0, 0.0, 0.0, news_of_r4],
             infos: vec![None; 4],
@@ -545,7 +570,10 @@ mod tests {
     fn rule_b_displaces_the_receiver_and_releases_later_tasks() {
         let (mut a, _) = pair();
         // R1's bundle: T1 (bid 3) then T2 (bid 2). T1 (L = 2) also has R2 (6).
-        a.plan = Plan { bundle: vec![0, 1], path: vec![0, 1] };
+        a.plan = Plan {
+            bundle: vec![0, 1],
+            path: vec![0, 1],
+        };
         a.winners.set(0, 0, 3.0);
         a.winners.set(0, 1, 2.0);
         a.winners.set(1, 0, 6.0);
@@ -562,14 +590,28 @@ mod tests {
 
     #[test]
     fn rule_b_needs_a_substitute_resource() {
-        let book: TaskBook = [(0, task(0, [0.0, 0.0], [1.0; 6], 1))].into_iter().collect();
-        let mut a = CbcaRobot::new(robot(0, [0.0, 1.0], [5.0; 6]), 3, 1, book, CbcaParams::default());
+        let book: TaskBook = [(0, task(0, [0.0, 0.0], [1.0; 6], 1))]
+            .into_iter()
+            .collect();
+        let mut a = CbcaRobot::new(
+            robot(0, [0.0, 1.0], [5.0; 6]),
+            3,
+            1,
+            book,
+            CbcaParams::default(),
+        );
         a.winners.set(1, 0, 2.0);
-        a.infos[1] = Some(RobotInfo { resources: [1.0, 0.0, 0.0, 0.0, 0.0, 0.0], path: vec![0] });
+        a.infos[1] = Some(RobotInfo {
+            resources: [1.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+            path: vec![0],
+        });
         a.stamps = vec![0.0, 1.0, 1.0];
         let mut m = msg(1, 2.0, &[(1, 0, 2.0), (2, 0, 9.0)], [0.0, 0.0, 1.5]);
         // R3 outbids R2 (9 > 2) but carries only type 6, R2 only type 1: leave.
-        m.infos[2] = Some(RobotInfo { resources: [0.0, 0.0, 0.0, 0.0, 0.0, 1.0], path: vec![0] });
+        m.infos[2] = Some(RobotInfo {
+            resources: [0.0, 0.0, 0.0, 0.0, 0.0, 1.0],
+            path: vec![0],
+        });
         a.receive(&m);
         assert_eq!(a.winners.winners_of(0), vec![(1, 2.0)]);
     }
@@ -577,7 +619,10 @@ mod tests {
     #[test]
     fn own_entries_are_never_overwritten() {
         let (mut a, _) = pair();
-        a.plan = Plan { bundle: vec![0], path: vec![0] };
+        a.plan = Plan {
+            bundle: vec![0],
+            path: vec![0],
+        };
         a.winners.set(0, 0, 3.0);
         // R2 claims R1 bids 8 on T2 and not on T1 with a huge stamp on R1: ignored.
         a.receive(&msg(1, 2.0, &[(0, 1, 8.0)], [100.0, 0.0, 0.0]));

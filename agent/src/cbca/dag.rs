@@ -176,7 +176,10 @@ mod tests {
         // R1 does T1 then T2, R2 does T2 then T1: R1 waits at T1 for R2, who waits at T2 for R1.
         let paths = vec![vec![0, 1], vec![1, 0]];
         assert!(!is_dag(paths.iter().map(|p| p.as_slice())));
-        let robots = vec![robot(0, [0.0, 0.0], [1.0; 6]), robot(1, [4.0, 0.0], [1.0; 6])];
+        let robots = vec![
+            robot(0, [0.0, 0.0], [1.0; 6]),
+            robot(1, [4.0, 0.0], [1.0; 6]),
+        ];
         assert_eq!(
             joint_schedule(&robots, &paths, &book()),
             Err(Deadlock { tasks: vec![0, 1] })
@@ -195,7 +198,10 @@ mod tests {
         let paths = vec![vec![0, 1], vec![0, 1]];
         assert!(is_dag(paths.iter().map(|p| p.as_slice())));
         assert_eq!(cycle_closer(&paths), None);
-        let mut robots = vec![robot(0, [0.0, 0.0], [1.0; 6]), robot(1, [4.0, 0.0], [1.0; 6])];
+        let mut robots = vec![
+            robot(0, [0.0, 0.0], [1.0; 6]),
+            robot(1, [4.0, 0.0], [1.0; 6]),
+        ];
         robots[1].speed = 2.0;
         let s = joint_schedule(&robots, &paths, &book()).unwrap();
         // T1: R1 arrives at 3, R2 at 5 / 2 = 2.5; starts at 3, ends at 4 (hold 1); R2 waits 0.5.

@@ -75,10 +75,19 @@ pub fn components(neighbours: &[Vec<RobotId>]) -> Vec<Vec<RobotId>> {
 }
 
 /// The targets within `radius` of some member.
-pub fn detected(members: &[RobotId], positions: &[Vec2], tasks: &[Task], radius: f64) -> BTreeSet<TaskId> {
+pub fn detected(
+    members: &[RobotId],
+    positions: &[Vec2],
+    tasks: &[Task],
+    radius: f64,
+) -> BTreeSet<TaskId> {
     tasks
         .iter()
-        .filter(|t| members.iter().any(|&m| (positions[m] - t.pos()).norm() <= radius))
+        .filter(|t| {
+            members
+                .iter()
+                .any(|&m| (positions[m] - t.pos()).norm() <= radius)
+        })
         .map(|t| t.id)
         .collect()
 }
@@ -92,7 +101,10 @@ pub fn group_knowledge(
     prior: PriorInfo,
 ) -> Vec<BTreeSet<TaskId>> {
     if prior == PriorInfo::Global {
-        return groups.iter().map(|_| tasks.iter().map(|t| t.id).collect()).collect();
+        return groups
+            .iter()
+            .map(|_| tasks.iter().map(|t| t.id).collect())
+            .collect();
     }
     let mut known: Vec<BTreeSet<TaskId>> = groups
         .iter()
@@ -118,6 +130,37 @@ pub fn group_knowledge(
     known
 }
 
+/// What each ROBOT knows at the start under `prior`, before any message: its own detections;
+/// with [`PriorInfo::DetectionPlusNearest`] also each target nobody detects for which it is the
+/// nearest robot (so the nearest group learns it over the radio); with [`PriorInfo::Global`]
+/// everything. Sharing inside a group is then the consensus messages' job.
+pub fn robot_knowledge(
+    positions: &[Vec2],
+    tasks: &[Task],
+    detection_radius: f64,
+    prior: PriorInfo,
+) -> Vec<BTreeSet<TaskId>> {
+    let mut known: Vec<BTreeSet<TaskId>> = (0..positions.len())
+        .map(|i| match prior {
+            PriorInfo::Global => tasks.iter().map(|t| t.id).collect(),
+            _ => detected(&[i], positions, tasks, detection_radius),
+        })
+        .collect();
+    if prior == PriorInfo::DetectionPlusNearest && !positions.is_empty() {
+        let seen: BTreeSet<TaskId> = known.iter().flatten().copied().collect();
+        for t in tasks.iter().filter(|t| !seen.contains(&t.id)) {
+            let mut best = 0;
+            for i in 0..positions.len() {
+                if (positions[i] - t.pos()).norm() < (positions[best] - t.pos()).norm() {
+                    best = i;
+                }
+            }
+            known[best].insert(t.id);
+        }
+    }
+    known
+}
+
 /// A merge: a new group made of members of several old groups.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Merge {
@@ -129,7 +172,12 @@ pub struct Merge {
 /// The merges between the old groups and the groups of the current positions: every current
 /// component holding members of more than one old group.
 pub fn merges(old: &[Vec<RobotId>], now: &[Vec<RobotId>]) -> Vec<Merge> {
-    let n = old.iter().flatten().chain(now.iter().flatten()).max().map_or(0, |m| m + 1);
+    let n = old
+        .iter()
+        .flatten()
+        .chain(now.iter().flatten())
+        .max()
+        .map_or(0, |m| m + 1);
     let mut old_of = vec![usize::MAX; n];
     for (s, g) in old.iter().enumerate() {
         for &m in g {
@@ -138,7 +186,11 @@ pub fn merges(old: &[Vec<RobotId>], now: &[Vec<RobotId>]) -> Vec<Merge> {
     }
     now.iter()
         .filter_map(|g| {
-            let from: BTreeSet<usize> = g.iter().map(|&m| old_of[m]).filter(|&s| s != usize::MAX).collect();
+            let from: BTreeSet<usize> = g
+                .iter()
+                .map(|&m| old_of[m])
+                .filter(|&s| s != usize::MAX)
+                .collect();
             (from.len() > 1).then(|| Merge {
                 members: g.clone(),
                 from: from.into_iter().collect(),
@@ -153,7 +205,9 @@ mod tests {
     use crate::cbca::scenario::tests::example;
 
     fn ids(g: &[Vec<RobotId>]) -> Vec<Vec<usize>> {
-        g.iter().map(|g| g.iter().map(|m| m + 1).collect()).collect()
+        g.iter()
+            .map(|g| g.iter().map(|m| m + 1).collect())
+            .collect()
     }
 
     #[test]
@@ -163,7 +217,10 @@ mod tests {
         let g = temporary_groups(&pos, 1.5);
         assert_eq!(
             ids(&g),
-            vec![vec![1, 2, 3, 4, 5, 6, 10], vec![7, 8, 9, 11, 12, 13, 14, 15]]
+            vec![
+                vec![1, 2, 3, 4, 5, 6, 10],
+                vec![7, 8, 9, 11, 12, 13, 14, 15]
+            ]
         );
         // Detections (1.2 km): group 1 sees T1 (R2 1.00 km, R3 0.72 km) and T2 (R5 1.02 km, R6
         // 0.68 km); group 2 sees T4 (R7 0.71 km); nobody sees T3 (> 3.4 km from everyone).
@@ -177,6 +234,12 @@ mod tests {
             group_knowledge(&g, &pos, &tasks, 1.2, PriorInfo::Global)[0].len(),
             4
         );
+        // Per robot: R3 (index 2) detects T1; R7 (index 6) detects T4 and, as the nearest
+        // robot, is handed T3; R10 (index 9) detects nothing.
+        let r = robot_knowledge(&pos, &tasks, 1.2, PriorInfo::DetectionPlusNearest);
+        assert_eq!(r[2], [0].into());
+        assert_eq!(r[6], [2, 3].into());
+        assert!(r[9].is_empty());
     }
 
     #[test]
@@ -197,7 +260,10 @@ mod tests {
         );
         assert_eq!(
             ids(&temporary_groups(&pos, 2.0)),
-            vec![vec![1, 2, 3, 4, 5, 6, 15], vec![7, 8, 9, 10, 11, 12, 13, 14]]
+            vec![
+                vec![1, 2, 3, 4, 5, 6, 15],
+                vec![7, 8, 9, 10, 11, 12, 13, 14]
+            ]
         );
     }
 
@@ -215,7 +281,10 @@ mod tests {
         let now = temporary_groups(&pos, 1.5);
         assert_eq!(
             merges(&old, &now),
-            vec![Merge { members: vec![0, 1, 2], from: vec![0, 1] }]
+            vec![Merge {
+                members: vec![0, 1, 2],
+                from: vec![0, 1]
+            }]
         );
         assert!(merges(&old, &old).is_empty());
     }

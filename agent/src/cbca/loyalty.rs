@@ -146,7 +146,12 @@ mod tests {
         assert!(!switches(40.0, 60.0, sigma));
         assert!(switches(40.0, 65.0, sigma));
         // Without loyalty (all r = 0) any gain switches.
-        let none = LoyaltyParams { r1: 0.0, r2: 0.0, r3: 0.0, ..LoyaltyParams::default() };
+        let none = LoyaltyParams {
+            r1: 0.0,
+            r2: 0.0,
+            r3: 0.0,
+            ..LoyaltyParams::default()
+        };
         assert!(switches(40.0, 40.5, threshold(&state(), &none).sigma));
     }
 
@@ -158,8 +163,18 @@ mod tests {
         assert_eq!(
             p,
             vec![
-                Payment { from: 5, to: 1, task: 1, amount: 18.0 },
-                Payment { from: 5, to: 3, task: 1, amount: 18.0 },
+                Payment {
+                    from: 5,
+                    to: 1,
+                    task: 1,
+                    amount: 18.0
+                },
+                Payment {
+                    from: 5,
+                    to: 3,
+                    task: 1,
+                    amount: 18.0
+                },
             ]
         );
         // Rate 0.5 on a three-member remainder: 0.5 * 36 / 3 = 6 each.

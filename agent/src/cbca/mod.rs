@@ -13,13 +13,15 @@ pub mod loyalty;
 pub mod model;
 pub mod params;
 pub mod replan;
+pub mod scenario;
 pub mod score;
 pub mod winners;
-pub mod scenario;
 
 pub use model::{Resources, Robot, RobotId, Task, TaskBook, TaskId, RESOURCE_TYPES};
 pub use params::{CbcaParams, Consumption, LoyaltyParams};
 
+#[cfg(test)]
+mod example1;
 #[cfg(test)]
 mod proptests;
 #[cfg(test)]

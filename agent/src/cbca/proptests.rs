@@ -55,28 +55,34 @@ fn instance(seed: u64, n_r: usize, n_e: usize) -> (Vec<CbcaRobot>, Vec<Vec<Robot
             CbcaRobot::new(r, n_r, n_e, book.clone(), params.clone())
         })
         .collect();
-    let mut adj = vec![vec![false; n_r]; n_r];
+    let mut edges = std::collections::BTreeSet::new();
     for i in 1..n_r {
-        let j = rng.gen_range(0..i);
-        adj[i][j] = true;
-        adj[j][i] = true;
+        edges.insert((rng.gen_range(0..i), i));
     }
     for i in 0..n_r {
         for j in i + 1..n_r {
             if rng.gen_bool(0.3) {
-                adj[i][j] = true;
-                adj[j][i] = true;
+                edges.insert((i, j));
             }
         }
     }
-    let neighbours = (0..n_r)
-        .map(|i| (0..n_r).filter(|&j| adj[i][j]).collect())
-        .collect();
+    let mut neighbours = vec![Vec::new(); n_r];
+    for &(i, j) in &edges {
+        neighbours[i].push(j);
+        neighbours[j].push(i);
+    }
+    for n in &mut neighbours {
+        n.sort_unstable();
+    }
     (robots, neighbours, book)
 }
 
 /// The properties that must hold after convergence.
-fn check_agreement(robots: &[CbcaRobot], book: &TaskBook, stats: &RunStats) -> Result<(), TestCaseError> {
+fn check_agreement(
+    robots: &[CbcaRobot],
+    book: &TaskBook,
+    stats: &RunStats,
+) -> Result<(), TestCaseError> {
     prop_assert!(stats.converged, "no convergence in {} rounds", stats.rounds);
     let first = robots[0].winners().entries();
     for r in robots {
@@ -87,7 +93,11 @@ fn check_agreement(robots: &[CbcaRobot], book: &TaskBook, stats: &RunStats) -> R
     }
     // The agreed lists are the robots' own bundles.
     for r in robots {
-        let mut won: Vec<_> = first.iter().filter(|e| e.robot == r.id()).map(|e| e.task).collect();
+        let mut won: Vec<_> = first
+            .iter()
+            .filter(|e| e.robot == r.id())
+            .map(|e| e.task)
+            .collect();
         won.sort();
         let mut bundle = r.plan().bundle.clone();
         bundle.sort();
@@ -115,4 +125,3 @@ proptest! {
         check_agreement(&robots, &book, &stats)?;
     }
 }
-

@@ -221,10 +221,7 @@ pub(crate) mod tests {
         let text = "[cbca]\n[[cbca.tasks]]\nid = 2\nposition = [0.0, 0.0]\nvalue = 1.0\n\
                     resources = [1.0, 1.0, 1.0, 1.0, 1.0, 1.0]\nrobots_needed = 1\n";
         let s = CbcaScenario::from_toml(text).unwrap();
-        assert!(matches!(
-            s.tasks(),
-            Err(ScenarioError::BadId { id: 2, .. })
-        ));
+        assert!(matches!(s.tasks(), Err(ScenarioError::BadId { id: 2, .. })));
         let text = "[cbca]\n[[cbca.robots]]\nid = 1\nposition = [0.0, 0.0]\n\
                     resources = [1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 2.0]\n";
         let s = CbcaScenario::from_toml(text).unwrap();

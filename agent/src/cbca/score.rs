@@ -35,7 +35,12 @@ pub struct PathScore {
 
 /// S_i(p_i) of (4.13) for `path`, executed from the robot's position at t_o. Tasks missing from
 /// the book are skipped (a caller checks the path first).
-pub fn path_score(robot: &Robot, path: &[TaskId], book: &TaskBook, params: &CbcaParams) -> PathScore {
+pub fn path_score(
+    robot: &Robot,
+    path: &[TaskId],
+    book: &TaskBook,
+    params: &CbcaParams,
+) -> PathScore {
     let mut at = robot.position;
     let mut elapsed = 0.0;
     let mut tasks = Vec::with_capacity(path.len());

@@ -46,7 +46,10 @@ impl Winners {
     }
 
     fn at(&self, m: RobotId, j: TaskId) -> usize {
-        assert!(m < self.n_robots && j < self.n_tasks, "({m}, {j}) outside Z");
+        assert!(
+            m < self.n_robots && j < self.n_tasks,
+            "({m}, {j}) outside Z"
+        );
         m * self.n_tasks + j
     }
 
@@ -98,9 +101,13 @@ impl Winners {
     /// The weakest winner of j, the one every other winner outbids (lowest bid; of equal bids,
     /// the larger id): min_k y_kj over the winners, the k of (4.16).
     pub fn weakest(&self, j: TaskId) -> Option<(RobotId, f64)> {
-        self.winners_of(j)
-            .into_iter()
-            .reduce(|w, c| if outbids((w.1, w.0), (c.1, c.0)) { c } else { w })
+        self.winners_of(j).into_iter().reduce(|w, c| {
+            if outbids((w.1, w.0), (c.1, c.0)) {
+                c
+            } else {
+                w
+            }
+        })
     }
 
     /// The non-empty entries, in (robot, task) order.
@@ -109,7 +116,11 @@ impl Winners {
         for m in 0..self.n_robots {
             for j in 0..self.n_tasks {
                 if let Some(bid) = self.get(m, j) {
-                    out.push(WinnerEntry { robot: m, task: j, bid });
+                    out.push(WinnerEntry {
+                        robot: m,
+                        task: j,
+                        bid,
+                    });
                 }
             }
         }
