@@ -32,6 +32,25 @@ pub trait Peers {
     fn count(&self) -> usize;
 }
 
+/// Peers given as plain lists (tests, benches, centralised baselines).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct StaticPeers {
+    pub resources: Vec<Resources>,
+    pub paths: Vec<Vec<TaskId>>,
+}
+
+impl Peers for StaticPeers {
+    fn resources(&self, m: RobotId) -> Option<Resources> {
+        self.resources.get(m).copied()
+    }
+    fn path(&self, m: RobotId) -> &[TaskId] {
+        self.paths.get(m).map(|p| p.as_slice()).unwrap_or(&[])
+    }
+    fn count(&self) -> usize {
+        self.paths.len()
+    }
+}
+
 /// A robot's plan: b_i (4.10), tasks in the order they were added, and p_i (4.9), in the
 /// order they will be executed.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -216,24 +235,6 @@ pub(crate) mod tests {
     use super::*;
     use crate::cbca::model::tests::{robot, task};
 
-    /// Peers known by a test: resources and paths by robot.
-    pub struct Known {
-        pub resources: Vec<Resources>,
-        pub paths: Vec<Vec<TaskId>>,
-    }
-
-    impl Peers for Known {
-        fn resources(&self, m: RobotId) -> Option<Resources> {
-            self.resources.get(m).copied()
-        }
-        fn path(&self, m: RobotId) -> &[TaskId] {
-            self.paths.get(m).map(|p| p.as_slice()).unwrap_or(&[])
-        }
-        fn count(&self) -> usize {
-            self.paths.len()
-        }
-    }
-
     /// T1 at (0, 0): V_a 100, L 2. T2 at (4, 0): V_a 60, L 1. beta 0 (no decay), w1 = w2 = 1,
     /// so S_ij = V_a - gamma d and the hand computation is exact. Resources never bind here.
     fn case() -> (Vec<Robot>, TaskBook, CbcaParams) {
@@ -262,7 +263,7 @@ pub(crate) mod tests {
         let (robots, book, params) = case();
         let mut winners = Winners::new(3, 2);
         let mut plans = vec![Plan::default(); 3];
-        let mut known = Known {
+        let mut known = StaticPeers {
             resources: robots.iter().map(|r| r.resources).collect(),
             paths: vec![vec![]; 3],
         };
@@ -364,7 +365,7 @@ pub(crate) mod tests {
     fn l_i_and_non_positive_gains_stop_the_bundle() {
         let (mut robots, mut book, params) = case();
         robots[0].max_tasks = 1;
-        let known = Known {
+        let known = StaticPeers {
             resources: robots.iter().map(|r| r.resources).collect(),
             paths: vec![vec![]; 3],
         };
@@ -391,7 +392,7 @@ pub(crate) mod tests {
         // R2 is known to do T2 then T1. R1 holding T1 must not append T2 after it (T1 -> T2 and
         // T2 -> T1); it may put T2 first.
         robots[0].max_tasks = 2;
-        let known = Known {
+        let known = StaticPeers {
             resources: robots.iter().map(|r| r.resources).collect(),
             paths: vec![vec![], vec![1, 0], vec![]],
         };
@@ -406,7 +407,7 @@ pub(crate) mod tests {
             other => panic!("{other:?}"),
         }
         // With R2 at T2 -> T1 and R3 at T1 -> T2 known, both orders close a cycle for R1.
-        let both = Known {
+        let both = StaticPeers {
             resources: known.resources.clone(),
             paths: vec![vec![], vec![1, 0], vec![0, 1]],
         };
@@ -426,7 +427,7 @@ pub(crate) mod tests {
         robots[2].resources = [0.0, 0.0, 0.0, 0.0, 0.0, 1.0];
         let mut resources: Vec<Resources> = robots.iter().map(|r| r.resources).collect();
         resources[1] = [1.0, 0.0, 0.0, 0.0, 0.0, 0.0];
-        let known = Known {
+        let known = StaticPeers {
             resources,
             paths: vec![vec![]; 3],
         };
