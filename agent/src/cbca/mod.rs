@@ -5,6 +5,7 @@
 //! (sec. 4.2.2), loyalty and compensation (4.18)-(4.22) and the local-vision re-planning of
 //! sec. 4.2.5. No I/O: the runtime carries the messages.
 
+pub mod baselines;
 pub mod bundle;
 pub mod consensus;
 pub mod dag;
