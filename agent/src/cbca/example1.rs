@@ -1,0 +1,250 @@
+//! Example 1 of thesis sec. 4.3 (Tables 4.1, 4.2; spec 8.1) run through the in-memory radio
+//! of testdriver.rs: the temporary groups, the coalitions beside the thesis's, the idle robots
+//! and why, consensus rounds, messages and bytes, with and without grouping. It prints a report
+//! (`cargo test --release -p agent --lib cbca::example1 -- --nocapture`) and asserts only what
+//! is true of the algorithm, not the thesis's figures.
+
+use std::collections::BTreeMap;
+
+use swarm::geometry::Vec2;
+
+use super::bundle::{evaluate, Candidate};
+use super::consensus::CbcaRobot;
+use super::dag;
+use super::grouping::{comm_graph, robot_knowledge, temporary_groups, PriorInfo};
+use super::model::{coverage_shortfall, robot_label, task_label, Robot, RobotId, Task, TaskId};
+use super::scenario::tests::example;
+use super::testdriver::{run, Radio, RunStats};
+
+/// How a run is set up.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Setup {
+    /// Radio graph of radius comm_radius_km, knowledge by `PriorInfo`.
+    Grouped(PriorInfo),
+    /// Every robot hears every other and knows every target (CBCA without grouping).
+    Global,
+}
+
+struct Outcome {
+    robots: Vec<CbcaRobot>,
+    groups: Vec<Vec<RobotId>>,
+    stats: RunStats,
+}
+
+fn setup(robots: &[Robot], tasks: &[Task], setup: Setup) -> (Vec<CbcaRobot>, Vec<Vec<RobotId>>) {
+    let s = example(1);
+    let pos: Vec<Vec2> = robots.iter().map(|r| r.position).collect();
+    let n = robots.len();
+    let (knowledge, neighbours) = match setup {
+        Setup::Grouped(prior) => (
+            robot_knowledge(&pos, tasks, s.params.detection_radius_km, prior),
+            comm_graph(&pos, s.params.comm_radius_km),
+        ),
+        Setup::Global => (
+            robot_knowledge(&pos, tasks, 0.0, PriorInfo::Global),
+            (0..n)
+                .map(|i| (0..n).filter(|&j| j != i).collect())
+                .collect(),
+        ),
+    };
+    let cbca = robots
+        .iter()
+        .map(|r| {
+            let book = tasks
+                .iter()
+                .filter(|t| knowledge[r.id].contains(&t.id))
+                .map(|t| (t.id, t.clone()))
+                .collect();
+            CbcaRobot::new(r.clone(), n, tasks.len(), book, s.params.clone())
+        })
+        .collect();
+    (cbca, neighbours)
+}
+
+fn run_example(how: Setup, radio: &Radio) -> Outcome {
+    let s = example(1);
+    let robots = s.robots().unwrap();
+    let tasks = s.tasks().unwrap();
+    let (mut cbca, neighbours) = setup(&robots, &tasks, how);
+    let stats = run(&mut cbca, &neighbours, radio, s.params.max_iterations);
+    let groups = match how {
+        Setup::Grouped(_) => temporary_groups(
+            &robots.iter().map(|r| r.position).collect::<Vec<_>>(),
+            s.params.comm_radius_km,
+        ),
+        Setup::Global => vec![(0..robots.len()).collect()],
+    };
+    Outcome {
+        robots: cbca,
+        groups,
+        stats,
+    }
+}
+
+fn labels(ms: &[RobotId]) -> String {
+    ms.iter()
+        .map(|&m| robot_label(m))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// The coalitions as the group of each task agrees on them: task -> members.
+fn coalitions(o: &Outcome) -> BTreeMap<TaskId, Vec<RobotId>> {
+    let mut c: BTreeMap<TaskId, Vec<RobotId>> = BTreeMap::new();
+    for r in &o.robots {
+        for &j in &r.plan().bundle {
+            c.entry(j).or_default().push(r.id());
+        }
+    }
+    c
+}
+
+/// What is true of the algorithm: converged; inside each group every robot holds the same
+/// winner lists and they are the members' bundles; no task over L_j; a DAG; no robot of one
+/// group is a winner in another's view.
+fn check(o: &Outcome, tasks: &[Task]) {
+    assert!(o.stats.converged, "no convergence: {:?}", o.stats);
+    for g in &o.groups {
+        let first = o.robots[g[0]].winners().entries();
+        for &m in g {
+            assert_eq!(
+                o.robots[m].winners().entries(),
+                first,
+                "{} disagrees",
+                robot_label(m)
+            );
+            for e in &first {
+                assert!(g.contains(&e.robot), "a winner outside the group");
+            }
+        }
+        for t in tasks {
+            assert!(o.robots[g[0]].winners().count(t.id) <= t.robots_needed);
+        }
+    }
+    for (j, ms) in coalitions(o) {
+        assert!(ms.len() <= tasks[j].robots_needed);
+    }
+    assert!(dag::is_dag(
+        o.robots.iter().map(|r| r.plan().path.as_slice())
+    ));
+}
+
+fn report(title: &str, o: &Outcome, tasks: &[Task]) {
+    println!("== {title}");
+    println!(
+        "groups: {}",
+        o.groups
+            .iter()
+            .map(|g| format!("{{{}}}", labels(g)))
+            .collect::<Vec<_>>()
+            .join(" ")
+    );
+    let c = coalitions(o);
+    for t in tasks {
+        let ms = c.get(&t.id).cloned().unwrap_or_default();
+        let res: Vec<_> = ms.iter().map(|&m| &o.robots[m].robot().resources).collect();
+        let short = coverage_shortfall(&res, t);
+        let full = ms.len() == t.robots_needed;
+        println!(
+            "  {}: {{{}}} {}/{} robots{}; (2.6) shortfall {:?}",
+            task_label(t.id),
+            labels(&ms),
+            ms.len(),
+            t.robots_needed,
+            if full { "" } else { " (INCOMPLETE)" },
+            short
+        );
+    }
+    for r in &o.robots {
+        if !r.plan().bundle.is_empty() {
+            continue;
+        }
+        let why: Vec<String> = r
+            .book()
+            .keys()
+            .map(|&j| {
+                let c = evaluate(
+                    r.robot(),
+                    r.plan(),
+                    j,
+                    r.winners(),
+                    r.book(),
+                    &r.peers(),
+                    r.params(),
+                );
+                let s = match c {
+                    Candidate::Outbid {
+                        bid,
+                        weakest,
+                        weakest_bid,
+                    } => format!(
+                        "bid {bid:.2} <= weakest winner {} {weakest_bid:.2}",
+                        robot_label(weakest)
+                    ),
+                    other => format!("{other:?}"),
+                };
+                format!("{}: {s}", task_label(j))
+            })
+            .collect();
+        println!(
+            "  idle {}: knows {:?}; {}",
+            robot_label(r.id()),
+            r.book().keys().map(|&j| task_label(j)).collect::<Vec<_>>(),
+            why.join("; ")
+        );
+    }
+    let st = &o.stats;
+    println!(
+        "  rounds {} (detector), broadcasts {}, bytes {}, copies delivered {}, dropped {}",
+        st.rounds, st.broadcasts, st.bytes, st.delivered, st.dropped
+    );
+}
+
+const THESIS: &str = "thesis (Fig. 4.2): Phi1 = {R3, R6, R5}, Phi2 = {R1, R2, R4}, \
+                      Phi3 = {R7, R11, R12}, Phi4 = {R8, R9, R14, R15}; R10, R13 idle";
+
+#[test]
+fn example1_grouped_and_global() {
+    let tasks = example(1).tasks().unwrap();
+    println!("{THESIS}");
+    let runs = [
+        (
+            "grouped, detections only",
+            Setup::Grouped(PriorInfo::Detection),
+        ),
+        (
+            "grouped, detections + nearest-robot prior",
+            Setup::Grouped(PriorInfo::DetectionPlusNearest),
+        ),
+        (
+            "without grouping (complete graph, all targets)",
+            Setup::Global,
+        ),
+    ];
+    let mut stats = Vec::new();
+    for (title, how) in runs {
+        let o = run_example(how, &Radio::perfect());
+        report(title, &o, &tasks);
+        check(&o, &tasks);
+        stats.push(o.stats.clone());
+        if how == Setup::Grouped(PriorInfo::Detection) {
+            // Nobody detects T3, so nobody can bid on it.
+            assert!(o.robots.iter().all(|r| !r.plan().bundle.contains(&2)));
+        }
+        if let Setup::Grouped(_) = how {
+            assert_eq!(o.groups.len(), 2);
+        }
+    }
+    // Lossy radio, grouped with the prior: same guarantees.
+    let lossy = Radio {
+        loss: 0.3,
+        max_delay: 2,
+        seed: 7,
+    };
+    let o = run_example(Setup::Grouped(PriorInfo::DetectionPlusNearest), &lossy);
+    report("grouped + prior, loss 0.3, delay <= 2 rounds", &o, &tasks);
+    check(&o, &tasks);
+    let o = run_example(Setup::Global, &lossy);
+    report("without grouping, loss 0.3, delay <= 2 rounds", &o, &tasks);
+    check(&o, &tasks);
+}
