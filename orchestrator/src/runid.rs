@@ -16,7 +16,20 @@ fn civil(days: i64) -> (i64, u32, u32) {
     (y, m, d)
 }
 
+/// The environment variable that fixes the next run's id (tests and scripts that must know a
+/// run's shared-memory prefix before it starts; it must be a valid id of letters, digits and
+/// dashes, at most 40 characters, or it is ignored).
+pub const RUN_ID_ENV: &str = "SWARM_RUN_ID";
+
 pub fn new_run_id() -> String {
+    if let Ok(id) = std::env::var(RUN_ID_ENV) {
+        let ok = !id.is_empty()
+            && id.len() <= 40
+            && id.chars().all(|c| c.is_ascii_alphanumeric() || c == '-');
+        if ok {
+            return id;
+        }
+    }
     let now = SystemTime::now()
         .duration_since(UNIX_EPOCH)
         .expect("clock after 1970");

@@ -111,14 +111,32 @@ pub fn roam() -> &'static str {
 
 /// Runs `orchestrator up` with the given flags (quiet) and waits.
 pub fn up(args: &[&str], out: &Path) -> Output {
-    Command::new(orchestrator())
-        .arg("up")
-        .arg("--quiet")
-        .arg("--out")
-        .arg(out)
-        .args(args)
-        .output()
-        .expect("run orchestrator")
+    up_as(args, out, None)
+}
+
+/// [`up`] with the run id fixed (`SWARM_RUN_ID`), so the test knows the run's shared-memory
+/// prefix (`swarm::transport::prefix_for(id)`) even when the run never starts.
+pub fn up_as(args: &[&str], out: &Path, run_id: Option<&str>) -> Output {
+    let mut c = Command::new(orchestrator());
+    c.arg("up").arg("--quiet").arg("--out").arg(out).args(args);
+    if let Some(id) = run_id {
+        c.env("SWARM_RUN_ID", id);
+    }
+    c.output().expect("run orchestrator")
+}
+
+/// A run id of this test process's own, for [`up_as`].
+pub fn own_run_id(tag: &str) -> String {
+    format!("e2e-{}-{tag}", std::process::id())
+}
+
+/// This run's entries in /dev/shm (those under its prefix).
+pub fn shm_of_run(run_id: &str) -> Vec<String> {
+    let prefix = swarm::transport::prefix_for(run_id);
+    run_shm_entries()
+        .into_iter()
+        .filter(|n| n.starts_with(&prefix))
+        .collect()
 }
 
 /// Every entry of /dev/shm that belongs to a run of this runtime (prefix `sw`).

@@ -5,8 +5,10 @@ use e2e::*;
 
 fn expect_rejected(args: &[&str], must_name: &[&str]) {
     let out = tmp_dir("bad");
-    let before = run_shm_entries();
-    let o = up(args, &out);
+    // The run's own id: a refused run must create nothing under its prefix (other runs may be
+    // on the machine, so the test looks at this run's files only).
+    let id = own_run_id("bad");
+    let o = up_as(args, &out, Some(&id));
     let err = stderr(&o);
     assert_eq!(o.status.code(), Some(2), "args {args:?}: {err}");
     for m in must_name {
@@ -16,7 +18,8 @@ fn expect_rejected(args: &[&str], must_name: &[&str]) {
         );
     }
     assert!(!out.exists(), "no run folder for rejected input");
-    assert_eq!(run_shm_entries(), before, "nothing created in /dev/shm");
+    let left = shm_of_run(&id);
+    assert!(left.is_empty(), "nothing created in /dev/shm: {left:?}");
 }
 
 #[test]
