@@ -52,7 +52,7 @@ fn chase(starts: &[Vec2], v: f64, slowdown: f64, t_max: f64) -> Run {
         // cycle, sec. 3.2.4 step 5).
         let goals: Vec<Vec2> = match phase.update(&members, &evader, r_e) {
             None => vec![evader; poses.len()],
-            Some(l) => {
+            Some(_) => {
                 let pts =
                     hunting_points(&evader, poses.len(), p.r_s, phase.anchor_angle().unwrap());
                 let a = assign(&members, &pts, p.contested_point_to_farthest);
