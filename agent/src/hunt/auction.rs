@@ -137,6 +137,10 @@ pub enum AuctionError {
     DuplicateBid(RobotId),
     #[error("no round is open")]
     NoOpenRound,
+    /// The robot already won a task: its award was lost on the radio. The auctioneer ignores the
+    /// bid and resends the award ([`Auctioneer::award_of`]).
+    #[error("robot {robot} already won task {task}")]
+    AlreadyAwarded { robot: RobotId, task: TaskId },
 }
 
 /// What happened in one round (for Fig. 3.6 and the reports).
@@ -258,6 +262,12 @@ impl Auctioneer {
         if !self.round_open {
             return Err(AuctionError::NoOpenRound);
         }
+        if let Some(a) = self.award_of(bid.robot) {
+            return Err(AuctionError::AlreadyAwarded {
+                robot: bid.robot,
+                task: a.task,
+            });
+        }
         if bid.round != self.round {
             return Err(AuctionError::WrongRound {
                 got: bid.round,
@@ -358,6 +368,13 @@ impl Auctioneer {
 
     pub fn finish(&self) -> Option<Finish> {
         self.finish
+    }
+    /// The award robot `robot` holds, if any (to resend when its award was lost).
+    pub fn award_of(&self, robot: RobotId) -> Option<&Award> {
+        self.coalitions
+            .values()
+            .map(|c| &c.award)
+            .find(|a| a.members.contains(&robot))
     }
     pub fn round(&self) -> u32 {
         self.round
@@ -594,19 +611,51 @@ impl AuctionOutcome {
 
 /// Run an auctioneer and bidders to the end, synchronously, with lossless messages.
 pub fn drive(auctioneer: &mut Auctioneer, bidders: &mut [Bidder]) -> AuctionOutcome {
+    drive_lossy(auctioneer, bidders, &mut |_| true)
+}
+
+/// Run an auctioneer and bidders to the end, synchronously, where `delivered(message)` decides
+/// whether each transmission reaches its one receiver (a broadcast is one transmission per
+/// receiver). A lost announcement means no bid that round; a lost bid is no bid; a lost award
+/// leaves the robot bidding, so the auctioneer rejects its next bid and resends the award.
+pub fn drive_lossy(
+    auctioneer: &mut Auctioneer,
+    bidders: &mut [Bidder],
+    delivered: &mut dyn FnMut(&AuctionMessage) -> bool,
+) -> AuctionOutcome {
     let mut messages = 0;
     while let Some(a) = auctioneer.announce() {
         messages += 1;
+        let announce = AuctionMessage::Announce(a.clone());
         for b in bidders.iter_mut() {
+            if !delivered(&announce) {
+                continue;
+            }
             if let Some(bid) = b.on_announcement(&a) {
                 messages += 1;
-                auctioneer.receive(bid).expect("a bidder's bid is valid");
+                if !delivered(&AuctionMessage::Bid(bid.clone())) {
+                    continue;
+                }
+                match auctioneer.receive(bid) {
+                    Ok(()) => {}
+                    Err(AuctionError::AlreadyAwarded { robot, .. }) => {
+                        let award = auctioneer.award_of(robot).expect("awarded").clone();
+                        messages += 1;
+                        if delivered(&AuctionMessage::Award(award.clone())) {
+                            b.on_award(&award);
+                        }
+                    }
+                    Err(e) => panic!("a bidder's bid is invalid: {e}"),
+                }
             }
         }
         for award in auctioneer.close_round() {
             messages += 1;
+            let msg = AuctionMessage::Award(award.clone());
             for b in bidders.iter_mut() {
-                b.on_award(&award);
+                if delivered(&msg) {
+                    b.on_award(&award);
+                }
             }
         }
         if auctioneer.finish().is_some() {
@@ -615,8 +664,11 @@ pub fn drive(auctioneer: &mut Auctioneer, bidders: &mut [Bidder]) -> AuctionOutc
     }
     if let Some(c) = auctioneer.closed() {
         messages += 1;
+        let msg = AuctionMessage::Closed(c.clone());
         for b in bidders.iter_mut() {
-            b.on_closed(&c);
+            if delivered(&msg) {
+                b.on_closed(&c);
+            }
         }
     }
     AuctionOutcome {
@@ -869,6 +921,86 @@ mod tests {
             }),
             Err(AuctionError::UnknownTask(9))
         );
+    }
+
+    #[test]
+    fn lost_award_is_resent_and_nobody_wins_twice() {
+        // Example 3-A with 30 % of the transmissions lost (seeded): coalitions stay disjoint,
+        // meet L_j and E_j, and every robot the auctioneer counts in a coalition either learned
+        // it or never bid again.
+        use crate::hunt::scenario::tests::example_3a;
+        use rand::{Rng, SeedableRng};
+        let h = example_3a();
+        let tasks = h.tasks_at(0.0);
+        for seed in 0..20 {
+            let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+            let mut a = Auctioneer::new(&tasks, 15, &p());
+            let mut bidders: Vec<Bidder> = h
+                .robots()
+                .into_iter()
+                .map(|r| Bidder::new(r, &p()))
+                .collect();
+            let out = drive_lossy(&mut a, &mut bidders, &mut |_| rng.gen::<f64>() >= 0.3);
+            let mut seen = BTreeSet::new();
+            for c in out.coalitions.values() {
+                let t = tasks.iter().find(|t| t.id == c.award.task).unwrap();
+                assert_eq!(c.award.members.len(), t.required_robots);
+                let res: Vec<&Resources> = c
+                    .award
+                    .members
+                    .iter()
+                    .map(|i| {
+                        &bidders
+                            .iter()
+                            .find(|b| b.robot().id == *i)
+                            .unwrap()
+                            .robot()
+                            .resources
+                    })
+                    .collect();
+                assert!(coalition_covers(res, &t.resources), "seed {seed}: (2.6)");
+                for i in &c.award.members {
+                    assert!(seen.insert(*i), "seed {seed}: R{i} won twice");
+                }
+            }
+            // A robot that believes it won holds the auctioneer's award.
+            for b in &bidders {
+                if let BidderState::Awarded(aw) = b.state() {
+                    assert_eq!(a.award_of(b.robot().id), Some(aw));
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn bid_from_an_awarded_robot_is_rejected() {
+        let (tasks, robots) = two_task_world();
+        let mut a = Auctioneer::new(&tasks, 4, &p());
+        let ann = a.announce().unwrap();
+        let mut bidders: Vec<Bidder> = robots.into_iter().map(|r| Bidder::new(r, &p())).collect();
+        // R1, R2 bid on T1 (L = 2), R3, R4 on T2: both tasks awarded in round 1.
+        for b in &mut bidders {
+            let bid = b.on_announcement(&ann).unwrap();
+            a.receive(bid).unwrap();
+        }
+        let awards = a.close_round();
+        assert_eq!(awards.len(), 2);
+        // Had the award been lost, R1's next bid is answered with it.
+        let mut again = a.clone();
+        again.round_open = true;
+        let bid = Bid {
+            round: again.round(),
+            robot: 1,
+            task: 1,
+            utility: 1.0,
+            position: [0.0, 0.0],
+            resources: [1.0; 6],
+        };
+        assert_eq!(
+            again.receive(bid),
+            Err(AuctionError::AlreadyAwarded { robot: 1, task: 1 })
+        );
+        assert_eq!(again.award_of(1).map(|x| x.task), Some(1));
     }
 
     #[test]

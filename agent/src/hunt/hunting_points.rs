@@ -18,15 +18,25 @@ pub fn in_effective_range(x: &Vec2, target: &Vec2, r_e: f64) -> bool {
     (x - target).norm() <= r_e
 }
 
-/// Who leads a coalition's encirclement: the first member to enter r_e, kept afterwards.
+/// Who leads a coalition's encirclement: the first member to enter r_e, kept afterwards, and the
+/// bearing (from the target) at which it entered, which orients the ring of points from then on.
+/// [chosen] The ring translates with the target but does not turn with the leader: re-anchoring
+/// s_1 on the leader's bearing every cycle makes the ring turn whenever the leader moves to a
+/// point other than s_1, so that robot chases a point that keeps moving away and never gets there.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct HuntingPhase {
     leader: Option<RobotId>,
+    anchor: f64,
 }
 
 impl HuntingPhase {
     pub fn leader(&self) -> Option<RobotId> {
         self.leader
+    }
+
+    /// The bearing of s_1 (the leader's bearing from the target when it entered r_e).
+    pub fn anchor_angle(&self) -> Option<f64> {
+        self.leader.map(|_| self.anchor)
     }
 
     /// Update with the members' current positions; returns the leader once there is one. If

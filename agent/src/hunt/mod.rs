@@ -6,6 +6,8 @@
 
 pub mod apf;
 pub mod auction;
+#[cfg(test)]
+mod closed_loop;
 pub mod cost;
 #[cfg(test)]
 mod example_3a;
