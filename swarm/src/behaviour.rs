@@ -63,6 +63,8 @@ pub struct Command {
     /// velocity (vx, vy) for holonomic robots, (v, w) (speed, turn rate) for unicycles.
     pub cmd: [f64; 2],
     pub events: u32,
+    /// What the robot reports to the mission (Action `report`).
+    pub report: [f64; 4],
 }
 
 /// Messages queued by a behaviour in one tick.
@@ -379,6 +381,7 @@ impl<B: Behaviour> AgentRuntime<B> {
         self.due = due;
         self.stats.refused_sends += out.refused as u64;
         action.cmd = cmd.cmd;
+        action.report = cmd.report;
         action.events = cmd.events;
         for (dest, msg) in out.msgs.iter() {
             let mut size = bincode::enc::write::SizeWriter::default();

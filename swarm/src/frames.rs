@@ -168,6 +168,10 @@ pub struct Action {
     /// The motion command: (vx, vy) for holonomic robots, (v, w) for unicycles
     /// (`robot.kinematics`).
     pub cmd: [f64; 2],
+    /// What the behaviour reports to the mission this tick (a robot's claim, as a real robot
+    /// reports to a monitor: e.g. the slot it is heading for); the mission says what the
+    /// numbers mean, other missions ignore them.
+    pub report: [f64; 4],
     /// Messages sent this tick and their destinations (BROADCAST or a robot id).
     pub n_sent: u32,
     /// Radio outcome of the messages due at this tick, as the receiver's transport saw them.
@@ -184,6 +188,7 @@ impl Action {
             robot,
             events: 0,
             cmd: [0.0, 0.0],
+            report: [0.0; 4],
             n_sent: 0,
             radio_delivered: 0,
             radio_dropped_loss: 0,
@@ -281,7 +286,7 @@ mod tests {
                 + 40 * MAX_ENTITIES
                 + 40 * MAX_NEARBY
         );
-        assert_eq!(std::mem::size_of::<Action>(), 48 + 4 * MAX_SENT);
+        assert_eq!(std::mem::size_of::<Action>(), 80 + 4 * MAX_SENT);
     }
 
     #[test]

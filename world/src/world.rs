@@ -556,6 +556,7 @@ impl World {
                 continue;
             }
             self.states[i] = (a.events & STATE_MASK) as u8;
+            self.mission.observe(i as u32, a.report);
             if a.events & !STATE_MASK != 0 {
                 events.push(Event::Declared {
                     robot: i as u32,

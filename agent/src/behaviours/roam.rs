@@ -170,6 +170,7 @@ impl<M: BeaconMsg> Behaviour for Roam<M> {
                 self.v_max * self.heading.sin(),
             ],
             events: 0,
+            ..Command::default()
         }
     }
 }

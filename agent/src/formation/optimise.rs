@@ -113,7 +113,13 @@ pub fn optimise_without_rotation(
     template: &Template,
     params: &FormationParams,
 ) -> Result<Solution, FormationError> {
-    optimise_in(starts, template, params, params.optimiser.alpha_range, [0.0, 0.0])
+    optimise_in(
+        starts,
+        template,
+        params,
+        params.optimiser.alpha_range,
+        [0.0, 0.0],
+    )
 }
 
 /// Solve eq. (14) with alpha in `alpha_range` and theta in `theta_range` (lo == hi fixes it;
@@ -130,7 +136,11 @@ pub fn optimise_in(
             return Err(FormationError::NonFinite(name));
         }
         if r[0] > r[1] {
-            return Err(FormationError::EmptyRange { name, lo: r[0], hi: r[1] });
+            return Err(FormationError::EmptyRange {
+                name,
+                lo: r[0],
+                hi: r[1],
+            });
         }
     }
     let problem = Problem::new(starts, template, params)?;
@@ -202,13 +212,23 @@ impl Problem {
     ) -> Result<Self, FormationError> {
         let n = starts.len();
         if template.len() != n {
-            return Err(FormationError::SizeMismatch { template: template.len(), robots: n });
+            return Err(FormationError::SizeMismatch {
+                template: template.len(),
+                robots: n,
+            });
         }
         if n == 0 {
-            return Err(FormationError::SizeMismatch { template: 0, robots: 0 });
+            return Err(FormationError::SizeMismatch {
+                template: 0,
+                robots: 0,
+            });
         }
         let s = template.vectors();
-        if starts.iter().chain(&s).any(|p| !(p.x.is_finite() && p.y.is_finite())) {
+        if starts
+            .iter()
+            .chain(&s)
+            .any(|p| !(p.x.is_finite() && p.y.is_finite()))
+        {
             return Err(FormationError::NonFinite("starts or template"));
         }
         let s_bar = s.iter().sum::<Vec2>() / n as f64;
@@ -225,7 +245,11 @@ impl Problem {
         }
         let constraints = PatternConstraints::new(params);
         let spacing = template.min_spacing();
-        let lambda_sep = if spacing.is_finite() { constraints.min_separation / spacing } else { 0.0 };
+        let lambda_sep = if spacing.is_finite() {
+            constraints.min_separation / spacing
+        } else {
+            0.0
+        };
         Ok(Self {
             n,
             reading: params.transform_reading,
@@ -247,7 +271,11 @@ impl Problem {
     /// max over sigma of a D(sigma) + b X(sigma), and the maximising sigma.
     fn best_alignment(&self, a: f64, b: f64, h: &mut Hungarian, sigma: &mut Vec<usize>) -> f64 {
         let n = self.n;
-        -h.solve_with(n, |i, j| -(a * self.dot[i * n + j] + b * self.cross[i * n + j]), sigma)
+        -h.solve_with(
+            n,
+            |i, j| -(a * self.dot[i * n + j] + b * self.cross[i * n + j]),
+            sigma,
+        )
     }
 
     /// Outer interval box of (a, b) over an (alpha, theta) box.
@@ -320,7 +348,11 @@ impl Problem {
                 if j == k {
                     continue;
                 }
-                let (dd, dx, dv) = (self.dot[i * n + j] - dk, self.cross[i * n + j] - xk, big_v(j) - vk);
+                let (dd, dx, dv) = (
+                    self.dot[i * n + j] - dk,
+                    self.cross[i * n + j] - xk,
+                    big_v(j) - vk,
+                );
                 // A linear function of (a, b): its maximum over the rectangle is at a corner.
                 let at = |a: f64, b: f64| a * dd + b * dx - dv;
                 worst = worst.max(at(ar[0], br[0])).max(at(ar[0], br[1]));
@@ -362,15 +394,27 @@ impl Problem {
         let g = self.p2 + (a * a + b * b) * self.s2 - 2.0 * self.best_alignment(a, b, h, sigma);
         let clamp = |v: f64, r: [f64; 2]| v.clamp(r[0], r[1]);
         let candidates = [
-            Vec2::new(clamp(self.p_bar.x, node.c[0]), clamp(self.p_bar.y, node.c[1])),
-            Vec2::new(0.5 * (node.c[0][0] + node.c[0][1]), 0.5 * (node.c[1][0] + node.c[1][1])),
+            Vec2::new(
+                clamp(self.p_bar.x, node.c[0]),
+                clamp(self.p_bar.y, node.c[1]),
+            ),
+            Vec2::new(
+                0.5 * (node.c[0][0] + node.c[0][1]),
+                0.5 * (node.c[1][0] + node.c[1][1]),
+            ),
         ];
         for c in candidates {
             let f = g + self.n as f64 * (self.p_bar - c).norm_squared();
             if best.as_ref().is_some_and(|b| b.cost <= f) || !self.feasible(a, b, c) {
                 continue;
             }
-            *best = Some(Incumbent { cost: f, alpha, theta, c, assignment: sigma.clone() });
+            *best = Some(Incumbent {
+                cost: f,
+                alpha,
+                theta,
+                c,
+                assignment: sigma.clone(),
+            });
         }
     }
 
@@ -421,7 +465,12 @@ impl Problem {
         let mut sigma = Vec::with_capacity(self.n);
         let mut best: Option<Incumbent> = None;
         let cons = &self.constraints;
-        let mut root = Node { alpha, theta, c: [cons.x_range, cons.y_range], lb: 0.0 };
+        let mut root = Node {
+            alpha,
+            theta,
+            c: [cons.x_range, cons.y_range],
+            lb: 0.0,
+        };
         let mut heap = BinaryHeap::new();
         let mut nodes = 1;
         // The least lower bound among nodes discarded by bound (not by infeasibility).
@@ -432,7 +481,13 @@ impl Problem {
             heap.push(root);
         }
         // Without an incumbent (ub infinite) nothing is pruned by bound.
-        let tolerance = |ub: f64| if ub.is_finite() { opts.gap_abs.max(opts.gap_rel * ub) } else { 0.0 };
+        let tolerance = |ub: f64| {
+            if ub.is_finite() {
+                opts.gap_abs.max(opts.gap_rel * ub)
+            } else {
+                0.0
+            }
+        };
         let mut proven = true;
         while let Some(node) = heap.pop() {
             let ub = best.as_ref().map_or(f64::INFINITY, |b| b.cost);
@@ -447,7 +502,9 @@ impl Problem {
             }
             for mut child in self.split(&node) {
                 nodes += 1;
-                let Some(lb) = self.bound(&child, &mut h, &mut sigma) else { continue };
+                let Some(lb) = self.bound(&child, &mut h, &mut sigma) else {
+                    continue;
+                };
                 child.lb = lb.max(node.lb);
                 self.try_incumbent(&child, &mut h, &mut sigma, &mut best);
                 let ub = best.as_ref().map_or(f64::INFINITY, |b| b.cost);
@@ -462,9 +519,16 @@ impl Problem {
         let open_lb = heap.peek().map_or(f64::INFINITY, |n| n.lb);
         let lower_bound = open_lb.min(pruned_lb).min(best.cost);
         let (a, b) = matrix(best.alpha, best.theta, self.reading);
-        let a_s_bar = Vec2::new(a * self.s_bar.x - b * self.s_bar.y, b * self.s_bar.x + a * self.s_bar.y);
+        let a_s_bar = Vec2::new(
+            a * self.s_bar.x - b * self.s_bar.y,
+            b * self.s_bar.x + a * self.s_bar.y,
+        );
         let d = best.c - a_s_bar;
-        let transform = Transform { alpha: best.alpha, d: [d.x, d.y], theta: best.theta };
+        let transform = Transform {
+            alpha: best.alpha,
+            d: [d.x, d.y],
+            theta: best.theta,
+        };
         let targets = transform.targets(self.reading, &self.template);
         let cost = (0..self.n)
             .map(|i| (self.starts[i] - targets[best.assignment[i]]).norm_squared())
@@ -484,7 +548,10 @@ impl Problem {
 
 fn mul(x: [f64; 2], y: [f64; 2]) -> [f64; 2] {
     let p = [x[0] * y[0], x[0] * y[1], x[1] * y[0], x[1] * y[1]];
-    [p.iter().copied().fold(f64::INFINITY, f64::min), p.iter().copied().fold(f64::NEG_INFINITY, f64::max)]
+    [
+        p.iter().copied().fold(f64::INFINITY, f64::min),
+        p.iter().copied().fold(f64::NEG_INFINITY, f64::max),
+    ]
 }
 
 fn scale(x: [f64; 2], k: f64) -> [f64; 2] {

@@ -86,6 +86,9 @@ pub trait Mission: Send + Sync {
     /// `out.entities` (and `n_entities`, which the core sets to 0 before). Called for the live
     /// robots in id order each tick, so a mission may draw sensor noise from its own stream.
     fn sense(&mut self, robot: u32, pos: [f64; 2], out: &mut Sense);
+    /// Robot `robot`'s report of this tick (Action `report`; accepted actions only, before the
+    /// moves). Most missions ignore it.
+    fn observe(&mut self, _robot: u32, _report: [f64; 4]) {}
     /// After the moves of tick `tick`: the entities move and the mission judges progress,
     /// pushing its events.
     fn update(&mut self, tick: u64, poses: &[[f64; 3]], alive: &[bool], events: &mut Vec<Event>);

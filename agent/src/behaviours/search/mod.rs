@@ -239,6 +239,7 @@ impl Search {
         Command {
             cmd: [0.0, 0.0],
             events: STATE_DECLARED | events,
+            ..Command::default()
         }
     }
 
@@ -644,6 +645,7 @@ impl Behaviour for Search {
             } else {
                 STATE_ROAMING
             },
+            ..Command::default()
         }
     }
 }
