@@ -36,7 +36,11 @@ impl PatternConstraints {
         Self {
             x_range: [params.box_min[0] + r, params.box_max[0] - r],
             y_range: [params.box_min[1] + r, params.box_max[1] - r],
-            obstacles: params.obstacle_centres.iter().map(|c| Vec2::new(c[0], c[1])).collect(),
+            obstacles: params
+                .obstacle_centres
+                .iter()
+                .map(|c| Vec2::new(c[0], c[1]))
+                .collect(),
             keep_out: params.obstacle_radius + r + params.obstacle_margin,
             obstacle_form: params.obstacle_constraint,
             min_separation: 2.0 * r + params.separation_margin,
@@ -102,7 +106,9 @@ impl PatternConstraints {
 
     /// All of C1-C3 for a pattern.
     pub fn satisfied(&self, targets: &[Vec2]) -> bool {
-        targets.iter().all(|&q| self.in_box(q) && self.clear_of_obstacles(q))
+        targets
+            .iter()
+            .all(|&q| self.in_box(q) && self.clear_of_obstacles(q))
             && self.separated(targets)
     }
 }

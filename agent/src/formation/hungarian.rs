@@ -121,7 +121,10 @@ impl Hungarian {
 /// Minimum-cost assignment of a row-major n x n cost matrix: (assignment[row] = column, cost).
 pub fn solve(cost: &[f64], n: usize) -> Result<(Vec<usize>, f64), FormationError> {
     if cost.len() != n * n {
-        return Err(FormationError::SizeMismatch { template: cost.len(), robots: n * n });
+        return Err(FormationError::SizeMismatch {
+            template: cost.len(),
+            robots: n * n,
+        });
     }
     if cost.iter().any(|c| !c.is_finite()) {
         return Err(FormationError::NonFinite("assignment cost"));
@@ -145,10 +148,18 @@ pub fn assign_targets(
             robots: positions.len(),
         });
     }
-    if positions.iter().chain(targets).any(|p| !p.x.is_finite() || !p.y.is_finite()) {
+    if positions
+        .iter()
+        .chain(targets)
+        .any(|p| !p.x.is_finite() || !p.y.is_finite())
+    {
         return Err(FormationError::NonFinite("positions or targets"));
     }
-    solver.solve_with(positions.len(), |i, j| -positions[i].dot(&targets[j]), assignment);
+    solver.solve_with(
+        positions.len(),
+        |i, j| -positions[i].dot(&targets[j]),
+        assignment,
+    );
     Ok(())
 }
 
@@ -186,7 +197,8 @@ mod tests {
 
     fn is_permutation(a: &[usize]) -> bool {
         let mut seen = vec![false; a.len()];
-        a.iter().all(|&j| j < a.len() && !std::mem::replace(&mut seen[j], true))
+        a.iter()
+            .all(|&j| j < a.len() && !std::mem::replace(&mut seen[j], true))
     }
 
     #[test]
@@ -244,7 +256,9 @@ mod tests {
                 let p = pts(&mut rng);
                 let q = pts(&mut rng);
                 assign_targets(&p, &q, &mut solver, &mut by_dot).unwrap();
-                let sq: Vec<f64> = (0..n * n).map(|k| (p[k / n] - q[k % n]).norm_squared()).collect();
+                let sq: Vec<f64> = (0..n * n)
+                    .map(|k| (p[k / n] - q[k % n]).norm_squared())
+                    .collect();
                 let (by_sq, best) = solve(&sq, n).unwrap();
                 let cost_of = |a: &[usize]| (0..n).map(|i| sq[i * n + a[i]]).sum::<f64>();
                 // Same optimal value (and, barring exact ties, the same permutation).
@@ -264,7 +278,11 @@ mod tests {
         let total = h.solve_with(n, |i, j| cost[i * n + j], &mut a);
         // u_i = min_j (c_ij - v_j) is then dual feasible; the dual value must equal the cost.
         let dual: f64 = (0..n)
-            .map(|i| (0..n).map(|j| cost[i * n + j] - h.column_potential(j)).fold(f64::INFINITY, f64::min))
+            .map(|i| {
+                (0..n)
+                    .map(|j| cost[i * n + j] - h.column_potential(j))
+                    .fold(f64::INFINITY, f64::min)
+            })
             .sum::<f64>()
             + (0..n).map(|j| h.column_potential(j)).sum::<f64>();
         assert!((dual - total).abs() < 1e-9, "{dual} vs {total}");
@@ -272,6 +290,9 @@ mod tests {
 
     #[test]
     fn rejects_non_finite_costs() {
-        assert_eq!(solve(&[f64::NAN], 1), Err(FormationError::NonFinite("assignment cost")));
+        assert_eq!(
+            solve(&[f64::NAN], 1),
+            Err(FormationError::NonFinite("assignment cost"))
+        );
     }
 }

@@ -78,9 +78,18 @@ pub fn select_velocity(
     all.extend_from_slice(soft);
     let fixed = keep.len() + hard.len();
     match solve_2d(&all, max_speed, Objective::Closest(preferred)) {
-        Ok(velocity) => Selected { velocity, selection: Selection::Feasible },
+        Ok(velocity) => Selected {
+            velocity,
+            selection: Selection::Feasible,
+        },
         Err((failed, partial)) if failed >= fixed => Selected {
-            velocity: solve_3d(&all[..fixed], &all[fixed..], failed - fixed, partial, max_speed),
+            velocity: solve_3d(
+                &all[..fixed],
+                &all[fixed..],
+                failed - fixed,
+                partial,
+                max_speed,
+            ),
             selection: Selection::SoftRelaxed,
         },
         Err(_) => {
@@ -166,10 +175,16 @@ fn solve_1d(lines: &[HalfPlane], i: usize, radius: f64, objective: Objective) ->
 /// j < i become (v - p_j).n_j >= (v - p_i).n_i, i.e. the half-plane v.(n_j - n_i) >=
 /// p_j.n_j - p_i.n_i; maximising (v - p_i).n_i over those, the fixed lines and the disc is a
 /// 2-D program with a linear objective.
-fn solve_3d(fixed: &[HalfPlane], soft: &[HalfPlane], from: usize, mut v: Vec2, radius: f64) -> Vec2 {
+fn solve_3d(
+    fixed: &[HalfPlane],
+    soft: &[HalfPlane],
+    from: usize,
+    mut v: Vec2,
+    radius: f64,
+) -> Vec2 {
     let mut delta: f64 = 0.0;
-    for i in 0..from {
-        delta = delta.max(soft[i].violation(v));
+    for line in &soft[..from] {
+        delta = delta.max(line.violation(v));
     }
     let mut lines = Vec::with_capacity(fixed.len() + soft.len());
     for i in from..soft.len() {
@@ -189,7 +204,10 @@ fn solve_3d(fixed: &[HalfPlane], soft: &[HalfPlane], from: usize, mut v: Vec2, r
             }
             let unit = m / len;
             let rhs = earlier.point.dot(&earlier.normal) - offset_i;
-            lines.push(HalfPlane { point: unit * (rhs / len), normal: unit });
+            lines.push(HalfPlane {
+                point: unit * (rhs / len),
+                normal: unit,
+            });
         }
         if let Ok(next) = solve_2d(&lines, radius, Objective::Farthest(ni)) {
             v = next;
@@ -207,7 +225,10 @@ mod tests {
 
     fn hp(px: f64, py: f64, nx: f64, ny: f64) -> HalfPlane {
         let n = Vec2::new(nx, ny).normalize();
-        HalfPlane { point: Vec2::new(px, py), normal: n }
+        HalfPlane {
+            point: Vec2::new(px, py),
+            normal: n,
+        }
     }
 
     #[test]
@@ -216,7 +237,13 @@ mod tests {
         let s = select_velocity(&[], &[], &[], 1.0, Vec2::new(2.0, 0.0));
         assert!((s.velocity - Vec2::new(1.0, 0.0)).norm() < 1e-12);
         // x <= 0.5 (normal -x through (0.5, 0)): (0.5, 0).
-        let s = select_velocity(&[], &[], &[hp(0.5, 0.0, -1.0, 0.0)], 1.0, Vec2::new(2.0, 0.0));
+        let s = select_velocity(
+            &[],
+            &[],
+            &[hp(0.5, 0.0, -1.0, 0.0)],
+            1.0,
+            Vec2::new(2.0, 0.0),
+        );
         assert_eq!(s.selection, Selection::Feasible);
         assert!((s.velocity - Vec2::new(0.5, 0.0)).norm() < 1e-12);
         // x <= 0.5 and y >= 0.2 with preferred (2, -1): the corner (0.5, 0.2).
@@ -242,7 +269,12 @@ mod tests {
             let lines: Vec<HalfPlane> = (0..k)
                 .map(|_| {
                     let a: f64 = rng.gen_range(0.0..std::f64::consts::TAU);
-                    hp(rng.gen_range(-1.0..1.0), rng.gen_range(-1.0..1.0), a.cos(), a.sin())
+                    hp(
+                        rng.gen_range(-1.0..1.0),
+                        rng.gen_range(-1.0..1.0),
+                        a.cos(),
+                        a.sin(),
+                    )
                 })
                 .collect();
             let pref = Vec2::new(rng.gen_range(-2.0..2.0), rng.gen_range(-2.0..2.0));
@@ -278,7 +310,10 @@ mod tests {
                     let a: f64 = rng.gen_range(0.0..std::f64::consts::TAU);
                     let n = Vec2::new(a.cos(), a.sin());
                     // Each line excludes a large part of the disc, so conflicts are common.
-                    HalfPlane { point: n * rng.gen_range(0.0..0.9), normal: n }
+                    HalfPlane {
+                        point: n * rng.gen_range(0.0..0.9),
+                        normal: n,
+                    }
                 })
                 .collect();
             let s = select_velocity(&[], &[], &lines, 1.0, Vec2::zeros());
@@ -286,7 +321,12 @@ mod tests {
                 continue;
             }
             relaxed += 1;
-            let worst = |v: Vec2| lines.iter().map(|l| l.violation(v)).fold(f64::MIN, f64::max);
+            let worst = |v: Vec2| {
+                lines
+                    .iter()
+                    .map(|l| l.violation(v))
+                    .fold(f64::MIN, f64::max)
+            };
             let got = worst(s.velocity);
             for _ in 0..300 {
                 let q = Vec2::new(rng.gen_range(-1.0..1.0), rng.gen_range(-1.0..1.0));

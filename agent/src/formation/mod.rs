@@ -46,5 +46,9 @@ pub enum FormationError {
     Infeasible,
     /// A range was given with its lower end above its upper end.
     #[error("the range {name} = [{lo}, {hi}] is empty")]
-    EmptyRange { name: &'static str, lo: f64, hi: f64 },
+    EmptyRange {
+        name: &'static str,
+        lo: f64,
+        hi: f64,
+    },
 }

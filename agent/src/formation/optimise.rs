@@ -113,7 +113,13 @@ pub fn optimise_without_rotation(
     template: &Template,
     params: &FormationParams,
 ) -> Result<Solution, FormationError> {
-    optimise_in(starts, template, params, params.optimiser.alpha_range, [0.0, 0.0])
+    optimise_in(
+        starts,
+        template,
+        params,
+        params.optimiser.alpha_range,
+        [0.0, 0.0],
+    )
 }
 
 /// Solve eq. (14) with alpha in `alpha_range` and theta in `theta_range` (lo == hi fixes it;
@@ -130,7 +136,11 @@ pub fn optimise_in(
             return Err(FormationError::NonFinite(name));
         }
         if r[0] > r[1] {
-            return Err(FormationError::EmptyRange { name, lo: r[0], hi: r[1] });
+            return Err(FormationError::EmptyRange {
+                name,
+                lo: r[0],
+                hi: r[1],
+            });
         }
     }
     let problem = Problem::new(starts, template, params)?;
@@ -202,13 +212,23 @@ impl Problem {
     ) -> Result<Self, FormationError> {
         let n = starts.len();
         if template.len() != n {
-            return Err(FormationError::SizeMismatch { template: template.len(), robots: n });
+            return Err(FormationError::SizeMismatch {
+                template: template.len(),
+                robots: n,
+            });
         }
         if n == 0 {
-            return Err(FormationError::SizeMismatch { template: 0, robots: 0 });
+            return Err(FormationError::SizeMismatch {
+                template: 0,
+                robots: 0,
+            });
         }
         let s = template.vectors();
-        if starts.iter().chain(&s).any(|p| !(p.x.is_finite() && p.y.is_finite())) {
+        if starts
+            .iter()
+            .chain(&s)
+            .any(|p| !(p.x.is_finite() && p.y.is_finite()))
+        {
             return Err(FormationError::NonFinite("starts or template"));
         }
         let s_bar = s.iter().sum::<Vec2>() / n as f64;
@@ -225,7 +245,11 @@ impl Problem {
         }
         let constraints = PatternConstraints::new(params);
         let spacing = template.min_spacing();
-        let lambda_sep = if spacing.is_finite() { constraints.min_separation / spacing } else { 0.0 };
+        let lambda_sep = if spacing.is_finite() {
+            constraints.min_separation / spacing
+        } else {
+            0.0
+        };
         Ok(Self {
             n,
             reading: params.transform_reading,
@@ -247,7 +271,11 @@ impl Problem {
     /// max over sigma of a D(sigma) + b X(sigma), and the maximising sigma.
     fn best_alignment(&self, a: f64, b: f64, h: &mut Hungarian, sigma: &mut Vec<usize>) -> f64 {
         let n = self.n;
-        -h.solve_with(n, |i, j| -(a * self.dot[i * n + j] + b * self.cross[i * n + j]), sigma)
+        -h.solve_with(
+            n,
+            |i, j| -(a * self.dot[i * n + j] + b * self.cross[i * n + j]),
+            sigma,
+        )
     }
 
     /// Outer interval box of (a, b) over an (alpha, theta) box.
@@ -260,21 +288,16 @@ impl Problem {
         }
     }
 
-    /// The node's lower bound, or None when no point of it can be feasible.
-    fn bound(&self, node: &Node, h: &mut Hungarian, sigma: &mut Vec<usize>) -> Option<f64> {
+    /// The node's lower bound, or None when no point of it can be feasible. Also narrows the
+    /// node's centroid box to the part that the constraints leave (domain reduction).
+    fn bound(&self, node: &mut Node, h: &mut Hungarian, sigma: &mut Vec<usize>) -> Option<f64> {
         let (ar, br) = self.ab_box(node.alpha, node.theta);
         let lam2_max = sq_max(ar) + sq_max(br);
         if lam2_max < self.lambda_sep2 * (1.0 - 1e-12) - SLACK {
             return None;
         }
-        for s in &self.s_tilde {
-            let x = add(sub(scale(ar, s.x), scale(br, s.y)), node.c[0]);
-            let y = add(add(scale(br, s.x), scale(ar, s.y)), node.c[1]);
-            if self.constraints.box_outside_area(x, y)
-                || self.constraints.box_inside_an_obstacle(x, y)
-            {
-                return None;
-            }
+        if !self.narrow_centroid(node, ar, br) {
+            return None;
         }
         let lam2 = (sq_min(ar) + sq_min(br)).max(self.lambda_sep2);
         let mut m = f64::NEG_INFINITY;
@@ -292,6 +315,60 @@ impl Problem {
         );
         let b1 = self.p2 + lam2 * self.s2 - 2.0 * m;
         Some(b1.max(b2) + self.n as f64 * dc.norm_squared())
+    }
+
+    /// Constraint propagation on the centroid box: target j is q_j = o_j + c with o_j in the
+    /// interval box ([a] x~_j - [b] y~_j, [b] x~_j + [a] y~_j). Eq. (9) needs
+    /// c in [area] - o_j. For an obstacle's forbidden square (half-side R; for the exact
+    /// circle, the inscribed square of half-side R / sqrt 2, which is inside the disc), when
+    /// every possible q_j has its y inside the square's y-span, its x must leave the x-span:
+    /// if no q_j can be left of the square, q_x >= o_x + R, so c_1 >= o_x + R - max o_j,x,
+    /// and symmetrically. Removed parts hold no feasible point. False when nothing is left or a
+    /// target box is wholly forbidden.
+    fn narrow_centroid(&self, node: &mut Node, ar: [f64; 2], br: [f64; 2]) -> bool {
+        let cons = &self.constraints;
+        let half = match cons.obstacle_form {
+            super::params::ObstacleConstraint::Square => cons.keep_out,
+            super::params::ObstacleConstraint::Circle => cons.keep_out / std::f64::consts::SQRT_2,
+        } - SLACK;
+        let mut c = node.c;
+        for s in &self.s_tilde {
+            let ox = sub(scale(ar, s.x), scale(br, s.y));
+            let oy = add(scale(br, s.x), scale(ar, s.y));
+            c[0][0] = c[0][0].max(cons.x_range[0] - SLACK - ox[1]);
+            c[0][1] = c[0][1].min(cons.x_range[1] + SLACK - ox[0]);
+            c[1][0] = c[1][0].max(cons.y_range[0] - SLACK - oy[1]);
+            c[1][1] = c[1][1].min(cons.y_range[1] + SLACK - oy[0]);
+            if c[0][0] > c[0][1] || c[1][0] > c[1][1] {
+                return false;
+            }
+            for o in &cons.obstacles {
+                let x = add(ox, c[0]);
+                let y = add(oy, c[1]);
+                if cons.box_inside_an_obstacle(x, y) {
+                    return false;
+                }
+                let y_inside = y[0] > o.y - half && y[1] < o.y + half;
+                let x_inside = x[0] > o.x - half && x[1] < o.x + half;
+                if y_inside && x[0] > o.x - half {
+                    c[0][0] = c[0][0].max(o.x + half - ox[1]);
+                }
+                if y_inside && x[1] < o.x + half {
+                    c[0][1] = c[0][1].min(o.x - half - ox[0]);
+                }
+                if x_inside && y[0] > o.y - half {
+                    c[1][0] = c[1][0].max(o.y + half - oy[1]);
+                }
+                if x_inside && y[1] < o.y + half {
+                    c[1][1] = c[1][1].min(o.y - half - oy[0]);
+                }
+                if c[0][0] > c[0][1] || c[1][0] > c[1][1] {
+                    return false;
+                }
+            }
+        }
+        node.c = c;
+        true
     }
 
     /// The second bound on min g over the rectangle (module comment, bound 4): duals V of the
@@ -320,7 +397,11 @@ impl Problem {
                 if j == k {
                     continue;
                 }
-                let (dd, dx, dv) = (self.dot[i * n + j] - dk, self.cross[i * n + j] - xk, big_v(j) - vk);
+                let (dd, dx, dv) = (
+                    self.dot[i * n + j] - dk,
+                    self.cross[i * n + j] - xk,
+                    big_v(j) - vk,
+                );
                 // A linear function of (a, b): its maximum over the rectangle is at a corner.
                 let at = |a: f64, b: f64| a * dd + b * dx - dv;
                 worst = worst.max(at(ar[0], br[0])).max(at(ar[0], br[1]));
@@ -362,15 +443,27 @@ impl Problem {
         let g = self.p2 + (a * a + b * b) * self.s2 - 2.0 * self.best_alignment(a, b, h, sigma);
         let clamp = |v: f64, r: [f64; 2]| v.clamp(r[0], r[1]);
         let candidates = [
-            Vec2::new(clamp(self.p_bar.x, node.c[0]), clamp(self.p_bar.y, node.c[1])),
-            Vec2::new(0.5 * (node.c[0][0] + node.c[0][1]), 0.5 * (node.c[1][0] + node.c[1][1])),
+            Vec2::new(
+                clamp(self.p_bar.x, node.c[0]),
+                clamp(self.p_bar.y, node.c[1]),
+            ),
+            Vec2::new(
+                0.5 * (node.c[0][0] + node.c[0][1]),
+                0.5 * (node.c[1][0] + node.c[1][1]),
+            ),
         ];
         for c in candidates {
             let f = g + self.n as f64 * (self.p_bar - c).norm_squared();
             if best.as_ref().is_some_and(|b| b.cost <= f) || !self.feasible(a, b, c) {
                 continue;
             }
-            *best = Some(Incumbent { cost: f, alpha, theta, c, assignment: sigma.clone() });
+            *best = Some(Incumbent {
+                cost: f,
+                alpha,
+                theta,
+                c,
+                assignment: sigma.clone(),
+            });
         }
     }
 
@@ -421,18 +514,29 @@ impl Problem {
         let mut sigma = Vec::with_capacity(self.n);
         let mut best: Option<Incumbent> = None;
         let cons = &self.constraints;
-        let mut root = Node { alpha, theta, c: [cons.x_range, cons.y_range], lb: 0.0 };
+        let mut root = Node {
+            alpha,
+            theta,
+            c: [cons.x_range, cons.y_range],
+            lb: 0.0,
+        };
         let mut heap = BinaryHeap::new();
         let mut nodes = 1;
         // The least lower bound among nodes discarded by bound (not by infeasibility).
         let mut pruned_lb = f64::INFINITY;
-        if let Some(lb) = self.bound(&root, &mut h, &mut sigma) {
+        if let Some(lb) = self.bound(&mut root, &mut h, &mut sigma) {
             root.lb = lb;
             self.try_incumbent(&root, &mut h, &mut sigma, &mut best);
             heap.push(root);
         }
         // Without an incumbent (ub infinite) nothing is pruned by bound.
-        let tolerance = |ub: f64| if ub.is_finite() { opts.gap_abs.max(opts.gap_rel * ub) } else { 0.0 };
+        let tolerance = |ub: f64| {
+            if ub.is_finite() {
+                opts.gap_abs.max(opts.gap_rel * ub)
+            } else {
+                0.0
+            }
+        };
         let mut proven = true;
         while let Some(node) = heap.pop() {
             let ub = best.as_ref().map_or(f64::INFINITY, |b| b.cost);
@@ -447,7 +551,9 @@ impl Problem {
             }
             for mut child in self.split(&node) {
                 nodes += 1;
-                let Some(lb) = self.bound(&child, &mut h, &mut sigma) else { continue };
+                let Some(lb) = self.bound(&mut child, &mut h, &mut sigma) else {
+                    continue;
+                };
                 child.lb = lb.max(node.lb);
                 self.try_incumbent(&child, &mut h, &mut sigma, &mut best);
                 let ub = best.as_ref().map_or(f64::INFINITY, |b| b.cost);
@@ -462,9 +568,16 @@ impl Problem {
         let open_lb = heap.peek().map_or(f64::INFINITY, |n| n.lb);
         let lower_bound = open_lb.min(pruned_lb).min(best.cost);
         let (a, b) = matrix(best.alpha, best.theta, self.reading);
-        let a_s_bar = Vec2::new(a * self.s_bar.x - b * self.s_bar.y, b * self.s_bar.x + a * self.s_bar.y);
+        let a_s_bar = Vec2::new(
+            a * self.s_bar.x - b * self.s_bar.y,
+            b * self.s_bar.x + a * self.s_bar.y,
+        );
         let d = best.c - a_s_bar;
-        let transform = Transform { alpha: best.alpha, d: [d.x, d.y], theta: best.theta };
+        let transform = Transform {
+            alpha: best.alpha,
+            d: [d.x, d.y],
+            theta: best.theta,
+        };
         let targets = transform.targets(self.reading, &self.template);
         let cost = (0..self.n)
             .map(|i| (self.starts[i] - targets[best.assignment[i]]).norm_squared())
@@ -484,7 +597,10 @@ impl Problem {
 
 fn mul(x: [f64; 2], y: [f64; 2]) -> [f64; 2] {
     let p = [x[0] * y[0], x[0] * y[1], x[1] * y[0], x[1] * y[1]];
-    [p.iter().copied().fold(f64::INFINITY, f64::min), p.iter().copied().fold(f64::NEG_INFINITY, f64::max)]
+    [
+        p.iter().copied().fold(f64::INFINITY, f64::min),
+        p.iter().copied().fold(f64::NEG_INFINITY, f64::max),
+    ]
 }
 
 fn scale(x: [f64; 2], k: f64) -> [f64; 2] {

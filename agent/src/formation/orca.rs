@@ -64,7 +64,8 @@ pub fn orca_half_plane(
                 let d = Vec2::new(p_rel.x * leg - p_rel.y * r, p_rel.x * r + p_rel.y * leg) / dist2;
                 (d, Vec2::new(-d.y, d.x))
             } else {
-                let d = Vec2::new(p_rel.x * leg + p_rel.y * r, -p_rel.x * r + p_rel.y * leg) / dist2;
+                let d =
+                    Vec2::new(p_rel.x * leg + p_rel.y * r, -p_rel.x * r + p_rel.y * leg) / dist2;
                 (d, Vec2::new(d.y, -d.x))
             };
             (dir * v_rel.dot(&dir) - v_rel, n)
@@ -82,7 +83,10 @@ pub fn orca_half_plane(
         };
         (n * (r / time_step - wl), n)
     };
-    HalfPlane { point: me.velocity + u * responsibility, normal: n }
+    HalfPlane {
+        point: me.velocity + u * responsibility,
+        normal: n,
+    }
 }
 
 fn cross(a: Vec2, b: Vec2) -> f64 {
@@ -95,7 +99,10 @@ pub fn acceleration_polygon(current: Vec2, reach: f64, sides: usize) -> Vec<Half
         .map(|k| {
             let angle = std::f64::consts::TAU * k as f64 / sides as f64;
             let out = Vec2::new(angle.cos(), angle.sin());
-            HalfPlane { point: current + out * reach, normal: -out }
+            HalfPlane {
+                point: current + out * reach,
+                normal: -out,
+            }
         })
         .collect()
 }

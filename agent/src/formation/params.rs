@@ -58,7 +58,7 @@ impl Default for OptimiserParams {
             alpha_range: [0.5, 2.0],
             theta_range: [-PI, PI],
             gap_abs: 1e-3,
-            gap_rel: 1e-4,
+            gap_rel: 1e-3,
             max_nodes: 400_000,
         }
     }

@@ -48,7 +48,11 @@ fn run(starts: &[Vec2], targets: &[Vec2], params: &FormationParams, per_step: bo
         .collect();
     let mut robots: Vec<Disc> = starts
         .iter()
-        .map(|&p| Disc { position: p, velocity: Vec2::zeros(), radius: r })
+        .map(|&p| Disc {
+            position: p,
+            velocity: Vec2::zeros(),
+            radius: r,
+        })
         .collect();
     let mut solver = Hungarian::new();
     let mut assignment = Vec::new();
@@ -69,8 +73,11 @@ fn run(starts: &[Vec2], targets: &[Vec2], params: &FormationParams, per_step: bo
     for k in 1..=params.max_iterations {
         if per_step {
             assign_targets(&positions, targets, &mut solver, &mut next_assignment).unwrap();
-            report.reassignments +=
-                assignment.iter().zip(&next_assignment).filter(|(a, b)| a != b).count();
+            report.reassignments += assignment
+                .iter()
+                .zip(&next_assignment)
+                .filter(|(a, b)| a != b)
+                .count();
             std::mem::swap(&mut assignment, &mut next_assignment);
         }
         let velocities: Vec<Vec2> = (0..n)
@@ -141,7 +148,12 @@ fn nine_robots_form_the_c_without_a_collision_for_20_seeds() {
         }
         eprintln!(
             "{seed:4} | {:4} {:7.2} {:8.2} {:3} | {:4} {:7.2} {:8.2}",
-            a.iterations, a.path_length, ours.cost, a.reassignments, b.iterations, b.path_length,
+            a.iterations,
+            a.path_length,
+            ours.cost,
+            a.reassignments,
+            b.iterations,
+            b.path_length,
             base.cost
         );
         ks.push(a.iterations as f64);
@@ -184,5 +196,9 @@ fn per_step_reassignment_against_one_shot() {
         per.push(a.path_length);
         once.push(b.path_length);
     }
-    eprintln!("mean L per-step {:.2}, one-shot {:.2}", mean(&per), mean(&once));
+    eprintln!(
+        "mean L per-step {:.2}, one-shot {:.2}",
+        mean(&per),
+        mean(&once)
+    );
 }

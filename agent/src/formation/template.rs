@@ -59,7 +59,10 @@ impl Template {
                 [radius * angle.cos(), radius * angle.sin()]
             })
             .collect();
-        Self { name: "C".into(), points }
+        Self {
+            name: "C".into(),
+            points,
+        }
     }
 
     /// The letter n (section 3.4): two stems of 3 points 2.2 apart, 5.6 apart, joined by a
@@ -71,7 +74,10 @@ impl Template {
             points.push([2.8 + 2.8 * angle.cos(), 4.4 + 2.8 * angle.sin()]);
         }
         points.extend([[5.6, 4.4], [5.6, 2.2], [5.6, 0.0]]);
-        Self { name: "n".into(), points }
+        Self {
+            name: "n".into(),
+            points,
+        }
     }
 
     /// The letter r (section 3.4): a stem of 5 points 2.2 apart and a shoulder of 4 points
@@ -88,7 +94,10 @@ impl Template {
             [6.2, 9.2],
             [7.8, 7.6],
         ];
-        Self { name: "r".into(), points }
+        Self {
+            name: "r".into(),
+            points,
+        }
     }
 
     /// The default templates by name ("C", "n", "r").
@@ -158,7 +167,11 @@ mod tests {
     fn literal_reading_matches_eq_8_componentwise() {
         // eq. (8): x_q = alpha x_s + d1 + x_s (cos - 1) - y_s sin,
         //          y_q = alpha y_s + d2 + x_s sin + y_s (cos - 1).
-        let t = Transform { alpha: 1.0725, d: [3.369, 0.6924], theta: 0.1323 };
+        let t = Transform {
+            alpha: 1.0725,
+            d: [3.369, 0.6924],
+            theta: 0.1323,
+        };
         let s = Vec2::new(2.0, -1.5);
         let q = t.apply(TransformReading::Literal, s);
         let (sn, cs) = t.theta.sin_cos();
@@ -173,14 +186,22 @@ mod tests {
 
     #[test]
     fn similarity_reading_is_scale_then_rotation() {
-        let t = Transform { alpha: 2.0, d: [1.0, 1.0], theta: std::f64::consts::FRAC_PI_2 };
+        let t = Transform {
+            alpha: 2.0,
+            d: [1.0, 1.0],
+            theta: std::f64::consts::FRAC_PI_2,
+        };
         let q = t.apply(TransformReading::Similarity, Vec2::new(1.0, 0.0));
         assert!((q - Vec2::new(1.0, 3.0)).norm() < 1e-12);
     }
 
     #[test]
     fn default_templates_have_nine_points_spaced_over_two() {
-        for t in [Template::letter_c(), Template::letter_n(), Template::letter_r()] {
+        for t in [
+            Template::letter_c(),
+            Template::letter_n(),
+            Template::letter_r(),
+        ] {
             assert_eq!(t.len(), 9, "{}", t.name);
             assert!(t.min_spacing() > 2.1, "{}: {}", t.name, t.min_spacing());
         }

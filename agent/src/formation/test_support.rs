@@ -10,8 +10,11 @@ use swarm::geometry::Vec2;
 pub fn random_starts(seed: u64, n: usize, params: &FormationParams, gap: f64) -> Vec<Vec2> {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let r = params.robot_radius;
-    let obstacles: Vec<Vec2> =
-        params.obstacle_centres.iter().map(|c| Vec2::new(c[0], c[1])).collect();
+    let obstacles: Vec<Vec2> = params
+        .obstacle_centres
+        .iter()
+        .map(|c| Vec2::new(c[0], c[1]))
+        .collect();
     let mut starts: Vec<Vec2> = Vec::with_capacity(n);
     while starts.len() < n {
         let p = Vec2::new(
@@ -19,8 +22,9 @@ pub fn random_starts(seed: u64, n: usize, params: &FormationParams, gap: f64) ->
             rng.gen_range(params.box_min[1] + r..params.box_max[1] - r),
         );
         let clear_of_robots = starts.iter().all(|q| (p - q).norm() >= 2.0 * r + gap);
-        let clear_of_obstacles =
-            obstacles.iter().all(|o| (p - o).norm() >= params.obstacle_radius + r + gap);
+        let clear_of_obstacles = obstacles
+            .iter()
+            .all(|o| (p - o).norm() >= params.obstacle_radius + r + gap);
         if clear_of_robots && clear_of_obstacles {
             starts.push(p);
         }

@@ -27,7 +27,8 @@ fn grid_best(
             if a * a + b * b < p.lambda_sep2 {
                 continue;
             }
-            let g = p.p2 + (a * a + b * b) * p.s2 - 2.0 * p.best_alignment(a, b, &mut h, &mut sigma);
+            let g =
+                p.p2 + (a * a + b * b) * p.s2 - 2.0 * p.best_alignment(a, b, &mut h, &mut sigma);
             for cx in cs(p.constraints.x_range) {
                 for cy in cs(p.constraints.y_range) {
                     let c = Vec2::new(cx, cy);
@@ -46,18 +47,24 @@ fn linspace(lo: f64, hi: f64, k: usize) -> Vec<f64> {
     if k == 1 {
         return vec![lo];
     }
-    (0..k).map(|i| lo + (hi - lo) * i as f64 / (k - 1) as f64).collect()
+    (0..k)
+        .map(|i| lo + (hi - lo) * i as f64 / (k - 1) as f64)
+        .collect()
 }
 
 fn check_solution(sol: &Solution, starts: &[Vec2], params: &FormationParams) {
     let cons = PatternConstraints::new(params);
-    assert!(cons.satisfied(&sol.targets), "constraints violated at the optimum: {sol:?}");
+    assert!(
+        cons.satisfied(&sol.targets),
+        "constraints violated at the optimum: {sol:?}"
+    );
     let mut seen = vec![false; starts.len()];
     for &j in &sol.assignment {
         assert!(!std::mem::replace(&mut seen[j], true));
     }
-    let direct: f64 =
-        (0..starts.len()).map(|i| (starts[i] - sol.targets[sol.assignment[i]]).norm_squared()).sum();
+    let direct: f64 = (0..starts.len())
+        .map(|i| (starts[i] - sol.targets[sol.assignment[i]]).norm_squared())
+        .sum();
     assert!((direct - sol.cost).abs() < 1e-6 * (1.0 + direct));
     assert!(sol.lower_bound <= sol.cost + 1e-9 && sol.gap >= 0.0);
 }
@@ -75,13 +82,28 @@ fn never_worse_than_a_dense_grid_and_within_its_gap() {
         let elapsed = t0.elapsed();
         check_solution(&sol, &starts, &params);
         assert!(sol.proven, "seed {seed}: {sol:?}");
-        let tol = params.optimiser.gap_abs.max(params.optimiser.gap_rel * sol.cost);
-        assert!(sol.gap <= tol + 1e-9, "seed {seed}: gap {} > {tol}", sol.gap);
+        let tol = params
+            .optimiser
+            .gap_abs
+            .max(params.optimiser.gap_rel * sol.cost);
+        assert!(
+            sol.gap <= tol + 1e-9,
+            "seed {seed}: gap {} > {tol}",
+            sol.gap
+        );
         let grid = grid_best(&starts, &template, &params, &alphas, &thetas, 0.25);
         // The grid point is feasible, so the proven lower bound cannot exceed it ...
-        assert!(sol.lower_bound <= grid + 1e-9, "seed {seed}: lb {} > grid {grid}", sol.lower_bound);
+        assert!(
+            sol.lower_bound <= grid + 1e-9,
+            "seed {seed}: lb {} > grid {grid}",
+            sol.lower_bound
+        );
         // ... and the solution is never worse than it by more than the certified gap.
-        assert!(sol.cost <= grid + sol.gap + 1e-9, "seed {seed}: {} > grid {grid}", sol.cost);
+        assert!(
+            sol.cost <= grid + sol.gap + 1e-9,
+            "seed {seed}: {} > grid {grid}",
+            sol.cost
+        );
         eprintln!(
             "seed {seed}: cost {:.4} (grid {grid:.4}), gap {:.2e}, {} nodes, {:.1} ms, {:?}",
             sol.cost,
@@ -109,23 +131,44 @@ fn baseline_without_rotation_matches_its_grid_and_is_never_better() {
         let free = optimise(&starts, &template, &params).unwrap();
         // theta = 0 is in the free model's domain: adding the rotation can only help.
         assert!(free.cost <= base.cost + free.gap + 1e-9, "seed {seed}");
-        eprintln!("seed {seed}: with rotation {:.3}, without {:.3}", free.cost, base.cost);
+        eprintln!(
+            "seed {seed}: with rotation {:.3}, without {:.3}",
+            free.cost, base.cost
+        );
     }
 }
 
 #[test]
 fn recovers_a_pattern_the_robots_already_form() {
     // Starts = the C under (alpha, d, theta) = (1.2, (12, 11), 0.7): optimum 0 at those values.
-    let params = FormationParams { obstacle_centres: vec![[3.0, 3.0]], ..Default::default() };
+    let params = FormationParams {
+        obstacle_centres: vec![[3.0, 3.0]],
+        ..Default::default()
+    };
     let template = Template::letter_c();
-    let truth = Transform { alpha: 1.2, d: [12.0, 11.0], theta: 0.7 };
+    let truth = Transform {
+        alpha: 1.2,
+        d: [12.0, 11.0],
+        theta: 0.7,
+    };
     let mut starts = truth.targets(TransformReading::Literal, &template);
     starts.reverse();
     let sol = optimise(&starts, &template, &params).unwrap();
     check_solution(&sol, &starts, &params);
-    assert!(sol.proven && sol.cost <= params.optimiser.gap_abs, "{sol:?}");
-    assert!((sol.transform.alpha - 1.2).abs() < 1e-2, "{:?}", sol.transform);
-    assert!((sol.transform.theta - 0.7).abs() < 1e-2, "{:?}", sol.transform);
+    assert!(
+        sol.proven && sol.cost <= params.optimiser.gap_abs,
+        "{sol:?}"
+    );
+    assert!(
+        (sol.transform.alpha - 1.2).abs() < 1e-2,
+        "{:?}",
+        sol.transform
+    );
+    assert!(
+        (sol.transform.theta - 0.7).abs() < 1e-2,
+        "{:?}",
+        sol.transform
+    );
     for (i, &j) in sol.assignment.iter().enumerate() {
         assert_eq!(j, 8 - i);
     }
@@ -141,14 +184,24 @@ fn obstacles_push_the_pattern_off_its_unconstrained_optimum() {
         ..Default::default()
     };
     let template = Template::letter_c();
-    let truth = Transform { alpha: 1.0, d: [12.0, 12.0], theta: 0.0 };
+    let truth = Transform {
+        alpha: 1.0,
+        d: [12.0, 12.0],
+        theta: 0.0,
+    };
     let starts = truth.targets(TransformReading::Literal, &template);
     for form in [ObstacleConstraint::Square, ObstacleConstraint::Circle] {
-        let p = FormationParams { obstacle_constraint: form, ..params.clone() };
+        let p = FormationParams {
+            obstacle_constraint: form,
+            ..params.clone()
+        };
         let sol = optimise(&starts, &template, &p).unwrap();
         check_solution(&sol, &starts, &p);
         assert!(sol.proven && sol.cost > 1.0, "{form:?}: {sol:?}");
-        eprintln!("{form:?}: cost {:.4}, {} nodes, {:?}", sol.cost, sol.nodes, sol.transform);
+        eprintln!(
+            "{form:?}: cost {:.4}, {} nodes, {:?}",
+            sol.cost, sol.nodes, sol.transform
+        );
     }
 }
 
@@ -162,30 +215,53 @@ fn exact_circle_is_never_worse_than_the_square() {
         let circle = optimise(
             &starts,
             &template,
-            &FormationParams { obstacle_constraint: ObstacleConstraint::Circle, ..params.clone() },
+            &FormationParams {
+                obstacle_constraint: ObstacleConstraint::Circle,
+                ..params.clone()
+            },
         )
         .unwrap();
         // The square keep-out contains the disc, so the circle's feasible set is larger.
-        assert!(circle.cost <= square.cost + circle.gap + 1e-9, "seed {seed}");
+        assert!(
+            circle.cost <= square.cost + circle.gap + 1e-9,
+            "seed {seed}"
+        );
     }
 }
 
 #[test]
 fn restricted_theta_stays_in_its_range_table_3() {
     let params = FormationParams::default();
-    for (template, range) in
-        [(Template::letter_n(), [0.35, 1.05]), (Template::letter_r(), [0.17, 0.43])]
-    {
+    for (template, range) in [
+        (Template::letter_n(), [0.35, 1.05]),
+        (Template::letter_r(), [0.17, 0.43]),
+    ] {
         let starts = random_starts(30, 9, &params, 0.1);
-        let sol = optimise_in(&starts, &template, &params, params.optimiser.alpha_range, range)
-            .unwrap();
+        let sol = optimise_in(
+            &starts,
+            &template,
+            &params,
+            params.optimiser.alpha_range,
+            range,
+        )
+        .unwrap();
         check_solution(&sol, &starts, &params);
         assert!(sol.proven);
         assert!(sol.transform.theta >= range[0] && sol.transform.theta <= range[1]);
         let thetas = linspace(range[0], range[1], 15);
-        let grid = grid_best(&starts, &template, &params, &linspace(0.5, 2.0, 16), &thetas, 0.25);
+        let grid = grid_best(
+            &starts,
+            &template,
+            &params,
+            &linspace(0.5, 2.0, 16),
+            &thetas,
+            0.25,
+        );
         assert!(sol.cost <= grid + sol.gap + 1e-9);
-        eprintln!("{}: theta* = {:.4} in {range:?}, cost {:.3}", template.name, sol.transform.theta, sol.cost);
+        eprintln!(
+            "{}: theta* = {:.4} in {range:?}, cost {:.3}",
+            template.name, sol.transform.theta, sol.cost
+        );
     }
 }
 
@@ -213,13 +289,51 @@ fn rejects_bad_input() {
         Err(FormationError::SizeMismatch { .. })
     ));
     assert!(matches!(
-        optimise_in(&starts, &Template::letter_c(), &params, [2.0, 1.0], [0.0, 0.0]),
+        optimise_in(
+            &starts,
+            &Template::letter_c(),
+            &params,
+            [2.0, 1.0],
+            [0.0, 0.0]
+        ),
         Err(FormationError::EmptyRange { .. })
     ));
     // A separation the area cannot hold: 9 targets 30 units apart in a 24 x 24 box.
-    let crowded = FormationParams { separation_margin: 28.0, ..params.clone() };
+    let crowded = FormationParams {
+        separation_margin: 28.0,
+        ..params.clone()
+    };
     assert_eq!(
         optimise(&starts, &Template::letter_c(), &crowded),
         Err(FormationError::Infeasible)
+    );
+}
+
+/// Solve times for 9 robots over 20 seeded starts (run with --ignored --nocapture).
+#[test]
+#[ignore]
+fn timing_per_solve_for_nine_robots() {
+    let params = FormationParams::default();
+    let template = Template::letter_c();
+    let mut times = Vec::new();
+    for seed in 1000..1020 {
+        let starts = random_starts(seed, 9, &params, 0.1);
+        let t0 = Instant::now();
+        let sol = optimise(&starts, &template, &params).unwrap();
+        let dt = t0.elapsed().as_secs_f64();
+        let t1 = Instant::now();
+        let base = optimise_without_rotation(&starts, &template, &params).unwrap();
+        let db = t1.elapsed().as_secs_f64();
+        times.push(dt);
+        eprintln!(
+            "seed {seed}: {:.3} s, {} nodes, gap {:.1e}, proven {} | theta = 0: {:.3} s, {} nodes",
+            dt, sol.nodes, sol.gap, sol.proven, db, base.nodes
+        );
+    }
+    times.sort_by(f64::total_cmp);
+    eprintln!(
+        "median {:.3} s, max {:.3} s",
+        times[times.len() / 2],
+        times[times.len() - 1]
     );
 }

@@ -6,7 +6,11 @@ use rand_chacha::ChaCha8Rng;
 use std::borrow::Cow;
 
 fn disc(x: f64, y: f64, vx: f64, vy: f64, radius: f64) -> Disc {
-    Disc { position: Vec2::new(x, y), velocity: Vec2::new(vx, vy), radius }
+    Disc {
+        position: Vec2::new(x, y),
+        velocity: Vec2::new(vx, vy),
+        radius,
+    }
 }
 
 #[test]
@@ -19,7 +23,10 @@ fn head_on_pair_gives_the_hand_computed_leg_half_plane() {
     let h = orca_half_plane(&me, &other, 0.5, 2.0, 0.25);
     let s3 = 3f64.sqrt() / 2.0;
     assert!((h.normal - Vec2::new(-0.5, -s3)).norm() < 1e-12, "{h:?}");
-    assert!((h.point - Vec2::new(0.75, -s3 / 2.0)).norm() < 1e-12, "{h:?}");
+    assert!(
+        (h.point - Vec2::new(0.75, -s3 / 2.0)).norm() < 1e-12,
+        "{h:?}"
+    );
 }
 
 #[test]
@@ -36,7 +43,10 @@ fn slow_approach_gives_the_hand_computed_cut_off_half_plane() {
     let wall = disc(10.0, 0.0, 0.0, 0.0, 1.0);
     let me = disc(0.0, 0.0, 1.0, 0.0, 1.0);
     let h = orca_half_plane(&me, &wall, 1.0, 5.0, 0.25);
-    assert!((h.point.x - 1.6).abs() < 1e-12 && (h.normal.x + 1.0).abs() < 1e-12, "{h:?}");
+    assert!(
+        (h.point.x - 1.6).abs() < 1e-12 && (h.normal.x + 1.0).abs() < 1e-12,
+        "{h:?}"
+    );
 }
 
 #[test]
@@ -54,15 +64,30 @@ fn random_scene(rng: &mut ChaCha8Rng, neighbours: usize) -> (Disc, Vec<Disc>, Ve
 }
 
 /// `neighbours` robots at least 2.05 apart within [-spread, spread]^2 around `me` at 0.
-fn random_scene_in(rng: &mut ChaCha8Rng, neighbours: usize, spread: f64) -> (Disc, Vec<Disc>, Vec2) {
+fn random_scene_in(
+    rng: &mut ChaCha8Rng,
+    neighbours: usize,
+    spread: f64,
+) -> (Disc, Vec<Disc>, Vec2) {
     let mut v = || Vec2::new(rng.gen_range(-1.0..1.0), rng.gen_range(-1.0..1.0)) * 0.7;
-    let me = Disc { position: Vec2::zeros(), velocity: v(), radius: 1.0 };
+    let me = Disc {
+        position: Vec2::zeros(),
+        velocity: v(),
+        radius: 1.0,
+    };
     let mut others: Vec<Disc> = Vec::new();
     while others.len() < neighbours {
-        let p = Vec2::new(rng.gen_range(-spread..spread), rng.gen_range(-spread..spread));
+        let p = Vec2::new(
+            rng.gen_range(-spread..spread),
+            rng.gen_range(-spread..spread),
+        );
         if p.norm() > 2.05 && others.iter().all(|o| (o.position - p).norm() > 2.05) {
             let vel = Vec2::new(rng.gen_range(-0.7..0.7), rng.gen_range(-0.7..0.7));
-            others.push(Disc { position: p, velocity: vel, radius: 1.0 });
+            others.push(Disc {
+                position: p,
+                velocity: vel,
+                radius: 1.0,
+            });
         }
     }
     let pref = Vec2::new(rng.gen_range(-1.5..1.5), rng.gen_range(-1.5..1.5));
@@ -83,7 +108,11 @@ fn new_velocity_satisfies_every_half_plane_when_feasible() {
         let s = orca_velocity(&me, pref, &robots, &obstacles, &params);
         assert!(s.velocity.norm() <= params.max_speed + 1e-9);
         // Always inside the acceleration polygon (it is never relaxed).
-        for h in acceleration_polygon(me.velocity, 4.0 * params.time_step, params.accel_polygon_sides) {
+        for h in acceleration_polygon(
+            me.velocity,
+            4.0 * params.time_step,
+            params.accel_polygon_sides,
+        ) {
             assert!(h.violation(s.velocity) < 1e-8);
         }
         if s.selection != Selection::Feasible {
@@ -108,13 +137,20 @@ fn two_robots_head_on_never_overlap_and_both_arrive() {
     let targets = [Vec2::new(16.0, 12.05), Vec2::new(8.0, 12.0)];
     // Exactly symmetric head-on starts deadlock ORCA (a known property: every half-plane is
     // then perpendicular to the line of centres; spec 6 item 12); 0.05 off the line breaks it.
-    let mut robots = [disc(8.0, 12.0, 0.0, 0.0, 1.0), disc(16.0, 12.05, 0.0, 0.0, 1.0)];
+    let mut robots = [
+        disc(8.0, 12.0, 0.0, 0.0, 1.0),
+        disc(16.0, 12.05, 0.0, 0.0, 1.0),
+    ];
     let mut closest = f64::INFINITY;
     for _ in 0..400 {
         let next: Vec<Vec2> = (0..2)
             .map(|i| {
-                let pref =
-                    preferred_velocity(robots[i].position, targets[i], params.max_speed, params.k_a);
+                let pref = preferred_velocity(
+                    robots[i].position,
+                    targets[i],
+                    params.max_speed,
+                    params.k_a,
+                );
                 orca_velocity(&robots[i], pref, &[robots[1 - i]], &[], &params).velocity
             })
             .collect();
@@ -127,7 +163,10 @@ fn two_robots_head_on_never_overlap_and_both_arrive() {
         assert!(d >= 2.0 - 1e-9, "overlap: {d}");
     }
     for i in 0..2 {
-        assert!((robots[i].position - targets[i]).norm() < params.epsilon, "{robots:?}");
+        assert!(
+            (robots[i].position - targets[i]).norm() < params.epsilon,
+            "{robots:?}"
+        );
     }
     // They passed each other (so the test exercised avoidance), touching at most.
     assert!(closest < 2.5, "{closest}");
@@ -174,9 +213,17 @@ fn agrees_with_dodgy_2d_on_random_cases() {
         };
         let with_obstacle = !crowded && case % 2 == 1;
         let obstacles: Vec<Disc> = if with_obstacle {
-            let o = disc(rng.gen_range(-6.0..6.0), rng.gen_range(-6.0..6.0), 0.0, 0.0, 2.0);
+            let o = disc(
+                rng.gen_range(-6.0..6.0),
+                rng.gen_range(-6.0..6.0),
+                0.0,
+                0.0,
+                2.0,
+            );
             let clear = (o.position - me.position).norm() > 3.05
-                && robots.iter().all(|r| (r.position - o.position).norm() > 3.05);
+                && robots
+                    .iter()
+                    .all(|r| (r.position - o.position).norm() > 3.05);
             if !clear {
                 continue;
             }
@@ -194,7 +241,10 @@ fn agrees_with_dodgy_2d_on_random_cases() {
             }
         };
         let soft: Vec<HalfPlane> = robots.iter().map(|r| line(r, 0.5)).collect();
-        let hard: Vec<HalfPlane> = obstacles.iter().map(|o| line(o, 1.0 / (1.0 + 1e-6))).collect();
+        let hard: Vec<HalfPlane> = obstacles
+            .iter()
+            .map(|o| line(o, 1.0 / (1.0 + 1e-6)))
+            .collect();
         let ours = select_velocity(&[], &hard, &soft, max_speed, pref);
         let neighbours: Vec<Cow<dodgy_2d::Agent>> = robots
             .iter()
