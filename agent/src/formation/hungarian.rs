@@ -22,6 +22,8 @@ pub struct Hungarian {
     way: Vec<usize>,
     minv: Vec<f64>,
     used: Vec<bool>,
+    /// The cost matrix buffer of [`assign_targets`].
+    scratch: Vec<f64>,
 }
 
 impl Hungarian {
@@ -155,11 +157,17 @@ pub fn assign_targets(
     {
         return Err(FormationError::NonFinite("positions or targets"));
     }
-    solver.solve_with(
-        positions.len(),
-        |i, j| -positions[i].dot(&targets[j]),
-        assignment,
+    let n = positions.len();
+    // Row-major costs, computed once (the solver reads each O(n) times).
+    let mut cost = std::mem::take(&mut solver.scratch);
+    cost.clear();
+    cost.extend(
+        positions
+            .iter()
+            .flat_map(|p| targets.iter().map(move |q| -p.dot(q))),
     );
+    solver.solve_with(n, |i, j| cost[i * n + j], assignment);
+    solver.scratch = cost;
     Ok(())
 }
 

@@ -44,8 +44,10 @@
 //!    the linear (l_ij - V_j) - (l_i,sigma0(i) - V_sigma0(i)), clipped at 0. Summing, a D + b X
 //!    <= a D(sigma0) + b X(sigma0) + E, E = sum e_i, so g >= P2 + min over the rectangle of the
 //!    convex quadratic S2 (a^2 + b^2) - 2 (a D(sigma0) + b X(sigma0)) - 2 E (the minimum is at
-//!    the projection of (D, X) / S2). Once sigma0 wins throughout a small rectangle, E = 0 and
-//!    this is exact.
+//!    the projection of z = (D, X) / S2, and since the quadratic is S2 (|A - z|^2 - |z|^2) and
+//!    feasible points have |A| >= lambda_sep, |A - z| >= lambda_sep - |z| bounds it too). Once
+//!    sigma0 wins throughout a small rectangle, E = 0 and this is exact (bounds 1-2 are then
+//!    skipped: they cannot be higher).
 //!
 //! So LB = max(bound 1-2, bound 4) + n dist^2(p_bar, [c]) <= f at every feasible point of the
 //! node (not clipped at 0, so that best-first order still ranks nodes whose bound is negative). The constraints prune too: a node is dropped when lambda_max < lambda_sep, or when the
@@ -299,21 +301,27 @@ impl Problem {
         if !self.narrow_centroid(node, ar, br) {
             return None;
         }
-        let lam2 = (sq_min(ar) + sq_min(br)).max(self.lambda_sep2);
-        let mut m = f64::NEG_INFINITY;
-        let a_corners: &[f64] = if ar[0] == ar[1] { &ar[..1] } else { &ar };
-        let b_corners: &[f64] = if br[0] == br[1] { &br[..1] } else { &br };
-        for &a in a_corners {
-            for &b in b_corners {
-                m = m.max(self.best_alignment(a, b, h, sigma));
+        let (b2, e) = self.dual_bound(ar, br, h, sigma);
+        // With E = 0 the centre's assignment is optimal over the whole rectangle, so bound 4
+        // is the exact minimum of the relaxed g there and bounds 1-2 cannot beat it.
+        let b1 = if e > 0.0 {
+            let lam2 = (sq_min(ar) + sq_min(br)).max(self.lambda_sep2);
+            let mut m = f64::NEG_INFINITY;
+            let a_corners: &[f64] = if ar[0] == ar[1] { &ar[..1] } else { &ar };
+            let b_corners: &[f64] = if br[0] == br[1] { &br[..1] } else { &br };
+            for &a in a_corners {
+                for &b in b_corners {
+                    m = m.max(self.best_alignment(a, b, h, sigma));
+                }
             }
-        }
-        let b2 = self.dual_bound(ar, br, h, sigma);
+            self.p2 + lam2 * self.s2 - 2.0 * m
+        } else {
+            f64::NEG_INFINITY
+        };
         let dc = Vec2::new(
             dist_to_interval(self.p_bar.x, node.c[0]),
             dist_to_interval(self.p_bar.y, node.c[1]),
         );
-        let b1 = self.p2 + lam2 * self.s2 - 2.0 * m;
         Some(b1.max(b2) + self.n as f64 * dc.norm_squared())
     }
 
@@ -381,12 +389,12 @@ impl Problem {
         br: [f64; 2],
         h: &mut Hungarian,
         sigma: &mut Vec<usize>,
-    ) -> f64 {
+    ) -> (f64, f64) {
         let n = self.n;
         let (a0, b0) = (0.5 * (ar[0] + ar[1]), 0.5 * (br[0] + br[1]));
         self.best_alignment(a0, b0, h, sigma);
-        // The maximisation's column duals are the negated potentials of the minimisation.
-        let big_v = |j: usize| -h.column_potential(j);
+        let duals = self.interior_duals(a0, b0, sigma);
+        let big_v = |j: usize| duals[j];
         let (mut d, mut x, mut e) = (0.0, 0.0, 0.0);
         for (i, &k) in sigma.iter().enumerate() {
             let (dk, xk, vk) = (self.dot[i * n + k], self.cross[i * n + k], big_v(k));
@@ -412,7 +420,53 @@ impl Problem {
         // S2 |(a, b)|^2 - 2 (a D + b X) is least at the projection of (D, X) / S2.
         let pa = (d / self.s2).clamp(ar[0], ar[1]);
         let pb = (x / self.s2).clamp(br[0], br[1]);
-        self.p2 + self.s2 * (pa * pa + pb * pb) - 2.0 * (pa * d + pb * x) - 2.0 * e
+        // S2 |A|^2 - 2 A.(D, X) = S2 (|A - z|^2 - |z|^2), z = (D, X) / S2, and a feasible A
+        // has |A| >= lambda_sep, so |A - z| >= lambda_sep - |z| as well.
+        let z = Vec2::new(d / self.s2, x / self.s2);
+        let to_rect = (pa - z.x).powi(2) + (pb - z.y).powi(2);
+        let to_sep = (self.lambda_sep2.sqrt() - z.norm()).max(0.0).powi(2);
+        let quad = self.s2 * (to_rect.max(to_sep) - z.norm_squared());
+        (self.p2 + quad - 2.0 * e, e)
+    }
+
+    /// Column duals V for the max-assignment `sigma` at (a0, b0) that leave the non-assignment
+    /// edges as slack as they can be: the Hungarian's own potentials make about 2n edges tight,
+    /// which would keep E > 0 in every rectangle around them (a first-order bound). Dual
+    /// feasibility for a fixed sigma is the difference system V_j - V_sigma(i) >= w_ij -
+    /// w_i,sigma(i) (w = a0 D_ij + b0 X_ij); its least solution (longest paths from a virtual
+    /// source, Bellman-Ford) and its greatest (the same on the reversed arcs, negated) are both
+    /// feasible, and their mean is slack on every arc that either leaves slack. Any V keeps
+    /// bound 4 valid (weak duality), so rounding here can only loosen it.
+    fn interior_duals(&self, a0: f64, b0: f64, sigma: &[usize]) -> Vec<f64> {
+        let n = self.n;
+        let w = |i: usize, j: usize| a0 * self.dot[i * n + j] + b0 * self.cross[i * n + j];
+        let mut lo = vec![0.0; n];
+        let mut hi = vec![0.0; n];
+        for _ in 0..n {
+            let mut changed = false;
+            for (i, &k) in sigma.iter().enumerate() {
+                let wk = w(i, k);
+                for j in 0..n {
+                    if j == k {
+                        continue;
+                    }
+                    let c = w(i, j) - wk;
+                    if lo[k] + c > lo[j] {
+                        lo[j] = lo[k] + c;
+                        changed = true;
+                    }
+                    // Reversed: W = -V with W_k - W_j >= c.
+                    if hi[j] + c > hi[k] {
+                        hi[k] = hi[j] + c;
+                        changed = true;
+                    }
+                }
+            }
+            if !changed {
+                break;
+            }
+        }
+        lo.iter().zip(&hi).map(|(l, h)| 0.5 * (l - h)).collect()
     }
 
     /// Whether the pattern with matrix (a, b) and centroid c meets C1-C3.
