@@ -255,6 +255,19 @@ mod tests {
         let s = select_velocity(&[], &[], &lines, 1.0, Vec2::new(0.0, 0.0));
         assert_eq!(s.selection, Selection::SoftRelaxed);
         assert!((s.velocity.x - 0.4).abs() < 1e-9, "{s:?}");
+        // keep x >= 0.5 against hard x <= 0.2 and soft y >= 0.3: keep holds; the hard and soft
+        // lines share the least largest violation: x = 0.5 (0.3 over), y anywhere >= 0.
+        let keep = [hp(0.5, 0.0, 1.0, 0.0)];
+        let hard = [hp(0.2, 0.0, -1.0, 0.0)];
+        let soft = [hp(0.0, 0.3, 0.0, 1.0)];
+        let s = select_velocity(&keep, &hard, &soft, 1.0, Vec2::new(0.0, 0.0));
+        assert_eq!(s.selection, Selection::HardRelaxed);
+        assert!(
+            s.velocity.x >= 0.5 - 1e-9 && s.velocity.x < 0.5 + 1e-6,
+            "{s:?}"
+        );
+        assert!(hard[0].violation(s.velocity) <= 0.3 + 1e-9);
+        assert!(soft[0].violation(s.velocity) <= 0.3 + 1e-9);
         // The same conflict with x >= 0.6 hard: it holds exactly.
         let s = select_velocity(&[], &lines[..1], &lines[1..], 1.0, Vec2::new(0.0, 0.0));
         assert!((s.velocity.x - 0.6).abs() < 1e-9, "{s:?}");
