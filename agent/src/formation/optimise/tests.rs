@@ -337,3 +337,30 @@ fn timing_per_solve_for_nine_robots() {
         times[times.len() - 1]
     );
 }
+
+#[test]
+fn similarity_reading_is_solved_as_well() {
+    // q = alpha R(theta) s + d: alpha is then the true scale; same checks as the literal case.
+    let params = FormationParams {
+        transform_reading: TransformReading::Similarity,
+        ..FormationParams::default()
+    };
+    let template = Template::letter_c();
+    for seed in 40..42 {
+        let starts = random_starts(seed, 9, &params, 0.1);
+        let sol = optimise(&starts, &template, &params).unwrap();
+        check_solution(&sol, &starts, &params);
+        assert!(sol.proven, "seed {seed}: {sol:?}");
+        let grid = grid_best(
+            &starts,
+            &template,
+            &params,
+            &linspace(0.5, 2.0, 16),
+            &linspace(-PI, PI, 73),
+            0.25,
+        );
+        assert!(sol.lower_bound <= grid + 1e-9 && sol.cost <= grid + sol.gap + 1e-9);
+        let (lambda, _) = sol.transform.scale_and_rotation(TransformReading::Similarity);
+        assert!((lambda - sol.transform.alpha).abs() < 1e-12);
+    }
+}
