@@ -1,5 +1,5 @@
 //! The minimum-cost assignment (the linear sum assignment problem of eqs. 1-3 and 15), by the
-//! Hungarian method (Kuhn 1955, the paper's ref. [20]) in its O(n^3) shortest-augmenting-path
+//! Hungarian method (Kuhn 1955, the paper's ref. \[20\]) in its O(n^3) shortest-augmenting-path
 //! form with row and column potentials. Our own f64 implementation: `pathfinding`'s
 //! kuhn_munkres needs integer (Ord) weights, and scaling real costs to integers would make the
 //! branch-and-bound's bounds inexact; the tests check this one against it and against brute
@@ -39,7 +39,7 @@ impl Hungarian {
     }
 
     /// Minimum-cost perfect assignment of an n x n cost given as a function of (row, column).
-    /// Writes `assignment[row] = column` and returns the total cost. Costs must be finite
+    /// Writes `assignment\[row\] = column` and returns the total cost. Costs must be finite
     /// (not checked here, for speed; [`solve`] checks). Ties go to the lowest column index.
     pub fn solve_with(
         &mut self,
@@ -120,7 +120,7 @@ impl Hungarian {
     }
 }
 
-/// Minimum-cost assignment of a row-major n x n cost matrix: (assignment[row] = column, cost).
+/// Minimum-cost assignment of a row-major n x n cost matrix: (assignment\[row\] = column, cost).
 pub fn solve(cost: &[f64], n: usize) -> Result<(Vec<usize>, f64), FormationError> {
     if cost.len() != n * n {
         return Err(FormationError::SizeMismatch {
@@ -136,7 +136,7 @@ pub fn solve(cost: &[f64], n: usize) -> Result<(Vec<usize>, f64), FormationError
     Ok((assignment, total))
 }
 
-/// The per-step reassignment of eq. (15): robot i -> target assignment[i], minimising
+/// The per-step reassignment of eq. (15): robot i -> target assignment\[i\], minimising
 /// sum_i -p_i . q_sigma(i) over the current positions and the fixed targets G*.
 pub fn assign_targets(
     positions: &[Vec2],

@@ -1,6 +1,6 @@
 //! The velocity selection of eqs. (25)-(26): the velocity closest to V_pref inside the speed
 //! disc ||v|| <= V_p and a set of half-planes, by the incremental 2-D linear program of
-//! van den Berg et al. 2011 (the paper's ref. [21]), and its 3-D fallback when the half-planes
+//! van den Berg et al. 2011 (the paper's ref. \[21\]), and its 3-D fallback when the half-planes
 //! have no common point: the velocity that minimises the largest violation of the "soft"
 //! half-planes while the "hard" ones stay satisfied.
 //!
@@ -125,7 +125,7 @@ fn solve_2d(lines: &[HalfPlane], radius: f64, objective: Objective) -> Result<Ve
     Ok(v)
 }
 
-/// The optimum on line i's boundary subject to lines[..i] and the disc, if any.
+/// The optimum on line i's boundary subject to lines\[..i\] and the disc, if any.
 fn solve_1d(lines: &[HalfPlane], i: usize, radius: f64, objective: Objective) -> Option<Vec2> {
     let line = lines[i];
     // Points on the line: point + t dir.
@@ -168,7 +168,7 @@ fn solve_1d(lines: &[HalfPlane], i: usize, radius: f64, objective: Objective) ->
 }
 
 /// The 3-D fallback: minimise delta = the largest violation of a `soft` half-plane over
-/// (v, delta), holding `fixed` and the disc. `v` is the optimum over fixed and soft[..from].
+/// (v, delta), holding `fixed` and the disc. `v` is the optimum over fixed and soft\[..from\].
 ///
 /// Incremental like the 2-D program: when soft line i is violated by more than the current
 /// delta, the new optimum has line i tight, delta = -(v - p_i).n_i, and the earlier soft lines

@@ -2,11 +2,12 @@
 //! rotation theta and the assignment sigma jointly, minimising the sum of squared robot-target
 //! distances (eq. 1, 4, 7) under the box (eq. 9), obstacle (eq. 10 or 12) and separation
 //! (eq. 13) constraints, to the GLOBAL optimum by spatial branch-and-bound (the paper's solver,
-//! its ref. [17]), with the assignment solved exactly (Hungarian) inside every bound.
+//! its ref. \[17\]), with the assignment solved exactly (Hungarian) inside every bound.
 //!
 //! # Change of variables
-//! Write the transform as q_j = A s_j + d with A = [[a, -b], [b, a]] (see [`super::template`]),
-//! centre the template (s~_j = s_j - s_bar) and the starts (p~_i = p_i - p_bar), and let
+//! Write the transform as q_j = A s_j + d with A = \[\[a, -b\], \[b, a\]\]
+//! (see [`super::template`]), centre the template (s~_j = s_j - s_bar) and the starts
+//! (p~_i = p_i - p_bar), and let
 //! c = A s_bar + d be the pattern's centroid. Since sum_i s_sigma(i) = sum_j s_j for every
 //! permutation, the objective splits exactly (the cross terms vanish because the centred sums
 //! are zero):
@@ -24,20 +25,21 @@
 //! inside it).
 //!
 //! # The lower bound of a node (valid for every feasible point in it)
-//! Let [a] x [b] be an outer interval box of {(a(alpha, theta), b(alpha, theta))} over the
+//! Let \[a\] x \[b\] be an outer interval box of {(a(alpha, theta), b(alpha, theta))} over the
 //! node (exact interval extensions of cos and sin).
-//! 1. (a^2 + b^2) >= L2 := max(min over [a] x [b] of a^2 + b^2, lambda_sep^2), since every
+//! 1. (a^2 + b^2) >= L2 := max(min over \[a\] x \[b\] of a^2 + b^2, lambda_sep^2), since every
 //!    feasible point has lambda >= lambda_sep (eq. 13 is lambda ||s_i - s_j|| >= 2r + margin,
 //!    so lambda_sep = (2r + margin) / min spacing of S).
 //! 2. a D(sigma) + b X(sigma) is linear in (a, b), so over the rectangle it is at most its
 //!    value at one of the 4 corners; hence for every sigma it is at most
 //!    M := max over corners (a_k, b_k) of max_sigma (a_k D(sigma) + b_k X(sigma)), and each
 //!    inner max is one Hungarian solve with cost -(a_k p~_i . s~_j + b_k s~_j x p~_i).
-//! 3. n ||p_bar - c||^2 >= n dist^2(p_bar, [c_1] x [c_2]).
+//! 3. n ||p_bar - c||^2 >= n dist^2(p_bar, \[c_1\] x \[c_2\]).
 //!
 //! 4. A second bound on g with second-order accuracy (bounds 1-2 are only first-order, which
 //!    makes the search crawl near the optimum): let sigma0 be the optimal assignment at the
-//!    rectangle's centre and V its column duals (max-form: U_i + V_j >= a0 D_ij + b0 X_ij).
+//!    rectangle's centre and V column duals for it (max-form: U_i + V_j >= a0 D_ij + b0 X_ij;
+//!    any V is valid below, and `Problem::interior_duals` picks slack ones).
 //!    By weak duality, for every (a, b) and sigma, a D(sigma) + b X(sigma) <= sum_j V_j +
 //!    sum_i max_j (l_ij(a, b) - V_j), l_ij = a p~_i.s~_j + b s~_j x p~_i, and each max_j is at
 //!    most l_i,sigma0(i) - V_sigma0(i) + e_i with e_i = max_j max over the rectangle's corners of
@@ -49,12 +51,14 @@
 //!    sigma0 wins throughout a small rectangle, E = 0 and this is exact (bounds 1-2 are then
 //!    skipped: they cannot be higher).
 //!
-//! So LB = max(bound 1-2, bound 4) + n dist^2(p_bar, [c]) <= f at every feasible point of the
-//! node (not clipped at 0, so that best-first order still ranks nodes whose bound is negative). The constraints prune too: a node is dropped when lambda_max < lambda_sep, or when the
-//! interval box of some target q_j = [a] s~_j - [b] s~_j^perp + [c] misses the area or lies
-//! wholly inside an obstacle's forbidden region. As a node shrinks, [a] x [b] shrinks to a point,
-//! the corner maxima to the point's Hungarian value and the c term to the exact one, so LB tends
-//! to f and the search converges.
+//! So LB = max(bound 1-2, bound 4) + n dist^2(p_bar, \[c\]) <= f at every feasible point of the
+//! node (not clipped at 0, so that best-first order still ranks nodes whose bound is negative).
+//! The constraints prune too: a node is dropped when lambda_max < lambda_sep, or when the
+//! interval box of some target q_j = \[a\] s~_j - \[b\] s~_j^perp + \[c\] misses the area or lies
+//! wholly inside an obstacle's forbidden region; and before the bound, the c box is narrowed to
+//! what eq. (9) and the obstacles leave (`Problem::narrow_centroid`). As a node shrinks,
+//! \[a\] x \[b\] shrinks to a point, the corner maxima to the point's Hungarian value and the
+//! c term to the exact one, so LB tends to f and the search converges.
 //!
 //! # Upper bound (incumbent)
 //! Every node evaluates its (alpha, theta) midpoint: sigma by Hungarian (for fixed A and c the
@@ -85,7 +89,7 @@ pub struct Solution {
     pub transform: Transform,
     /// The targets G* = q_1..q_n.
     pub targets: Vec<Vec2>,
-    /// sigma*: robot i -> target `assignment[i]`.
+    /// sigma*: robot i -> target `assignment\[i\]`.
     pub assignment: Vec<usize>,
     /// The objective at the solution: sum_i ||p_i - q_sigma(i)||^2.
     pub cost: f64,
@@ -109,7 +113,7 @@ pub fn optimise(
     optimise_in(starts, template, params, o.alpha_range, o.theta_range)
 }
 
-/// The no-rotation model of ref. [10], the paper's baseline: theta fixed at 0.
+/// The no-rotation model of ref. \[10\], the paper's baseline: theta fixed at 0.
 pub fn optimise_without_rotation(
     starts: &[Vec2],
     template: &Template,
@@ -198,9 +202,9 @@ struct Problem {
     p_bar: Vec2,
     p2: f64,
     s2: f64,
-    /// dot[i * n + j] = p~_i . s~_j.
+    /// dot\[i * n + j\] = p~_i . s~_j.
     dot: Vec<f64>,
-    /// cross[i * n + j] = s~_j x p~_i.
+    /// cross\[i * n + j\] = s~_j x p~_i.
     cross: Vec<f64>,
     lambda_sep2: f64,
     s_max: f64,
@@ -326,8 +330,8 @@ impl Problem {
     }
 
     /// Constraint propagation on the centroid box: target j is q_j = o_j + c with o_j in the
-    /// interval box ([a] x~_j - [b] y~_j, [b] x~_j + [a] y~_j). Eq. (9) needs
-    /// c in [area] - o_j. For an obstacle's forbidden square (half-side R; for the exact
+    /// interval box (\[a\] x~_j - \[b\] y~_j, \[b\] x~_j + \[a\] y~_j). Eq. (9) needs
+    /// c in \[area\] - o_j. For an obstacle's forbidden square (half-side R; for the exact
     /// circle, the inscribed square of half-side R / sqrt 2, which is inside the disc), when
     /// every possible q_j has its y inside the square's y-span, its x must leave the x-span:
     /// if no q_j can be left of the square, q_x >= o_x + R, so c_1 >= o_x + R - max o_j,x,
@@ -382,7 +386,7 @@ impl Problem {
     /// The second bound on min g over the rectangle (module comment, bound 4): duals V of the
     /// assignment at the rectangle's centre give, for every (a, b) in it and every sigma',
     /// a D(sigma') + b X(sigma') <= a D(sigma) + b X(sigma) + E, sigma the centre's optimum;
-    /// then g >= P2 + min over the rectangle of [S2 (a^2 + b^2) - 2 (a D + b X)] - 2 E.
+    /// then g >= P2 + min over the rectangle of \[S2 (a^2 + b^2) - 2 (a D + b X)\] - 2 E.
     fn dual_bound(
         &self,
         ar: [f64; 2],
@@ -699,7 +703,7 @@ fn dist_to_interval(v: f64, r: [f64; 2]) -> f64 {
     }
 }
 
-/// The exact range of cos over [lo, hi].
+/// The exact range of cos over \[lo, hi\].
 fn cos_range(t: [f64; 2]) -> [f64; 2] {
     let (c0, c1) = (t[0].cos(), t[1].cos());
     let mut lo = c0.min(c1);
@@ -714,7 +718,7 @@ fn cos_range(t: [f64; 2]) -> [f64; 2] {
     [lo, hi]
 }
 
-/// The exact range of sin over [lo, hi] (sin t = cos(t - pi/2)).
+/// The exact range of sin over \[lo, hi\] (sin t = cos(t - pi/2)).
 fn sin_range(t: [f64; 2]) -> [f64; 2] {
     let shifted = cos_range([t[0] - PI / 2.0, t[1] - PI / 2.0]);
     // Rounding of the shift must not lose the endpoint values themselves.

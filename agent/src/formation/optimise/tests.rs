@@ -360,7 +360,9 @@ fn similarity_reading_is_solved_as_well() {
             0.25,
         );
         assert!(sol.lower_bound <= grid + 1e-9 && sol.cost <= grid + sol.gap + 1e-9);
-        let (lambda, _) = sol.transform.scale_and_rotation(TransformReading::Similarity);
+        let (lambda, _) = sol
+            .transform
+            .scale_and_rotation(TransformReading::Similarity);
         assert!((lambda - sol.transform.alpha).abs() < 1e-12);
     }
 }
