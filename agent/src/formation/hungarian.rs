@@ -22,7 +22,7 @@ pub struct Hungarian {
     way: Vec<usize>,
     minv: Vec<f64>,
     used: Vec<bool>,
-    /// The cost matrix buffer of [`assign_targets`].
+    /// The cost matrix buffer of [`Hungarian::solve_with`].
     scratch: Vec<f64>,
 }
 
@@ -47,6 +47,18 @@ impl Hungarian {
         cost: impl Fn(usize, usize) -> f64,
         assignment: &mut Vec<usize>,
     ) -> f64 {
+        // Row-major costs, computed once (the solver reads each O(n) times).
+        let mut matrix = std::mem::take(&mut self.scratch);
+        matrix.clear();
+        matrix.extend((0..n * n).map(|k| cost(k / n, k % n)));
+        let total = self.solve_matrix(n, &matrix, assignment);
+        self.scratch = matrix;
+        total
+    }
+
+    /// [`Self::solve_with`] on a row-major n x n matrix.
+    pub fn solve_matrix(&mut self, n: usize, cost: &[f64], assignment: &mut Vec<usize>) -> f64 {
+        assert_eq!(cost.len(), n * n, "the cost matrix must be n x n");
         assignment.clear();
         assignment.resize(n, 0);
         if n == 0 {
@@ -71,18 +83,27 @@ impl Hungarian {
             loop {
                 self.used[j0] = true;
                 let i0 = self.p[j0];
+                let ui0 = self.u[i0];
+                let costs = &cost[(i0 - 1) * n..i0 * n];
                 let mut delta = f64::INFINITY;
                 let mut j1 = 0;
-                for j in 1..=n {
-                    if !self.used[j] {
-                        let reduced = cost(i0 - 1, j - 1) - self.u[i0] - self.v[j];
-                        if reduced < self.minv[j] {
-                            self.minv[j] = reduced;
-                            self.way[j] = j0;
+                // Columns 1..=n, zipped so that the hot loop has no bounds checks.
+                let columns = self.used[1..]
+                    .iter()
+                    .zip(&mut self.minv[1..])
+                    .zip(&self.v[1..])
+                    .zip(&mut self.way[1..])
+                    .zip(costs);
+                for (j, ((((used, minv), v), way), c)) in columns.enumerate() {
+                    if !*used {
+                        let reduced = c - ui0 - v;
+                        if reduced < *minv {
+                            *minv = reduced;
+                            *way = j0;
                         }
-                        if self.minv[j] < delta {
-                            delta = self.minv[j];
-                            j1 = j;
+                        if *minv < delta {
+                            delta = *minv;
+                            j1 = j + 1;
                         }
                     }
                 }
@@ -109,14 +130,14 @@ impl Hungarian {
                 }
             }
         }
-        let mut total = 0.0;
         for j in 1..=n {
             assignment[self.p[j] - 1] = j - 1;
         }
-        for (i, &j) in assignment.iter().enumerate() {
-            total += cost(i, j);
-        }
-        total
+        assignment
+            .iter()
+            .enumerate()
+            .map(|(i, &j)| cost[i * n + j])
+            .sum()
     }
 }
 
@@ -132,7 +153,7 @@ pub fn solve(cost: &[f64], n: usize) -> Result<(Vec<usize>, f64), FormationError
         return Err(FormationError::NonFinite("assignment cost"));
     }
     let mut assignment = Vec::new();
-    let total = Hungarian::new().solve_with(n, |i, j| cost[i * n + j], &mut assignment);
+    let total = Hungarian::new().solve_matrix(n, cost, &mut assignment);
     Ok((assignment, total))
 }
 
@@ -157,17 +178,11 @@ pub fn assign_targets(
     {
         return Err(FormationError::NonFinite("positions or targets"));
     }
-    let n = positions.len();
-    // Row-major costs, computed once (the solver reads each O(n) times).
-    let mut cost = std::mem::take(&mut solver.scratch);
-    cost.clear();
-    cost.extend(
-        positions
-            .iter()
-            .flat_map(|p| targets.iter().map(move |q| -p.dot(q))),
+    solver.solve_with(
+        positions.len(),
+        |i, j| -positions[i].dot(&targets[j]),
+        assignment,
     );
-    solver.solve_with(n, |i, j| cost[i * n + j], assignment);
-    solver.scratch = cost;
     Ok(())
 }
 
