@@ -12,9 +12,9 @@ use swarm::geometry::Vec2;
 /// The constraint geometry, precomputed from the parameters.
 #[derive(Debug, Clone, PartialEq)]
 pub struct PatternConstraints {
-    /// Allowed target x range [X_min + r, X_max - r] (eq. 9).
+    /// Allowed target x range \[X_min + r, X_max - r\] (eq. 9).
     pub x_range: [f64; 2],
-    /// Allowed target y range [Y_min + r, Y_max - r] (eq. 9).
+    /// Allowed target y range \[Y_min + r, Y_max - r\] (eq. 9).
     pub y_range: [f64; 2],
     /// Obstacle centres.
     pub obstacles: Vec<Vec2>,
@@ -71,7 +71,7 @@ impl PatternConstraints {
         self.obstacles.iter().all(|&o| self.clear_of(q, o))
     }
 
-    /// Whether an axis-aligned box [x] x [y] lies wholly in one obstacle's forbidden region,
+    /// Whether an axis-aligned box \[x\] x \[y\] lies wholly in one obstacle's forbidden region,
     /// so that no target inside it can meet C2 (used to prune branch-and-bound nodes).
     pub fn box_inside_an_obstacle(&self, x: [f64; 2], y: [f64; 2]) -> bool {
         let r = self.keep_out - SLACK;

@@ -1,5 +1,5 @@
 //! The minimum-cost assignment (the linear sum assignment problem of eqs. 1-3 and 15), by the
-//! Hungarian method (Kuhn 1955, the paper's ref. [20]) in its O(n^3) shortest-augmenting-path
+//! Hungarian method (Kuhn 1955, the paper's ref. \[20\]) in its O(n^3) shortest-augmenting-path
 //! form with row and column potentials. Our own f64 implementation: `pathfinding`'s
 //! kuhn_munkres needs integer (Ord) weights, and scaling real costs to integers would make the
 //! branch-and-bound's bounds inexact; the tests check this one against it and against brute
@@ -22,6 +22,8 @@ pub struct Hungarian {
     way: Vec<usize>,
     minv: Vec<f64>,
     used: Vec<bool>,
+    /// The cost matrix buffer of [`Hungarian::solve_with`].
+    scratch: Vec<f64>,
 }
 
 impl Hungarian {
@@ -37,7 +39,7 @@ impl Hungarian {
     }
 
     /// Minimum-cost perfect assignment of an n x n cost given as a function of (row, column).
-    /// Writes `assignment[row] = column` and returns the total cost. Costs must be finite
+    /// Writes `assignment\[row\] = column` and returns the total cost. Costs must be finite
     /// (not checked here, for speed; [`solve`] checks). Ties go to the lowest column index.
     pub fn solve_with(
         &mut self,
@@ -45,6 +47,18 @@ impl Hungarian {
         cost: impl Fn(usize, usize) -> f64,
         assignment: &mut Vec<usize>,
     ) -> f64 {
+        // Row-major costs, computed once (the solver reads each O(n) times).
+        let mut matrix = std::mem::take(&mut self.scratch);
+        matrix.clear();
+        matrix.extend((0..n * n).map(|k| cost(k / n, k % n)));
+        let total = self.solve_matrix(n, &matrix, assignment);
+        self.scratch = matrix;
+        total
+    }
+
+    /// [`Self::solve_with`] on a row-major n x n matrix.
+    pub fn solve_matrix(&mut self, n: usize, cost: &[f64], assignment: &mut Vec<usize>) -> f64 {
+        assert_eq!(cost.len(), n * n, "the cost matrix must be n x n");
         assignment.clear();
         assignment.resize(n, 0);
         if n == 0 {
@@ -69,18 +83,27 @@ impl Hungarian {
             loop {
                 self.used[j0] = true;
                 let i0 = self.p[j0];
+                let ui0 = self.u[i0];
+                let costs = &cost[(i0 - 1) * n..i0 * n];
                 let mut delta = f64::INFINITY;
                 let mut j1 = 0;
-                for j in 1..=n {
-                    if !self.used[j] {
-                        let reduced = cost(i0 - 1, j - 1) - self.u[i0] - self.v[j];
-                        if reduced < self.minv[j] {
-                            self.minv[j] = reduced;
-                            self.way[j] = j0;
+                // Columns 1..=n, zipped so that the hot loop has no bounds checks.
+                let columns = self.used[1..]
+                    .iter()
+                    .zip(&mut self.minv[1..])
+                    .zip(&self.v[1..])
+                    .zip(&mut self.way[1..])
+                    .zip(costs);
+                for (j, ((((used, minv), v), way), c)) in columns.enumerate() {
+                    if !*used {
+                        let reduced = c - ui0 - v;
+                        if reduced < *minv {
+                            *minv = reduced;
+                            *way = j0;
                         }
-                        if self.minv[j] < delta {
-                            delta = self.minv[j];
-                            j1 = j;
+                        if *minv < delta {
+                            delta = *minv;
+                            j1 = j + 1;
                         }
                     }
                 }
@@ -107,18 +130,18 @@ impl Hungarian {
                 }
             }
         }
-        let mut total = 0.0;
         for j in 1..=n {
             assignment[self.p[j] - 1] = j - 1;
         }
-        for (i, &j) in assignment.iter().enumerate() {
-            total += cost(i, j);
-        }
-        total
+        assignment
+            .iter()
+            .enumerate()
+            .map(|(i, &j)| cost[i * n + j])
+            .sum()
     }
 }
 
-/// Minimum-cost assignment of a row-major n x n cost matrix: (assignment[row] = column, cost).
+/// Minimum-cost assignment of a row-major n x n cost matrix: (assignment\[row\] = column, cost).
 pub fn solve(cost: &[f64], n: usize) -> Result<(Vec<usize>, f64), FormationError> {
     if cost.len() != n * n {
         return Err(FormationError::SizeMismatch {
@@ -130,11 +153,11 @@ pub fn solve(cost: &[f64], n: usize) -> Result<(Vec<usize>, f64), FormationError
         return Err(FormationError::NonFinite("assignment cost"));
     }
     let mut assignment = Vec::new();
-    let total = Hungarian::new().solve_with(n, |i, j| cost[i * n + j], &mut assignment);
+    let total = Hungarian::new().solve_matrix(n, cost, &mut assignment);
     Ok((assignment, total))
 }
 
-/// The per-step reassignment of eq. (15): robot i -> target assignment[i], minimising
+/// The per-step reassignment of eq. (15): robot i -> target assignment\[i\], minimising
 /// sum_i -p_i . q_sigma(i) over the current positions and the fixed targets G*.
 pub fn assign_targets(
     positions: &[Vec2],

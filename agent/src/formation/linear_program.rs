@@ -1,6 +1,6 @@
 //! The velocity selection of eqs. (25)-(26): the velocity closest to V_pref inside the speed
 //! disc ||v|| <= V_p and a set of half-planes, by the incremental 2-D linear program of
-//! van den Berg et al. 2011 (the paper's ref. [21]), and its 3-D fallback when the half-planes
+//! van den Berg et al. 2011 (the paper's ref. \[21\]), and its 3-D fallback when the half-planes
 //! have no common point: the velocity that minimises the largest violation of the "soft"
 //! half-planes while the "hard" ones stay satisfied.
 //!
@@ -125,7 +125,7 @@ fn solve_2d(lines: &[HalfPlane], radius: f64, objective: Objective) -> Result<Ve
     Ok(v)
 }
 
-/// The optimum on line i's boundary subject to lines[..i] and the disc, if any.
+/// The optimum on line i's boundary subject to lines\[..i\] and the disc, if any.
 fn solve_1d(lines: &[HalfPlane], i: usize, radius: f64, objective: Objective) -> Option<Vec2> {
     let line = lines[i];
     // Points on the line: point + t dir.
@@ -168,7 +168,7 @@ fn solve_1d(lines: &[HalfPlane], i: usize, radius: f64, objective: Objective) ->
 }
 
 /// The 3-D fallback: minimise delta = the largest violation of a `soft` half-plane over
-/// (v, delta), holding `fixed` and the disc. `v` is the optimum over fixed and soft[..from].
+/// (v, delta), holding `fixed` and the disc. `v` is the optimum over fixed and soft\[..from\].
 ///
 /// Incremental like the 2-D program: when soft line i is violated by more than the current
 /// delta, the new optimum has line i tight, delta = -(v - p_i).n_i, and the earlier soft lines
@@ -183,8 +183,8 @@ fn solve_3d(
     radius: f64,
 ) -> Vec2 {
     let mut delta: f64 = 0.0;
-    for i in 0..from {
-        delta = delta.max(soft[i].violation(v));
+    for line in &soft[..from] {
+        delta = delta.max(line.violation(v));
     }
     let mut lines = Vec::with_capacity(fixed.len() + soft.len());
     for i in from..soft.len() {
@@ -255,6 +255,19 @@ mod tests {
         let s = select_velocity(&[], &[], &lines, 1.0, Vec2::new(0.0, 0.0));
         assert_eq!(s.selection, Selection::SoftRelaxed);
         assert!((s.velocity.x - 0.4).abs() < 1e-9, "{s:?}");
+        // keep x >= 0.5 against hard x <= 0.2 and soft y >= 0.3: keep holds; the hard and soft
+        // lines share the least largest violation: x = 0.5 (0.3 over), y anywhere >= 0.
+        let keep = [hp(0.5, 0.0, 1.0, 0.0)];
+        let hard = [hp(0.2, 0.0, -1.0, 0.0)];
+        let soft = [hp(0.0, 0.3, 0.0, 1.0)];
+        let s = select_velocity(&keep, &hard, &soft, 1.0, Vec2::new(0.0, 0.0));
+        assert_eq!(s.selection, Selection::HardRelaxed);
+        assert!(
+            s.velocity.x >= 0.5 - 1e-9 && s.velocity.x < 0.5 + 1e-6,
+            "{s:?}"
+        );
+        assert!(hard[0].violation(s.velocity) <= 0.3 + 1e-9);
+        assert!(soft[0].violation(s.velocity) <= 0.3 + 1e-9);
         // The same conflict with x >= 0.6 hard: it holds exactly.
         let s = select_velocity(&[], &lines[..1], &lines[1..], 1.0, Vec2::new(0.0, 0.0));
         assert!((s.velocity.x - 0.6).abs() < 1e-9, "{s:?}");

@@ -5,7 +5,7 @@
 //!
 //! - [`params`]: every chosen number, documented (the paper publishes almost none).
 //! - [`template`]: patterns as data (the letters C, n, r) and the transform of eq. (5).
-//! - [`hungarian`]: the minimum-cost assignment (Kuhn 1955, the paper's ref. [20]).
+//! - [`hungarian`]: the minimum-cost assignment (Kuhn 1955, the paper's ref. \[20\]).
 //! - [`constraints`]: the pattern constraints of eqs. (9)-(13).
 //! - [`optimise`]: eqs. (1)-(14), solved to the global optimum by spatial branch-and-bound.
 //! - [`preferred`]: the preferred velocity of eq. (16).

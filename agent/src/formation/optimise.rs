@@ -2,11 +2,12 @@
 //! rotation theta and the assignment sigma jointly, minimising the sum of squared robot-target
 //! distances (eq. 1, 4, 7) under the box (eq. 9), obstacle (eq. 10 or 12) and separation
 //! (eq. 13) constraints, to the GLOBAL optimum by spatial branch-and-bound (the paper's solver,
-//! its ref. [17]), with the assignment solved exactly (Hungarian) inside every bound.
+//! its ref. \[17\]), with the assignment solved exactly (Hungarian) inside every bound.
 //!
 //! # Change of variables
-//! Write the transform as q_j = A s_j + d with A = [[a, -b], [b, a]] (see [`super::template`]),
-//! centre the template (s~_j = s_j - s_bar) and the starts (p~_i = p_i - p_bar), and let
+//! Write the transform as q_j = A s_j + d with A = \[\[a, -b\], \[b, a\]\]
+//! (see [`super::template`]), centre the template (s~_j = s_j - s_bar) and the starts
+//! (p~_i = p_i - p_bar), and let
 //! c = A s_bar + d be the pattern's centroid. Since sum_i s_sigma(i) = sum_j s_j for every
 //! permutation, the objective splits exactly (the cross terms vanish because the centred sums
 //! are zero):
@@ -24,35 +25,40 @@
 //! inside it).
 //!
 //! # The lower bound of a node (valid for every feasible point in it)
-//! Let [a] x [b] be an outer interval box of {(a(alpha, theta), b(alpha, theta))} over the
+//! Let \[a\] x \[b\] be an outer interval box of {(a(alpha, theta), b(alpha, theta))} over the
 //! node (exact interval extensions of cos and sin).
-//! 1. (a^2 + b^2) >= L2 := max(min over [a] x [b] of a^2 + b^2, lambda_sep^2), since every
+//! 1. (a^2 + b^2) >= L2 := max(min over \[a\] x \[b\] of a^2 + b^2, lambda_sep^2), since every
 //!    feasible point has lambda >= lambda_sep (eq. 13 is lambda ||s_i - s_j|| >= 2r + margin,
 //!    so lambda_sep = (2r + margin) / min spacing of S).
 //! 2. a D(sigma) + b X(sigma) is linear in (a, b), so over the rectangle it is at most its
 //!    value at one of the 4 corners; hence for every sigma it is at most
 //!    M := max over corners (a_k, b_k) of max_sigma (a_k D(sigma) + b_k X(sigma)), and each
 //!    inner max is one Hungarian solve with cost -(a_k p~_i . s~_j + b_k s~_j x p~_i).
-//! 3. n ||p_bar - c||^2 >= n dist^2(p_bar, [c_1] x [c_2]).
+//! 3. n ||p_bar - c||^2 >= n dist^2(p_bar, \[c_1\] x \[c_2\]).
 //!
 //! 4. A second bound on g with second-order accuracy (bounds 1-2 are only first-order, which
 //!    makes the search crawl near the optimum): let sigma0 be the optimal assignment at the
-//!    rectangle's centre and V its column duals (max-form: U_i + V_j >= a0 D_ij + b0 X_ij).
+//!    rectangle's centre and V column duals for it (max-form: U_i + V_j >= a0 D_ij + b0 X_ij;
+//!    any V is valid below, and `Problem::interior_duals` picks slack ones).
 //!    By weak duality, for every (a, b) and sigma, a D(sigma) + b X(sigma) <= sum_j V_j +
 //!    sum_i max_j (l_ij(a, b) - V_j), l_ij = a p~_i.s~_j + b s~_j x p~_i, and each max_j is at
 //!    most l_i,sigma0(i) - V_sigma0(i) + e_i with e_i = max_j max over the rectangle's corners of
 //!    the linear (l_ij - V_j) - (l_i,sigma0(i) - V_sigma0(i)), clipped at 0. Summing, a D + b X
 //!    <= a D(sigma0) + b X(sigma0) + E, E = sum e_i, so g >= P2 + min over the rectangle of the
 //!    convex quadratic S2 (a^2 + b^2) - 2 (a D(sigma0) + b X(sigma0)) - 2 E (the minimum is at
-//!    the projection of (D, X) / S2). Once sigma0 wins throughout a small rectangle, E = 0 and
-//!    this is exact.
+//!    the projection of z = (D, X) / S2, and since the quadratic is S2 (|A - z|^2 - |z|^2) and
+//!    feasible points have |A| >= lambda_sep, |A - z| >= lambda_sep - |z| bounds it too). Once
+//!    sigma0 wins throughout a small rectangle, E = 0 and this is exact (bounds 1-2 are then
+//!    skipped: they cannot be higher).
 //!
-//! So LB = max(bound 1-2, bound 4) + n dist^2(p_bar, [c]) <= f at every feasible point of the
-//! node (not clipped at 0, so that best-first order still ranks nodes whose bound is negative). The constraints prune too: a node is dropped when lambda_max < lambda_sep, or when the
-//! interval box of some target q_j = [a] s~_j - [b] s~_j^perp + [c] misses the area or lies
-//! wholly inside an obstacle's forbidden region. As a node shrinks, [a] x [b] shrinks to a point,
-//! the corner maxima to the point's Hungarian value and the c term to the exact one, so LB tends
-//! to f and the search converges.
+//! So LB = max(bound 1-2, bound 4) + n dist^2(p_bar, \[c\]) <= f at every feasible point of the
+//! node (not clipped at 0, so that best-first order still ranks nodes whose bound is negative).
+//! The constraints prune too: a node is dropped when lambda_max < lambda_sep, or when the
+//! interval box of some target q_j = \[a\] s~_j - \[b\] s~_j^perp + \[c\] misses the area or lies
+//! wholly inside an obstacle's forbidden region; and before the bound, the c box is narrowed to
+//! what eq. (9) and the obstacles leave (`Problem::narrow_centroid`). As a node shrinks,
+//! \[a\] x \[b\] shrinks to a point, the corner maxima to the point's Hungarian value and the
+//! c term to the exact one, so LB tends to f and the search converges.
 //!
 //! # Upper bound (incumbent)
 //! Every node evaluates its (alpha, theta) midpoint: sigma by Hungarian (for fixed A and c the
@@ -83,7 +89,7 @@ pub struct Solution {
     pub transform: Transform,
     /// The targets G* = q_1..q_n.
     pub targets: Vec<Vec2>,
-    /// sigma*: robot i -> target `assignment[i]`.
+    /// sigma*: robot i -> target `assignment\[i\]`.
     pub assignment: Vec<usize>,
     /// The objective at the solution: sum_i ||p_i - q_sigma(i)||^2.
     pub cost: f64,
@@ -107,7 +113,7 @@ pub fn optimise(
     optimise_in(starts, template, params, o.alpha_range, o.theta_range)
 }
 
-/// The no-rotation model of ref. [10], the paper's baseline: theta fixed at 0.
+/// The no-rotation model of ref. \[10\], the paper's baseline: theta fixed at 0.
 pub fn optimise_without_rotation(
     starts: &[Vec2],
     template: &Template,
@@ -196,9 +202,9 @@ struct Problem {
     p_bar: Vec2,
     p2: f64,
     s2: f64,
-    /// dot[i * n + j] = p~_i . s~_j.
+    /// dot\[i * n + j\] = p~_i . s~_j.
     dot: Vec<f64>,
-    /// cross[i * n + j] = s~_j x p~_i.
+    /// cross\[i * n + j\] = s~_j x p~_i.
     cross: Vec<f64>,
     lambda_sep2: f64,
     s_max: f64,
@@ -288,56 +294,111 @@ impl Problem {
         }
     }
 
-    /// The node's lower bound, or None when no point of it can be feasible.
-    fn bound(&self, node: &Node, h: &mut Hungarian, sigma: &mut Vec<usize>) -> Option<f64> {
+    /// The node's lower bound, or None when no point of it can be feasible. Also narrows the
+    /// node's centroid box to the part that the constraints leave (domain reduction).
+    fn bound(&self, node: &mut Node, h: &mut Hungarian, sigma: &mut Vec<usize>) -> Option<f64> {
         let (ar, br) = self.ab_box(node.alpha, node.theta);
         let lam2_max = sq_max(ar) + sq_max(br);
         if lam2_max < self.lambda_sep2 * (1.0 - 1e-12) - SLACK {
             return None;
         }
-        for s in &self.s_tilde {
-            let x = add(sub(scale(ar, s.x), scale(br, s.y)), node.c[0]);
-            let y = add(add(scale(br, s.x), scale(ar, s.y)), node.c[1]);
-            if self.constraints.box_outside_area(x, y)
-                || self.constraints.box_inside_an_obstacle(x, y)
-            {
-                return None;
-            }
+        if !self.narrow_centroid(node, ar, br) {
+            return None;
         }
-        let lam2 = (sq_min(ar) + sq_min(br)).max(self.lambda_sep2);
-        let mut m = f64::NEG_INFINITY;
-        let a_corners: &[f64] = if ar[0] == ar[1] { &ar[..1] } else { &ar };
-        let b_corners: &[f64] = if br[0] == br[1] { &br[..1] } else { &br };
-        for &a in a_corners {
-            for &b in b_corners {
-                m = m.max(self.best_alignment(a, b, h, sigma));
+        let (b2, e) = self.dual_bound(ar, br, h, sigma);
+        // With E = 0 the centre's assignment is optimal over the whole rectangle, so bound 4
+        // is the exact minimum of the relaxed g there and bounds 1-2 cannot beat it.
+        let b1 = if e > 0.0 {
+            let lam2 = (sq_min(ar) + sq_min(br)).max(self.lambda_sep2);
+            let mut m = f64::NEG_INFINITY;
+            let a_corners: &[f64] = if ar[0] == ar[1] { &ar[..1] } else { &ar };
+            let b_corners: &[f64] = if br[0] == br[1] { &br[..1] } else { &br };
+            for &a in a_corners {
+                for &b in b_corners {
+                    m = m.max(self.best_alignment(a, b, h, sigma));
+                }
             }
-        }
-        let b2 = self.dual_bound(ar, br, h, sigma);
+            self.p2 + lam2 * self.s2 - 2.0 * m
+        } else {
+            f64::NEG_INFINITY
+        };
         let dc = Vec2::new(
             dist_to_interval(self.p_bar.x, node.c[0]),
             dist_to_interval(self.p_bar.y, node.c[1]),
         );
-        let b1 = self.p2 + lam2 * self.s2 - 2.0 * m;
         Some(b1.max(b2) + self.n as f64 * dc.norm_squared())
+    }
+
+    /// Constraint propagation on the centroid box: target j is q_j = o_j + c with o_j in the
+    /// interval box (\[a\] x~_j - \[b\] y~_j, \[b\] x~_j + \[a\] y~_j). Eq. (9) needs
+    /// c in \[area\] - o_j. For an obstacle's forbidden square (half-side R; for the exact
+    /// circle, the inscribed square of half-side R / sqrt 2, which is inside the disc), when
+    /// every possible q_j has its y inside the square's y-span, its x must leave the x-span:
+    /// if no q_j can be left of the square, q_x >= o_x + R, so c_1 >= o_x + R - max o_j,x,
+    /// and symmetrically. Removed parts hold no feasible point. False when nothing is left or a
+    /// target box is wholly forbidden.
+    fn narrow_centroid(&self, node: &mut Node, ar: [f64; 2], br: [f64; 2]) -> bool {
+        let cons = &self.constraints;
+        let half = match cons.obstacle_form {
+            super::params::ObstacleConstraint::Square => cons.keep_out,
+            super::params::ObstacleConstraint::Circle => cons.keep_out / std::f64::consts::SQRT_2,
+        } - SLACK;
+        let mut c = node.c;
+        for s in &self.s_tilde {
+            let ox = sub(scale(ar, s.x), scale(br, s.y));
+            let oy = add(scale(br, s.x), scale(ar, s.y));
+            c[0][0] = c[0][0].max(cons.x_range[0] - SLACK - ox[1]);
+            c[0][1] = c[0][1].min(cons.x_range[1] + SLACK - ox[0]);
+            c[1][0] = c[1][0].max(cons.y_range[0] - SLACK - oy[1]);
+            c[1][1] = c[1][1].min(cons.y_range[1] + SLACK - oy[0]);
+            if c[0][0] > c[0][1] || c[1][0] > c[1][1] {
+                return false;
+            }
+            for o in &cons.obstacles {
+                let x = add(ox, c[0]);
+                let y = add(oy, c[1]);
+                if cons.box_inside_an_obstacle(x, y) {
+                    return false;
+                }
+                let y_inside = y[0] > o.y - half && y[1] < o.y + half;
+                let x_inside = x[0] > o.x - half && x[1] < o.x + half;
+                if y_inside && x[0] > o.x - half {
+                    c[0][0] = c[0][0].max(o.x + half - ox[1]);
+                }
+                if y_inside && x[1] < o.x + half {
+                    c[0][1] = c[0][1].min(o.x - half - ox[0]);
+                }
+                if x_inside && y[0] > o.y - half {
+                    c[1][0] = c[1][0].max(o.y + half - oy[1]);
+                }
+                if x_inside && y[1] < o.y + half {
+                    c[1][1] = c[1][1].min(o.y - half - oy[0]);
+                }
+                if c[0][0] > c[0][1] || c[1][0] > c[1][1] {
+                    return false;
+                }
+            }
+        }
+        node.c = c;
+        true
     }
 
     /// The second bound on min g over the rectangle (module comment, bound 4): duals V of the
     /// assignment at the rectangle's centre give, for every (a, b) in it and every sigma',
     /// a D(sigma') + b X(sigma') <= a D(sigma) + b X(sigma) + E, sigma the centre's optimum;
-    /// then g >= P2 + min over the rectangle of [S2 (a^2 + b^2) - 2 (a D + b X)] - 2 E.
+    /// then g >= P2 + min over the rectangle of \[S2 (a^2 + b^2) - 2 (a D + b X)\] - 2 E.
     fn dual_bound(
         &self,
         ar: [f64; 2],
         br: [f64; 2],
         h: &mut Hungarian,
         sigma: &mut Vec<usize>,
-    ) -> f64 {
+    ) -> (f64, f64) {
         let n = self.n;
         let (a0, b0) = (0.5 * (ar[0] + ar[1]), 0.5 * (br[0] + br[1]));
         self.best_alignment(a0, b0, h, sigma);
-        // The maximisation's column duals are the negated potentials of the minimisation.
-        let big_v = |j: usize| -h.column_potential(j);
+        let duals = self.interior_duals(a0, b0, sigma);
+        let big_v = |j: usize| duals[j];
         let (mut d, mut x, mut e) = (0.0, 0.0, 0.0);
         for (i, &k) in sigma.iter().enumerate() {
             let (dk, xk, vk) = (self.dot[i * n + k], self.cross[i * n + k], big_v(k));
@@ -363,7 +424,53 @@ impl Problem {
         // S2 |(a, b)|^2 - 2 (a D + b X) is least at the projection of (D, X) / S2.
         let pa = (d / self.s2).clamp(ar[0], ar[1]);
         let pb = (x / self.s2).clamp(br[0], br[1]);
-        self.p2 + self.s2 * (pa * pa + pb * pb) - 2.0 * (pa * d + pb * x) - 2.0 * e
+        // S2 |A|^2 - 2 A.(D, X) = S2 (|A - z|^2 - |z|^2), z = (D, X) / S2, and a feasible A
+        // has |A| >= lambda_sep, so |A - z| >= lambda_sep - |z| as well.
+        let z = Vec2::new(d / self.s2, x / self.s2);
+        let to_rect = (pa - z.x).powi(2) + (pb - z.y).powi(2);
+        let to_sep = (self.lambda_sep2.sqrt() - z.norm()).max(0.0).powi(2);
+        let quad = self.s2 * (to_rect.max(to_sep) - z.norm_squared());
+        (self.p2 + quad - 2.0 * e, e)
+    }
+
+    /// Column duals V for the max-assignment `sigma` at (a0, b0) that leave the non-assignment
+    /// edges as slack as they can be: the Hungarian's own potentials make about 2n edges tight,
+    /// which would keep E > 0 in every rectangle around them (a first-order bound). Dual
+    /// feasibility for a fixed sigma is the difference system V_j - V_sigma(i) >= w_ij -
+    /// w_i,sigma(i) (w = a0 D_ij + b0 X_ij); its least solution (longest paths from a virtual
+    /// source, Bellman-Ford) and its greatest (the same on the reversed arcs, negated) are both
+    /// feasible, and their mean is slack on every arc that either leaves slack. Any V keeps
+    /// bound 4 valid (weak duality), so rounding here can only loosen it.
+    fn interior_duals(&self, a0: f64, b0: f64, sigma: &[usize]) -> Vec<f64> {
+        let n = self.n;
+        let w = |i: usize, j: usize| a0 * self.dot[i * n + j] + b0 * self.cross[i * n + j];
+        let mut lo = vec![0.0; n];
+        let mut hi = vec![0.0; n];
+        for _ in 0..n {
+            let mut changed = false;
+            for (i, &k) in sigma.iter().enumerate() {
+                let wk = w(i, k);
+                for j in 0..n {
+                    if j == k {
+                        continue;
+                    }
+                    let c = w(i, j) - wk;
+                    if lo[k] + c > lo[j] {
+                        lo[j] = lo[k] + c;
+                        changed = true;
+                    }
+                    // Reversed: W = -V with W_k - W_j >= c.
+                    if hi[j] + c > hi[k] {
+                        hi[k] = hi[j] + c;
+                        changed = true;
+                    }
+                }
+            }
+            if !changed {
+                break;
+            }
+        }
+        lo.iter().zip(&hi).map(|(l, h)| 0.5 * (l - h)).collect()
     }
 
     /// Whether the pattern with matrix (a, b) and centroid c meets C1-C3.
@@ -475,7 +582,7 @@ impl Problem {
         let mut nodes = 1;
         // The least lower bound among nodes discarded by bound (not by infeasibility).
         let mut pruned_lb = f64::INFINITY;
-        if let Some(lb) = self.bound(&root, &mut h, &mut sigma) {
+        if let Some(lb) = self.bound(&mut root, &mut h, &mut sigma) {
             root.lb = lb;
             self.try_incumbent(&root, &mut h, &mut sigma, &mut best);
             heap.push(root);
@@ -502,7 +609,7 @@ impl Problem {
             }
             for mut child in self.split(&node) {
                 nodes += 1;
-                let Some(lb) = self.bound(&child, &mut h, &mut sigma) else {
+                let Some(lb) = self.bound(&mut child, &mut h, &mut sigma) else {
                     continue;
                 };
                 child.lb = lb.max(node.lb);
@@ -596,7 +703,7 @@ fn dist_to_interval(v: f64, r: [f64; 2]) -> f64 {
     }
 }
 
-/// The exact range of cos over [lo, hi].
+/// The exact range of cos over \[lo, hi\].
 fn cos_range(t: [f64; 2]) -> [f64; 2] {
     let (c0, c1) = (t[0].cos(), t[1].cos());
     let mut lo = c0.min(c1);
@@ -611,7 +718,7 @@ fn cos_range(t: [f64; 2]) -> [f64; 2] {
     [lo, hi]
 }
 
-/// The exact range of sin over [lo, hi] (sin t = cos(t - pi/2)).
+/// The exact range of sin over \[lo, hi\] (sin t = cos(t - pi/2)).
 fn sin_range(t: [f64; 2]) -> [f64; 2] {
     let shifted = cos_range([t[0] - PI / 2.0, t[1] - PI / 2.0]);
     // Rounding of the shift must not lose the endpoint values themselves.

@@ -1,5 +1,5 @@
 //! Optimal reciprocal collision avoidance, eqs. (17)-(26) (van den Berg, Guy, Lin, Manocha 2011,
-//! the paper's ref. [21]): one half-plane of allowed velocities per neighbour, then the velocity
+//! the paper's ref. \[21\]): one half-plane of allowed velocities per neighbour, then the velocity
 //! nearest the preferred one inside all of them, the speed disc and the acceleration limit.
 //!
 //! For robot i and a neighbour j (positions p, velocities v, radii r): the velocity obstacle of

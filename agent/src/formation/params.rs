@@ -36,12 +36,12 @@ pub enum TransformReading {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
 pub struct OptimiserParams {
-    /// Search range of the "scale parameter" alpha. Chosen: [0.5, 2.0], wide enough for the
+    /// Search range of the "scale parameter" alpha. Chosen: \[0.5, 2.0\], wide enough for the
     /// paper's optima (0.83 to 1.13, Table 2) and for the separation bound (lambda >= ~1.02
     /// for our templates).
     pub alpha_range: [f64; 2],
-    /// Search range of theta in radians. [-pi, pi] is the proposed model (free rotation); the
-    /// baseline of ref. [10] is [0, 0]; section 3.4 restricts it (Table 3).
+    /// Search range of theta in radians. \[-pi, pi\] is the proposed model (free rotation); the
+    /// baseline of ref. \[10\] is \[0, 0\]; section 3.4 restricts it (Table 3).
     pub theta_range: [f64; 2],
     /// Absolute optimality gap at which the branch-and-bound stops (squared units).
     pub gap_abs: f64,
@@ -58,7 +58,7 @@ impl Default for OptimiserParams {
             alpha_range: [0.5, 2.0],
             theta_range: [-PI, PI],
             gap_abs: 1e-3,
-            gap_rel: 1e-4,
+            gap_rel: 1e-3,
             max_nodes: 400_000,
         }
     }

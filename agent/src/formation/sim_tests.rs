@@ -2,7 +2,7 @@
 //! pattern once, then every iteration reassign (eq. 15, Hungarian), preferred velocity
 //! (eq. 16), ORCA (eqs. 17-26) for every robot from the same state (synchronous, as in a MATLAB
 //! loop), p += v tau (eq. 27), until every robot is within epsilon of its assigned target.
-//! It previews Table 1: the proposed model against the no-rotation baseline of ref. [10].
+//! It previews Table 1: the proposed model against the no-rotation baseline of ref. \[10\].
 
 use super::hungarian::{assign_targets, Hungarian};
 use super::optimise::{optimise, optimise_without_rotation};

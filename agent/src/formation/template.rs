@@ -2,8 +2,8 @@
 //! that maps a template point s_j to a target q_j.
 //!
 //! The reading of eq. (5) (spec 6 item 3): as printed, q_j = alpha s_j + d + s_j r(theta) with
-//! r(theta) = [[cos - 1, sin], [-sin, cos - 1]] acting on the row vector s_j (eq. 6), which in
-//! column form is q = A s + d with A = [[a, -b], [b, a]], a = alpha - 1 + cos theta,
+//! r(theta) = \[\[cos - 1, sin\], \[-sin, cos - 1\]\] acting on the row vector s_j (eq. 6),
+//! which in column form is q = A s + d with A = \[\[a, -b\], \[b, a\]\], a = alpha - 1 + cos theta,
 //! b = sin theta (eq. 8). The default, [`TransformReading::Literal`], is that; the alternative,
 //! [`TransformReading::Similarity`], is a = alpha cos theta, b = alpha sin theta. Either way A is
 //! a rotation times a scale lambda = sqrt(a^2 + b^2), which is all the optimiser needs.
@@ -12,7 +12,7 @@ use super::params::TransformReading;
 use serde::{Deserialize, Serialize};
 use swarm::geometry::Vec2;
 
-/// A pattern template: the points S = [s_1; ...; s_n] (any origin; the optimiser centres them).
+/// A pattern template: the points S = \[s_1; ...; s_n\] (any origin; the optimiser centres them).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Template {
     /// The letter or name of the pattern, for reports.
@@ -116,14 +116,14 @@ impl Template {
 pub struct Transform {
     /// alpha (比例参数).
     pub alpha: f64,
-    /// d = [d_1, d_2].
+    /// d = \[d_1, d_2\].
     pub d: [f64; 2],
     /// theta in radians.
     pub theta: f64,
 }
 
 impl Transform {
-    /// The coefficients (a, b) of A = [[a, -b], [b, a]] under the reading (eq. 8).
+    /// The coefficients (a, b) of A = \[\[a, -b\], \[b, a\]\] under the reading (eq. 8).
     pub fn matrix(&self, reading: TransformReading) -> (f64, f64) {
         matrix(self.alpha, self.theta, reading)
     }

@@ -308,3 +308,61 @@ fn rejects_bad_input() {
         Err(FormationError::Infeasible)
     );
 }
+
+/// Solve times for 9 robots over 20 seeded starts (run with --ignored --nocapture).
+#[test]
+#[ignore]
+fn timing_per_solve_for_nine_robots() {
+    let params = FormationParams::default();
+    let template = Template::letter_c();
+    let mut times = Vec::new();
+    for seed in 1000..1020 {
+        let starts = random_starts(seed, 9, &params, 0.1);
+        let t0 = Instant::now();
+        let sol = optimise(&starts, &template, &params).unwrap();
+        let dt = t0.elapsed().as_secs_f64();
+        let t1 = Instant::now();
+        let base = optimise_without_rotation(&starts, &template, &params).unwrap();
+        let db = t1.elapsed().as_secs_f64();
+        times.push(dt);
+        eprintln!(
+            "seed {seed}: {:.3} s, {} nodes, gap {:.1e}, proven {} | theta = 0: {:.3} s, {} nodes",
+            dt, sol.nodes, sol.gap, sol.proven, db, base.nodes
+        );
+    }
+    times.sort_by(f64::total_cmp);
+    eprintln!(
+        "median {:.3} s, max {:.3} s",
+        times[times.len() / 2],
+        times[times.len() - 1]
+    );
+}
+
+#[test]
+fn similarity_reading_is_solved_as_well() {
+    // q = alpha R(theta) s + d: alpha is then the true scale; same checks as the literal case.
+    let params = FormationParams {
+        transform_reading: TransformReading::Similarity,
+        ..FormationParams::default()
+    };
+    let template = Template::letter_c();
+    for seed in 40..42 {
+        let starts = random_starts(seed, 9, &params, 0.1);
+        let sol = optimise(&starts, &template, &params).unwrap();
+        check_solution(&sol, &starts, &params);
+        assert!(sol.proven, "seed {seed}: {sol:?}");
+        let grid = grid_best(
+            &starts,
+            &template,
+            &params,
+            &linspace(0.5, 2.0, 16),
+            &linspace(-PI, PI, 73),
+            0.25,
+        );
+        assert!(sol.lower_bound <= grid + 1e-9 && sol.cost <= grid + sol.gap + 1e-9);
+        let (lambda, _) = sol
+            .transform
+            .scale_and_rotation(TransformReading::Similarity);
+        assert!((lambda - sol.transform.alpha).abs() < 1e-12);
+    }
+}

@@ -63,7 +63,7 @@ fn random_scene(rng: &mut ChaCha8Rng, neighbours: usize) -> (Disc, Vec<Disc>, Ve
     random_scene_in(rng, neighbours, 7.0)
 }
 
-/// `neighbours` robots at least 2.05 apart within [-spread, spread]^2 around `me` at 0.
+/// `neighbours` robots at least 2.05 apart within \[-spread, spread\]^2 around `me` at 0.
 fn random_scene_in(
     rng: &mut ChaCha8Rng,
     neighbours: usize,
