@@ -8,6 +8,7 @@ use std::collections::BTreeMap;
 
 use swarm::geometry::Vec2;
 
+use super::baselines::{self, Allocation};
 use super::bundle::{evaluate, Candidate};
 use super::consensus::CbcaRobot;
 use super::dag;
@@ -247,4 +248,66 @@ fn example1_grouped_and_global() {
     let o = run_example(Setup::Global, &lossy);
     report("without grouping, loss 0.3, delay <= 2 rounds", &o, &tasks);
     check(&o, &tasks);
+}
+
+/// CBCA's Example 1 allocations and the three baselines, scored alike (baselines::evaluate).
+#[test]
+fn example1_against_the_baselines() {
+    let s = example(1);
+    let robots = s.robots().unwrap();
+    let book = s.task_book().unwrap();
+    let tasks = s.tasks().unwrap();
+    let mut rows: Vec<(String, Allocation)> = Vec::new();
+    for (name, how) in [
+        (
+            "CBCA grouped + prior",
+            Setup::Grouped(PriorInfo::DetectionPlusNearest),
+        ),
+        ("CBCA without grouping", Setup::Global),
+    ] {
+        let o = run_example(how, &Radio::perfect());
+        check(&o, &tasks);
+        rows.push((
+            name.to_string(),
+            Allocation {
+                paths: o.robots.iter().map(|r| r.plan().path.clone()).collect(),
+                messages: o.stats.delivered,
+            },
+        ));
+    }
+    rows.push((
+        "Sujit et al. 2014".into(),
+        baselines::sujit::allocate(&robots, &book, &s.params),
+    ));
+    rows.push((
+        "Kim, Baik, Lee 2015".into(),
+        baselines::welfare::allocate(&robots, &book, &s.params),
+    ));
+    rows.push((
+        "improved contract net".into(),
+        baselines::contract_net::allocate(&robots, &book, &s.params),
+    ));
+    println!(
+        "method | system utility | mean capture time | hunted/shelved | messages | coalitions"
+    );
+    for (name, a) in &rows {
+        let e = baselines::evaluate(&robots, &book, a, &s.params).expect("a DAG");
+        for (j, ms) in a.coalitions() {
+            assert!(ms.len() <= book[&j].robots_needed, "{name} over L_j on {j}");
+        }
+        let c: Vec<String> = a
+            .coalitions()
+            .iter()
+            .map(|(j, ms)| format!("{}={{{}}}", task_label(*j), labels(ms)))
+            .collect();
+        println!(
+            "{name} | {:.2} | {:.3} | {}/{} | {} | {}",
+            e.system_utility,
+            e.mean_completion,
+            e.hunted,
+            e.shelved,
+            a.messages,
+            c.join(" ")
+        );
+    }
 }
