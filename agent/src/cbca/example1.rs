@@ -311,3 +311,45 @@ fn example1_against_the_baselines() {
         );
     }
 }
+
+/// Example 1 under radio loss 0, 0.1, 0.3, 0.5 (delays up to 2 rounds when lossy), 5 seeds a
+/// level, with and without grouping: every run must converge and agree (check); the table of
+/// rounds, broadcasts and bytes is printed.
+#[test]
+fn example1_under_radio_loss() {
+    let tasks = example(1).tasks().unwrap();
+    println!("setup | loss | mean rounds | mean broadcasts | mean kB | mean copies delivered");
+    for (name, how) in [
+        (
+            "grouped + prior",
+            Setup::Grouped(PriorInfo::DetectionPlusNearest),
+        ),
+        ("without grouping", Setup::Global),
+    ] {
+        for loss in [0.0, 0.1, 0.3, 0.5] {
+            let seeds = 5;
+            let mut sum = RunStats::default();
+            for seed in 0..seeds {
+                let radio = Radio {
+                    loss,
+                    max_delay: if loss > 0.0 { 2 } else { 0 },
+                    seed,
+                };
+                let o = run_example(how, &radio);
+                check(&o, &tasks);
+                sum.rounds += o.stats.rounds;
+                sum.broadcasts += o.stats.broadcasts;
+                sum.bytes += o.stats.bytes;
+                sum.delivered += o.stats.delivered;
+            }
+            let n = seeds as f64;
+            println!(
+                "{name} | {loss} | {:.1} | {:.1} | {:.1} | {:.1}",
+                sum.rounds as f64 / n,
+                sum.broadcasts as f64 / n,
+                sum.bytes as f64 / n / 1000.0,
+                sum.delivered as f64 / n
+            );
+        }
+    }
+}
