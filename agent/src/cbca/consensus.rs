@@ -418,6 +418,20 @@ impl CbcaRobot {
         }
     }
 
+    /// Robot m is gone (its agent process died; the runtime's liveness check says so): clear its
+    /// winner entries and its facts, and refuse any later news of it (s_im = +inf), so stale
+    /// relays cannot bring it back. Its tasks reopen for Algorithm 1 at the next iteration.
+    pub fn forget_robot(&mut self, m: RobotId) {
+        if m == self.me.id || m >= self.stamps.len() {
+            return;
+        }
+        for j in 0..self.winners.n_tasks() {
+            self.winners.clear(m, j);
+        }
+        self.infos[m] = None;
+        self.stamps[m] = f64::INFINITY;
+    }
+
     /// The detector's verdict for the current neighbour set.
     pub fn converged(&self, neighbours: &[RobotId]) -> bool {
         self.detector

@@ -8,6 +8,7 @@ use std::collections::BTreeMap;
 
 use swarm::geometry::Vec2;
 
+use super::baselines::{self, Allocation};
 use super::bundle::{evaluate, Candidate};
 use super::consensus::CbcaRobot;
 use super::dag;
@@ -247,4 +248,108 @@ fn example1_grouped_and_global() {
     let o = run_example(Setup::Global, &lossy);
     report("without grouping, loss 0.3, delay <= 2 rounds", &o, &tasks);
     check(&o, &tasks);
+}
+
+/// CBCA's Example 1 allocations and the three baselines, scored alike (baselines::evaluate).
+#[test]
+fn example1_against_the_baselines() {
+    let s = example(1);
+    let robots = s.robots().unwrap();
+    let book = s.task_book().unwrap();
+    let tasks = s.tasks().unwrap();
+    let mut rows: Vec<(String, Allocation)> = Vec::new();
+    for (name, how) in [
+        (
+            "CBCA grouped + prior",
+            Setup::Grouped(PriorInfo::DetectionPlusNearest),
+        ),
+        ("CBCA without grouping", Setup::Global),
+    ] {
+        let o = run_example(how, &Radio::perfect());
+        check(&o, &tasks);
+        rows.push((
+            name.to_string(),
+            Allocation {
+                paths: o.robots.iter().map(|r| r.plan().path.clone()).collect(),
+                messages: o.stats.delivered,
+            },
+        ));
+    }
+    rows.push((
+        "Sujit et al. 2014".into(),
+        baselines::sujit::allocate(&robots, &book, &s.params),
+    ));
+    rows.push((
+        "Kim, Baik, Lee 2015".into(),
+        baselines::welfare::allocate(&robots, &book, &s.params),
+    ));
+    rows.push((
+        "improved contract net".into(),
+        baselines::contract_net::allocate(&robots, &book, &s.params),
+    ));
+    println!(
+        "method | system utility | mean capture time | hunted/shelved | messages | coalitions"
+    );
+    for (name, a) in &rows {
+        let e = baselines::evaluate(&robots, &book, a, &s.params).expect("a DAG");
+        for (j, ms) in a.coalitions() {
+            assert!(ms.len() <= book[&j].robots_needed, "{name} over L_j on {j}");
+        }
+        let c: Vec<String> = a
+            .coalitions()
+            .iter()
+            .map(|(j, ms)| format!("{}={{{}}}", task_label(*j), labels(ms)))
+            .collect();
+        println!(
+            "{name} | {:.2} | {:.3} | {}/{} | {} | {}",
+            e.system_utility,
+            e.mean_completion,
+            e.hunted,
+            e.shelved,
+            a.messages,
+            c.join(" ")
+        );
+    }
+}
+
+/// Example 1 under radio loss 0, 0.1, 0.3, 0.5 (delays up to 2 rounds when lossy), 5 seeds a
+/// level, with and without grouping: every run must converge and agree (check); the table of
+/// rounds, broadcasts and bytes is printed.
+#[test]
+fn example1_under_radio_loss() {
+    let tasks = example(1).tasks().unwrap();
+    println!("setup | loss | mean rounds | mean broadcasts | mean kB | mean copies delivered");
+    for (name, how) in [
+        (
+            "grouped + prior",
+            Setup::Grouped(PriorInfo::DetectionPlusNearest),
+        ),
+        ("without grouping", Setup::Global),
+    ] {
+        for loss in [0.0, 0.1, 0.3, 0.5] {
+            let seeds = 5;
+            let mut sum = RunStats::default();
+            for seed in 0..seeds {
+                let radio = Radio {
+                    loss,
+                    max_delay: if loss > 0.0 { 2 } else { 0 },
+                    seed,
+                };
+                let o = run_example(how, &radio);
+                check(&o, &tasks);
+                sum.rounds += o.stats.rounds;
+                sum.broadcasts += o.stats.broadcasts;
+                sum.bytes += o.stats.bytes;
+                sum.delivered += o.stats.delivered;
+            }
+            let n = seeds as f64;
+            println!(
+                "{name} | {loss} | {:.1} | {:.1} | {:.1} | {:.1}",
+                sum.rounds as f64 / n,
+                sum.broadcasts as f64 / n,
+                sum.bytes as f64 / n / 1000.0,
+                sum.delivered as f64 / n
+            );
+        }
+    }
 }

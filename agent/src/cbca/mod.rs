@@ -24,6 +24,8 @@ pub use params::{CbcaParams, Consumption, LoyaltyParams};
 #[cfg(test)]
 mod example1;
 #[cfg(test)]
+mod example2;
+#[cfg(test)]
 mod proptests;
 #[cfg(test)]
 pub(crate) mod testdriver;

@@ -125,3 +125,55 @@ proptest! {
         check_agreement(&robots, &book, &stats)?;
     }
 }
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 24, ..ProptestConfig::default() })]
+
+    /// A robot dies after convergence: the survivors forget it, re-plan over a lossy radio and
+    /// agree again, with the dead robot in no winner list (re-planning when an agent process
+    /// dies mid-hunt).
+    #[test]
+    fn survivors_replan_after_a_robot_dies(seed in any::<u64>(), n_r in 3usize..8, n_e in 1usize..4) {
+        let (mut robots, nb, book) = instance(seed, n_r, n_e);
+        let radio = Radio { loss: 0.3, max_delay: 2, seed: seed ^ 0xdead };
+        let stats = run(&mut robots, &nb, &radio, 2000);
+        prop_assert!(stats.converged);
+        // The robot with the most tasks dies (ties: the smallest id).
+        let dead = (0..n_r).max_by_key(|&i| (robots[i].plan().bundle.len(), std::cmp::Reverse(i))).unwrap();
+        let mut survivors: Vec<CbcaRobot> = Vec::new();
+        let mut index = vec![usize::MAX; n_r];
+        for r in robots.into_iter().filter(|r| r.id() != dead) {
+            index[r.id()] = survivors.len();
+            survivors.push(r);
+        }
+        for r in &mut survivors {
+            r.forget_robot(dead);
+        }
+        // The radio graph without the dead robot, by survivor index; keep it connected by
+        // linking the dead robot's neighbours in a chain (they relay for each other).
+        let mut graph: Vec<Vec<RobotId>> = vec![Vec::new(); survivors.len()];
+        for (i, ns) in nb.iter().enumerate() {
+            if i == dead { continue; }
+            for &n in ns {
+                if n != dead { graph[index[i]].push(index[n]); }
+            }
+        }
+        let around: Vec<usize> = nb[dead].iter().map(|&n| index[n]).collect();
+        for w in around.windows(2) {
+            if !graph[w[0]].contains(&w[1]) {
+                graph[w[0]].push(w[1]);
+                graph[w[1]].push(w[0]);
+            }
+        }
+        let stats = run(&mut survivors, &graph, &radio, 2000);
+        prop_assert!(stats.converged, "no convergence after the death");
+        let first = survivors[0].winners().entries();
+        for r in &survivors {
+            prop_assert_eq!(&r.winners().entries(), &first);
+        }
+        prop_assert!(first.iter().all(|e| e.robot != dead));
+        for (j, t) in &book {
+            prop_assert!(survivors[0].winners().count(*j) <= t.robots_needed);
+        }
+    }
+}

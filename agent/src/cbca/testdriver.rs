@@ -48,8 +48,8 @@ pub fn message_bytes(m: &CbcaMessage) -> usize {
         .len()
 }
 
-/// Runs consensus on `robots` over the graph `neighbours` until every robot's detector
-/// converges, for at most `max_rounds` rounds.
+/// Runs consensus on `robots` over the graph `neighbours` (indices into `robots`) until every
+/// robot's detector converges, for at most `max_rounds` rounds.
 pub fn run(
     robots: &mut [CbcaRobot],
     neighbours: &[Vec<RobotId>],
@@ -65,11 +65,9 @@ pub fn run(
             r.iterate(now);
         }
         stats.rounds = round;
-        if robots
-            .iter()
-            .enumerate()
-            .all(|(i, r)| r.converged(&neighbours[i]))
-        {
+        let ids =
+            |i: usize| -> Vec<RobotId> { neighbours[i].iter().map(|&n| robots[n].id()).collect() };
+        if robots.iter().enumerate().all(|(i, r)| r.converged(&ids(i))) {
             stats.converged = true;
             return stats;
         }

@@ -23,15 +23,20 @@ pub fn welfare(team: &Resources) -> f64 {
     team.iter().map(|r| (1.0 + r.max(0.0)).ln()).sum()
 }
 
+fn add(a: &Resources, b: &Resources) -> Resources {
+    std::array::from_fn(|p| a[p] + b[p])
+}
+
+fn sub(a: &Resources, b: &Resources) -> Resources {
+    std::array::from_fn(|p| a[p] - b[p])
+}
+
 pub fn allocate(robots: &[Robot], book: &TaskBook, params: &CbcaParams) -> Allocation {
     let mut alloc = Allocation::empty(robots.len());
     alloc.messages += robots.len() as u64;
-    let mut team = [0.0; RESOURCE_TYPES];
-    for r in robots {
-        for p in 0..RESOURCE_TYPES {
-            team[p] += r.resources[p];
-        }
-    }
+    let mut team = robots
+        .iter()
+        .fold([0.0; RESOURCE_TYPES], |t, r| add(&t, &r.resources));
     let mut order: Vec<TaskId> = book.keys().copied().collect();
     order.sort_by(|a, b| book[b].value.total_cmp(&book[a].value).then(a.cmp(b)));
     for j in order {
@@ -49,18 +54,8 @@ pub fn allocate(robots: &[Robot], book: &TaskBook, params: &CbcaParams) -> Alloc
                 if gain <= 0.0 {
                     continue;
                 }
-                let mut after = team;
-                for p in 0..RESOURCE_TYPES {
-                    after[p] -= spent[p] + c[p];
-                }
-                let before = {
-                    let mut b = team;
-                    for p in 0..RESOURCE_TYPES {
-                        b[p] -= spent[p];
-                    }
-                    welfare(&b)
-                };
-                let ratio = gain / (before - welfare(&after) + 1e-9);
+                let left = sub(&team, &spent);
+                let ratio = gain / (welfare(&left) - welfare(&sub(&left, &c)) + 1e-9);
                 let t = eta(r, &alloc.paths[r.id], j, book);
                 let better = best.as_ref().is_none_or(|b| {
                     ratio > b.0 || (ratio == b.0 && (t < b.1 || (t == b.1 && r.id < b.2)))
@@ -71,15 +66,11 @@ pub fn allocate(robots: &[Robot], book: &TaskBook, params: &CbcaParams) -> Alloc
             }
             let Some((_, _, i, c)) = best else { break };
             reduce(&mut need, &c);
-            for p in 0..RESOURCE_TYPES {
-                spent[p] += c[p];
-            }
+            spent = add(&spent, &c);
             members.push(i);
         }
         if members.len() == task.robots_needed {
-            for p in 0..RESOURCE_TYPES {
-                team[p] -= spent[p];
-            }
+            team = sub(&team, &spent);
             for &i in &members {
                 alloc.paths[i].push(j);
             }
