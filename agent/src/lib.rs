@@ -1,6 +1,7 @@
 //! The robot side: behaviours (one per scenario) and the agent process loop.
 
 pub mod behaviours;
+pub mod kernels;
 pub mod process;
 pub mod search;
 

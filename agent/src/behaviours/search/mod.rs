@@ -55,11 +55,11 @@ pub mod params;
 pub use messages::{Candidacy, Msg, Status, WireRole};
 pub use params::{parse_mode, parse_params, validate_search, ObstacleLayer, Params, SearchLayer};
 
+use crate::kernels::virtual_force;
 use crate::search::calibration::{self, Calibration};
 use crate::search::estimator::{self, Detection};
-use crate::search::geometry::{clamp_norm, v2, Vec2};
 use crate::search::subgroup::{self, Member, Role};
-use crate::search::{arba, bsoa, svf, tpepso, virtual_force};
+use crate::search::{arba, bsoa, svf, tpepso};
 use messages::{pack, unpack, TargetSet};
 use rand::Rng;
 use rand_chacha::ChaCha8Rng;
@@ -67,6 +67,7 @@ use std::collections::BTreeMap;
 use std::collections::BTreeSet;
 use std::sync::{Arc, Mutex};
 use swarm::frames::{ENTITY_DONE_BY_YOU, STATE_DEFAULT as STATE_ROAMING};
+use swarm::geometry::{clamp_norm, Vec2};
 use swarm::scenario::Scenario;
 use swarm::scenario::{Check, ConfigError};
 use swarm::sections::search::{STATE_COOPERATIVE, STATE_DECLARED};
@@ -197,7 +198,7 @@ impl Search {
             found: BTreeSet::new(),
             choice: None,
             memory: None,
-            last_vel: v2(a.cos(), a.sin()) * v_max,
+            last_vel: Vec2::new(a.cos(), a.sin()) * v_max,
             sf: bsoa::Sense::None,
             follow: svf::Follow::None,
             bat: arba::Bat::new(&p.arba),
@@ -279,7 +280,7 @@ impl Search {
                     ..
                 }) if !self.found.contains(target) => {
                     let q = unpack(st.pos);
-                    Some((*from as usize, v2(q[0], q[1]), *target))
+                    Some((*from as usize, Vec2::new(q[0], q[1]), *target))
                 }
                 _ => None,
             })
@@ -346,7 +347,7 @@ fn heard_positions(heard: &[(u32, &Status)]) -> Vec<Vec2> {
         .iter()
         .map(|(_, st)| {
             let q = unpack(st.pos);
-            v2(q[0], q[1])
+            Vec2::new(q[0], q[1])
         })
         .collect()
 }
@@ -527,7 +528,7 @@ impl Search {
                 if c.target == t && c.member {
                     if let Some((q, f)) = c.pb {
                         let q = unpack(q);
-                        tpepso::update_best(&mut mem.sgb, v2(q[0], q[1]), f as f64);
+                        tpepso::update_best(&mut mem.sgb, Vec2::new(q[0], q[1]), f as f64);
                     }
                 }
             }
@@ -566,7 +567,7 @@ impl Search {
                 if tt == target && i > i_min {
                     let q = unpack(st.pos);
                     dets.push(Detection {
-                        position: v2(q[0], q[1]),
+                        position: Vec2::new(q[0], q[1]),
                         distance: self.cal.inverse(i),
                         signal: i,
                     });
@@ -598,7 +599,7 @@ impl Search {
         self.last_estimate = estimate;
         let state = tpepso::State {
             position: me,
-            velocity: v2(s.vel[0], s.vel[1]),
+            velocity: Vec2::new(s.vel[0], s.vel[1]),
             personal_best: b.pb.0,
             subgroup_best: b.sgb.0,
             target_estimate: estimate,
@@ -664,7 +665,7 @@ impl Search {
             }
             _ => f64::INFINITY,
         };
-        let sensed = s.obstacle_points().iter().map(|q| v2(q[0], q[1]));
+        let sensed = s.obstacle_points().iter().map(|q| Vec2::new(q[0], q[1]));
         let v = match self.obstacle {
             ObstacleLayer::Bsoa => {
                 let o = bsoa::avoid_within(&me, &v_if, sensed, horizon, self.sf, &self.p.bsoa);
@@ -747,7 +748,7 @@ impl Behaviour for Search {
         }
         // 2. The radio: found targets and the statuses heard.
         let heard = self.listen(inbox);
-        let me = v2(s.pos[0], s.pos[1]);
+        let me = Vec2::new(s.pos[0], s.pos[1]);
         // 3. Candidacy: Type I by own signals (eqs. 2-3), else Type II.
         let signals = self.own_signals(s);
         let cand = self.candidacy(&me, &signals, &heard);
