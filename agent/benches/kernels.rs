@@ -5,17 +5,17 @@
 
 use agent::search::bsoa::{self, Sense as Sf};
 use agent::search::estimator::{self, Detection};
-use agent::search::geometry::{sample_polygon_boundary, v2, Vec2};
 use criterion::{black_box, criterion_group, criterion_main, BenchmarkId, Criterion};
+use swarm::geometry::{sample_boundary, Vec2};
 
 /// `k` detectors on a ring around a target at (400, 300), distances with a small error.
 fn detections(k: usize) -> Vec<Detection> {
-    let target = v2(400.0, 300.0);
+    let target = Vec2::new(400.0, 300.0);
     (0..k)
         .map(|i| {
             let a = std::f64::consts::TAU * i as f64 / k as f64 + 0.3;
             let r = 40.0 + 7.0 * i as f64;
-            let position = target + v2(r * a.cos(), r * a.sin());
+            let position = target + Vec2::new(r * a.cos(), r * a.sin());
             Detection {
                 position,
                 distance: r * (1.0 + 0.01 * ((i % 3) as f64 - 1.0)),
@@ -41,7 +41,7 @@ fn bench_estimator(c: &mut Criterion) {
 fn sensed(polys: &[Vec<Vec2>], x: &Vec2, range: f64) -> Vec<Vec2> {
     polys
         .iter()
-        .flat_map(|p| sample_polygon_boundary(p, 2.0))
+        .flat_map(|p| sample_boundary(p, 2.0))
         .filter(|q| (q - x).norm() < range)
         .collect()
 }
@@ -49,38 +49,43 @@ fn sensed(polys: &[Vec<Vec2>], x: &Vec2, range: f64) -> Vec<Vec2> {
 fn bench_bsoa(c: &mut Criterion) {
     let p = bsoa::Params::default();
     let block = vec![
-        v2(300.0, 200.0),
-        v2(420.0, 230.0),
-        v2(400.0, 330.0),
-        v2(290.0, 310.0),
+        Vec2::new(300.0, 200.0),
+        Vec2::new(420.0, 230.0),
+        Vec2::new(400.0, 330.0),
+        Vec2::new(290.0, 310.0),
     ];
     let u_trap = vec![
-        v2(550.0, 500.0),
-        v2(700.0, 500.0),
-        v2(700.0, 650.0),
-        v2(670.0, 650.0),
-        v2(670.0, 530.0),
-        v2(580.0, 530.0),
-        v2(580.0, 650.0),
-        v2(550.0, 650.0),
+        Vec2::new(550.0, 500.0),
+        Vec2::new(700.0, 500.0),
+        Vec2::new(700.0, 650.0),
+        Vec2::new(670.0, 650.0),
+        Vec2::new(670.0, 530.0),
+        Vec2::new(580.0, 530.0),
+        Vec2::new(580.0, 650.0),
+        Vec2::new(550.0, 650.0),
     ];
     let cases = [
         // Heading straight at the block's face from 30 units away.
         (
             "block-ahead",
             vec![block.clone()],
-            v2(260.0, 260.0),
-            v2(10.0, 0.0),
+            Vec2::new(260.0, 260.0),
+            Vec2::new(10.0, 0.0),
         ),
         // Inside the U, heading into its closed end.
         (
             "u-trap",
             vec![u_trap.clone()],
-            v2(625.0, 600.0),
-            v2(0.0, -10.0),
+            Vec2::new(625.0, 600.0),
+            Vec2::new(0.0, -10.0),
         ),
         // Obstacles in range but not ahead: the free case after the scan of the points.
-        ("free", vec![block], v2(260.0, 260.0), v2(-10.0, 0.0)),
+        (
+            "free",
+            vec![block],
+            Vec2::new(260.0, 260.0),
+            Vec2::new(-10.0, 0.0),
+        ),
     ];
     let mut g = c.benchmark_group("bsoa");
     for (name, polys, x, v) in cases {

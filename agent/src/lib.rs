@@ -4,6 +4,7 @@ pub mod behaviours;
 pub mod cbca;
 pub mod formation;
 pub mod hunt;
+pub mod kernels;
 pub mod process;
 pub mod search;
 

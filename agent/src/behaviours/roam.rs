@@ -2,6 +2,7 @@
 //! repulsion from the two nearest robots *heard on the radio*, plus repulsion from obstacle
 //! and wall points the robot senses. Each robot broadcasts its position every tick.
 
+use crate::kernels::virtual_force;
 use rand::Rng;
 use serde::{Deserialize, Serialize};
 use swarm::scenario::{Check, ConfigError, RoamParams, Scenario, ROAM_BEACON_OVERHEAD};
@@ -96,6 +97,8 @@ pub fn dispatch<V: crate::BehaviourVisitor>(sc: &Scenario, v: V) -> V::Out {
 
 pub struct Roam<M = Beacon> {
     p: RoamParams,
+    /// Eq. (5)'s constants (c, l_1) for the shared kernel.
+    force: virtual_force::Params,
     v_max: f64,
     /// Current heading, kept while no force acts (spec/search.md 5 item 5).
     heading: f64,
@@ -109,6 +112,13 @@ impl<M: BeaconMsg> Roam<M> {
         let mut rng = streams::rng(sc.run.seed, robot, streams::ROAM_HEADING);
         Roam {
             p: sc.roam.clone(),
+            force: virtual_force::Params {
+                c: sc.roam.c,
+                l1: sc.roam.l1,
+                l_r: sc.roam.l_r,
+                l_b: sc.roam.obstacle_range,
+                v_max: sc.robot.v_max,
+            },
             v_max: sc.robot.v_max,
             heading: rng.gen_range(-std::f64::consts::PI..std::f64::consts::PI),
             payload: Blob::from(vec![robot as u8; sc.roam.payload_bytes as usize]),
@@ -123,7 +133,9 @@ impl<M: BeaconMsg> Roam<M> {
         if d <= 1e-9 || d > d0 {
             return [0.0, 0.0];
         }
-        let f = self.p.c * (self.p.l1 / d).powi(2);
+        let f = virtual_force::magnitude(d, d0, &self.force);
+        // Direction times magnitude in this order (not the kernel's `repulsion`, which
+        // divides first): roam's recordings depend on the rounding of these bits.
         [f * dx / d, f * dy / d]
     }
 }

@@ -56,9 +56,9 @@
 //! acceptance if the fitness improved, one heading when an escape starts, then (unless
 //! escaping) β, the walk decision and, if walking, two for ε.
 
-use crate::search::geometry::{clamp_norm, v2, Vec2};
 use rand::Rng;
 use serde::{Deserialize, Serialize};
+use swarm::geometry::{clamp_norm, Vec2};
 
 /// Tunables of the bat rule. The search paper gives none of them and ARBA's own values are not
 /// available here: every one is an assumption (the scenario file lists them under
@@ -193,7 +193,7 @@ impl Bat {
             best: f64::NEG_INFINITY,
             stall: 0,
             escape_left: 0,
-            escape_dir: v2(0.0, 0.0),
+            escape_dir: Vec2::new(0.0, 0.0),
         }
     }
 }
@@ -227,7 +227,7 @@ pub fn desired_velocity(
     // Escape from a local optimum: a random heading for a few ticks, loud again afterwards.
     if bat.escape_left == 0 && p.stall_ticks > 0 && bat.stall >= p.stall_ticks {
         let a = rng.gen_range(-std::f64::consts::PI..std::f64::consts::PI);
-        bat.escape_dir = v2(a.cos(), a.sin());
+        bat.escape_dir = Vec2::new(a.cos(), a.sin());
         bat.escape_left = p.escape_ticks;
         bat.stall = 0;
         bat.loudness = p.loudness_initial;
@@ -244,7 +244,7 @@ pub fn desired_velocity(
     // Local random walk around X* (assumption 4) when rand > r_i.
     if rng.gen::<f64>() > bat.pulse_rate {
         let r = p.local_walk * bat.loudness * p.v_max;
-        let u = v2(rng.gen_range(-1.0..=1.0), rng.gen_range(-1.0..=1.0));
+        let u = Vec2::new(rng.gen_range(-1.0..=1.0), rng.gen_range(-1.0..=1.0));
         v = best + u * r - position;
     }
     clamp_norm(v, p.v_max)
@@ -265,10 +265,12 @@ mod tests {
     /// target in an empty field.
     fn run(seed: u64, ticks: usize) -> (Vec<Vec2>, Vec2) {
         let p = Params::default();
-        let target = v2(300.0, 200.0);
+        let target = Vec2::new(300.0, 200.0);
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
-        let mut xs: Vec<Vec2> = (0..5).map(|i| v2(200.0 + 10.0 * i as f64, 120.0)).collect();
-        let mut vs = [v2(0.0, 0.0); 5];
+        let mut xs: Vec<Vec2> = (0..5)
+            .map(|i| Vec2::new(200.0 + 10.0 * i as f64, 120.0))
+            .collect();
+        let mut vs = [Vec2::new(0.0, 0.0); 5];
         let mut bats: Vec<Bat> = (0..5).map(|_| Bat::new(&p)).collect();
         let mut best = xs[0];
         for _ in 0..ticks {
@@ -317,12 +319,12 @@ mod tests {
         let mut bat = Bat::new(&p);
         let mut rng = ChaCha8Rng::seed_from_u64(3);
         for k in 0..30 {
-            let x = v2(k as f64, 0.0);
+            let x = Vec2::new(k as f64, 0.0);
             desired_velocity(
                 &mut bat,
                 x,
-                v2(0.0, 0.0),
-                v2(100.0, 0.0),
+                Vec2::new(0.0, 0.0),
+                Vec2::new(100.0, 0.0),
                 k as f64,
                 &p,
                 &mut rng,
@@ -337,10 +339,10 @@ mod tests {
         let p = Params::default();
         let mut bat = Bat::new(&p);
         let mut rng = ChaCha8Rng::seed_from_u64(4);
-        let x = v2(0.0, 0.0);
+        let x = Vec2::new(0.0, 0.0);
         let mut speeds = Vec::new();
         for _ in 0..=p.stall_ticks + 1 {
-            let v = desired_velocity(&mut bat, x, v2(0.0, 0.0), x, 1.0, &p, &mut rng);
+            let v = desired_velocity(&mut bat, x, Vec2::new(0.0, 0.0), x, 1.0, &p, &mut rng);
             speeds.push(v.norm());
         }
         // Tick 0 improves (from -inf); then stall_ticks ticks without improvement.
@@ -357,19 +359,19 @@ mod tests {
     fn ticks_to_l0(seed: u64, p: &Params) -> Option<usize> {
         use crate::search::calibration::{self, measure_signal};
         let sig = calibration::Params::default();
-        let target = v2(500.0, 500.0);
+        let target = Vec2::new(500.0, 500.0);
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
         let mut noise = ChaCha8Rng::seed_from_u64(seed + 1000);
         let mut xs: Vec<Vec2> = (0..6)
             .map(|_| {
                 let a: f64 = rng.gen_range(-0.6..0.6);
                 let d: f64 = rng.gen_range(70.0..95.0);
-                target + v2(a.cos(), a.sin()) * d
+                target + Vec2::new(a.cos(), a.sin()) * d
             })
             .collect();
-        let mut vs = [v2(0.0, 0.0); 6];
+        let mut vs = [Vec2::new(0.0, 0.0); 6];
         let mut bats: Vec<Bat> = (0..6).map(|_| Bat::new(p)).collect();
-        let mut pbs: Vec<(Vec2, f64)> = vec![(v2(0.0, 0.0), f64::NEG_INFINITY); 6];
+        let mut pbs: Vec<(Vec2, f64)> = vec![(Vec2::new(0.0, 0.0), f64::NEG_INFINITY); 6];
         for tick in 0..400 {
             if xs.iter().any(|x| (x - target).norm() < 5.0) {
                 return Some(tick);
@@ -425,9 +427,9 @@ mod tests {
             let (a, r) = (bat.loudness, bat.pulse_rate);
             desired_velocity(
                 &mut bat,
-                v2(0.0, 0.0),
-                v2(0.0, 0.0),
-                v2(50.0, 0.0),
+                Vec2::new(0.0, 0.0),
+                Vec2::new(0.0, 0.0),
+                Vec2::new(50.0, 0.0),
                 fitness,
                 &p,
                 &mut rng,
@@ -456,9 +458,9 @@ mod tests {
         let mut rng = ChaCha8Rng::seed_from_u64(5);
         let mut bat = Bat::new(&p);
         for k in 0..2000 {
-            let x = v2(rng.gen_range(-1e3..1e3), rng.gen_range(-1e3..1e3));
-            let v = v2(rng.gen_range(-1e2..1e2), rng.gen_range(-1e2..1e2));
-            let best = v2(rng.gen_range(-1e3..1e3), rng.gen_range(-1e3..1e3));
+            let x = Vec2::new(rng.gen_range(-1e3..1e3), rng.gen_range(-1e3..1e3));
+            let v = Vec2::new(rng.gen_range(-1e2..1e2), rng.gen_range(-1e2..1e2));
+            let best = Vec2::new(rng.gen_range(-1e3..1e3), rng.gen_range(-1e3..1e3));
             let out = desired_velocity(&mut bat, x, v, best, (k % 7) as f64, &p, &mut rng);
             assert!(out.norm() <= p.v_max + 1e-9, "{out:?}");
         }
@@ -472,13 +474,13 @@ mod tests {
             local_walk: 0.2,
             ..Params::default()
         };
-        let best = v2(100.0, 100.0);
-        let x = v2(103.0, 100.0);
+        let best = Vec2::new(100.0, 100.0);
+        let x = Vec2::new(103.0, 100.0);
         for seed in 0..50 {
             let mut bat = Bat::new(&p);
             bat.best = 10.0; // no improvement: A_i and r_i stay as they are
             let mut rng = ChaCha8Rng::seed_from_u64(seed);
-            let v = desired_velocity(&mut bat, x, v2(9.0, 9.0), best, 1.0, &p, &mut rng);
+            let v = desired_velocity(&mut bat, x, Vec2::new(9.0, 9.0), best, 1.0, &p, &mut rng);
             let aim = x + v - best;
             let half = p.local_walk * p.loudness_initial * p.v_max;
             assert!(

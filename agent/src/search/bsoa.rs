@@ -6,13 +6,13 @@
 //! points, and the rotation-sense flag SF of the previous step. Output: the
 //! velocity V_i(t+1) and the new SF.
 
-use crate::search::boundary::{self, Scan};
-use crate::search::geometry::{
-    angle_between, angle_of, blocked_at, cross, rotate, unit_from_angle, wrap_angle, Vec2,
-};
-use crate::search::virtual_force;
+use crate::kernels::boundary::{self, Scan};
+use crate::kernels::nearest::TwoNearest;
+use crate::kernels::obstacles::blocked_at;
+use crate::kernels::virtual_force;
 use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;
+use swarm::geometry::{angle_between, angle_of, cross, rotate, unit_from_angle, wrap_angle, Vec2};
 
 /// SF, the avoidance flag of Table 2 / eq. (22).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -155,10 +155,10 @@ pub fn obstacle_ahead(x: &Vec2, v_if: &Vec2, pts: &[Vec2], tol: f64, half_width:
         // (A zero v_if makes u NaN: nothing is ruled out.)
         let outside = cone.is_some_and(|t| {
             let along = u.dot(&r);
-            along <= 0.0 || cross(&u, &r).abs() > along * t
+            along <= 0.0 || cross(u, r).abs() > along * t
         });
         (!outside && wrap_angle(heading - angle_of(&r)).abs() < tol)
-            || (r.dot(&u) > 0.0 && cross(&u, &r).abs() < half_width)
+            || (r.dot(&u) > 0.0 && cross(u, r).abs() < half_width)
     })
 }
 
@@ -166,7 +166,7 @@ pub fn obstacle_ahead(x: &Vec2, v_if: &Vec2, pts: &[Vec2], tol: f64, half_width:
 /// obstacle point lies on: obstacle on the left ⇔ the robot is turning
 /// clockwise around it (SF = 1), on the right ⇔ counter-clockwise (SF = 2).
 fn side_sense(t: &Vec2, to_q1: &Vec2) -> Sense {
-    Sense::from_rotation(-cross(t, to_q1))
+    Sense::from_rotation(-cross(*t, *to_q1))
 }
 
 /// Case 1, eqs. (16)-(17) in reading (B) of spec §2.8 (erratum §6 item 2):
@@ -326,16 +326,11 @@ pub fn avoid_within(
     let points = obstacle_points.into_iter();
     let mut pts: Vec<Vec2> = Vec::with_capacity(points.size_hint().0);
     let mut dists: Vec<f64> = Vec::with_capacity(points.size_hint().0);
-    let mut nearest = [(f64::INFINITY, usize::MAX); 2];
+    let mut nearest = TwoNearest::default();
     for b in points {
         let d = (b - x).norm();
         if d < range && d > 1e-9 && d < limit {
-            let k = pts.len();
-            if d < nearest[0].0 {
-                nearest = [(d, k), nearest[0]];
-            } else if d < nearest[1].0 {
-                nearest[1] = (d, k);
-            }
+            nearest.offer(d, pts.len());
             pts.push(b);
             dists.push(d);
         }
@@ -343,13 +338,14 @@ pub fn avoid_within(
     if pts.is_empty() || v_if.norm() <= 1e-12 {
         return free; // Fig. 3(a) case 1 (or no desired motion)
     }
-    to_front(&mut pts, nearest[0].1, nearest[1].1);
-    to_front(&mut dists, nearest[0].1, nearest[1].1);
+    let (q1_dist, i1) = nearest.first().expect("a point in range");
+    let i2 = nearest.second().map_or(usize::MAX, |q2| q2.1);
+    to_front(&mut pts, i1, i2);
+    to_front(&mut dists, i1, i2);
     if !obstacle_ahead(x, v_if, &pts, p.heading_tolerance, p.corridor_half_width) {
         return free; // Fig. 3(a) case 2; Table 2 line 16
     }
     let heading = angle_of(v_if);
-    let q1_dist = nearest[0].0;
 
     let forced = |case: Case| {
         let (a, sense) = forced_heading(x, v_if, &pts, prev, p); // eqs. (16)-(17)
@@ -381,8 +377,8 @@ pub fn avoid_within(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::search::geometry::{sample_polygon_boundary, v2};
     use crate::search::testkit::{in_box, rect, run_to_goal, u_shape};
+    use swarm::geometry::sample_boundary;
 
     fn bsoa_runner(p: Params) -> impl FnMut(&Vec2, &Vec2, &[Vec2]) -> Vec2 {
         let mut sf = Sense::None;
@@ -396,19 +392,37 @@ mod tests {
     #[test]
     fn free_when_nothing_ahead() {
         let p = Params::default();
-        let wall = sample_polygon_boundary(&rect(50.0, -40.0, 54.0, 40.0), 2.0);
+        let wall = sample_boundary(&rect(50.0, -40.0, 54.0, 40.0), 2.0);
         // heading north, wall to the east: no avoidance
-        let o = avoid(&v2(0.0, 0.0), &v2(0.0, 7.0), &wall, Sense::Clockwise, &p);
+        let o = avoid(
+            &Vec2::new(0.0, 0.0),
+            &Vec2::new(0.0, 7.0),
+            &wall,
+            Sense::Clockwise,
+            &p,
+        );
         assert_eq!(
             (o.case, o.sense, o.velocity),
-            (Case::Free, Sense::None, v2(0.0, 7.0))
+            (Case::Free, Sense::None, Vec2::new(0.0, 7.0))
         );
         // heading east into it: avoidance at full speed
-        let o = avoid(&v2(0.0, 0.0), &v2(7.0, 0.0), &wall, Sense::None, &p);
+        let o = avoid(
+            &Vec2::new(0.0, 0.0),
+            &Vec2::new(7.0, 0.0),
+            &wall,
+            Sense::None,
+            &p,
+        );
         assert_eq!(o.case, Case::Continuous);
         assert!((o.velocity.norm() - 10.0).abs() < 1e-9);
         // out of range (≥ 100): ignored
-        let o = avoid(&v2(-60.0, 0.0), &v2(7.0, 0.0), &wall, Sense::None, &p);
+        let o = avoid(
+            &Vec2::new(-60.0, 0.0),
+            &Vec2::new(7.0, 0.0),
+            &wall,
+            Sense::None,
+            &p,
+        );
         assert_eq!(o.case, Case::Free);
     }
 
@@ -423,29 +437,38 @@ mod tests {
     fn continuous_case_heads_for_closer_boundary_point_and_keeps_sense() {
         let p = Params::default();
         // Wall ahead (east), longer to the north: the south end is closer in angle.
-        let wall = sample_polygon_boundary(&rect(40.0, -20.0, 44.0, 60.0), 2.0);
-        let x = v2(0.0, 0.0);
-        let o = avoid(&x, &v2(10.0, 0.0), &wall, Sense::None, &p);
+        let wall = sample_boundary(&rect(40.0, -20.0, 44.0, 60.0), 2.0);
+        let x = Vec2::new(0.0, 0.0);
+        let o = avoid(&x, &Vec2::new(10.0, 0.0), &wall, Sense::None, &p);
         assert_eq!(o.case, Case::Continuous);
         assert_eq!(o.sense, Sense::Clockwise);
-        let want = angle_of(&(v2(40.0, -20.0) - x));
+        let want = angle_of(&(Vec2::new(40.0, -20.0) - x));
         assert!((angle_of(&o.velocity) - want).abs() < 1e-9);
         // With SF = 2 (counter-clockwise last step) it keeps turning that way.
-        let o = avoid(&x, &v2(10.0, 0.0), &wall, Sense::CounterClockwise, &p);
+        let o = avoid(
+            &x,
+            &Vec2::new(10.0, 0.0),
+            &wall,
+            Sense::CounterClockwise,
+            &p,
+        );
         assert_eq!(o.sense, Sense::CounterClockwise);
-        let want = angle_of(&(v2(40.0, 60.0) - x));
+        let want = angle_of(&(Vec2::new(40.0, 60.0) - x));
         assert!((angle_of(&o.velocity) - want).abs() < 1e-9);
     }
 
     #[test]
     fn discontinuous_case_heads_into_the_gap_leaning_to_the_nearer_edge() {
         let p = Params::default();
-        let mut pts = sample_polygon_boundary(&rect(30.0, -50.0, 34.0, 2.0), 2.0);
-        pts.extend(sample_polygon_boundary(&rect(50.0, 14.0, 54.0, 60.0), 2.0));
-        let x = v2(0.0, 0.0);
-        let o = avoid(&x, &v2(10.0, 0.0), &pts, Sense::None, &p);
+        let mut pts = sample_boundary(&rect(30.0, -50.0, 34.0, 2.0), 2.0);
+        pts.extend(sample_boundary(&rect(50.0, 14.0, 54.0, 60.0), 2.0));
+        let x = Vec2::new(0.0, 0.0);
+        let o = avoid(&x, &Vec2::new(10.0, 0.0), &pts, Sense::None, &p);
         assert_eq!(o.case, Case::Discontinuous);
-        let (lo, hi) = (angle_of(&v2(30.0, 2.0)), angle_of(&v2(54.0, 14.0)));
+        let (lo, hi) = (
+            angle_of(&Vec2::new(30.0, 2.0)),
+            angle_of(&Vec2::new(54.0, 14.0)),
+        );
         let a = angle_of(&o.velocity);
         assert!(a > lo && a < hi, "{lo} < {a} < {hi}");
         // leans toward the nearer edge (34,2): below the angular midpoint
@@ -455,10 +478,10 @@ mod tests {
     #[test]
     fn forced_case_slides_along_the_wall() {
         let p = Params::default();
-        let wall = sample_polygon_boundary(&rect(5.0, -50.0, 9.0, 50.0), 2.0);
-        let x = v2(0.0, 0.0);
+        let wall = sample_boundary(&rect(5.0, -50.0, 9.0, 50.0), 2.0);
+        let x = Vec2::new(0.0, 0.0);
         // desired heading east-north-east: slide north (closer to V_if)
-        let o = avoid(&x, &v2(10.0, 1.0), &wall, Sense::None, &p);
+        let o = avoid(&x, &Vec2::new(10.0, 1.0), &wall, Sense::None, &p);
         assert_eq!(o.case, Case::Forced);
         assert!(
             o.velocity.x.abs() < 1e-9 && o.velocity.y > 9.99,
@@ -467,23 +490,26 @@ mod tests {
         );
         assert_eq!(o.sense, Sense::CounterClockwise);
         // after a clockwise step it keeps clockwise: slide south
-        let o = avoid(&x, &v2(10.0, 1.0), &wall, Sense::Clockwise, &p);
+        let o = avoid(&x, &Vec2::new(10.0, 1.0), &wall, Sense::Clockwise, &p);
         assert!(o.velocity.y < -9.99, "{:?}", o.velocity);
     }
 
     #[test]
     fn forced_slide_turns_at_a_concave_corner() {
-        use crate::search::geometry::segment_hits_polygon;
+        use swarm::geometry::segment_hits_polygon;
         // Floor y∈[0,4] and a wall x∈[96,100]; robot 3 above the floor,
         // 6 short of the wall, desired heading into the floor.
         let polys = [rect(0.0, 0.0, 100.0, 4.0), rect(96.0, 0.0, 100.0, 100.0)];
-        let pts: Vec<Vec2> = polys
-            .iter()
-            .flat_map(|q| sample_polygon_boundary(q, 2.0))
-            .collect();
-        let x = v2(90.0, 7.0);
-        let hits = |v: &Vec2| polys.iter().any(|q| segment_hits_polygon(&x, &(x + v), q));
-        let o = avoid(&x, &v2(10.0, -2.0), &pts, Sense::None, &Params::default());
+        let pts: Vec<Vec2> = polys.iter().flat_map(|q| sample_boundary(q, 2.0)).collect();
+        let x = Vec2::new(90.0, 7.0);
+        let hits = |v: &Vec2| polys.iter().any(|q| segment_hits_polygon(x, x + v, q));
+        let o = avoid(
+            &x,
+            &Vec2::new(10.0, -2.0),
+            &pts,
+            Sense::None,
+            &Params::default(),
+        );
         assert_eq!(o.case, Case::Forced);
         assert!(!hits(&o.velocity), "{:?}", o.velocity);
         // Without the look-ahead the literal slide runs into the wall.
@@ -491,7 +517,7 @@ mod tests {
             forced_lookahead: false,
             ..Params::default()
         };
-        let o = avoid(&x, &v2(10.0, -2.0), &pts, Sense::None, &literal);
+        let o = avoid(&x, &Vec2::new(10.0, -2.0), &pts, Sense::None, &literal);
         assert!(hits(&o.velocity), "{:?}", o.velocity);
     }
 
@@ -501,16 +527,24 @@ mod tests {
         // spaced 2 apart: the 0.1 rad cone alone would miss both
         // (atan(1/3) ≈ 0.32 rad); the corridor test must catch it.
         let p = Params::default();
-        let wall: Vec<Vec2> = (-20..=20).map(|k| v2(3.0, 2.0 * k as f64 + 1.0)).collect();
-        let o = avoid(&v2(0.0, 0.0), &v2(10.0, 0.0), &wall, Sense::None, &p);
+        let wall: Vec<Vec2> = (-20..=20)
+            .map(|k| Vec2::new(3.0, 2.0 * k as f64 + 1.0))
+            .collect();
+        let o = avoid(
+            &Vec2::new(0.0, 0.0),
+            &Vec2::new(10.0, 0.0),
+            &wall,
+            Sense::None,
+            &p,
+        );
         assert_ne!(o.case, Case::Free);
         let cone_only = Params {
             corridor_half_width: 0.0,
             ..Params::default()
         };
         let o = avoid(
-            &v2(0.0, 0.0),
-            &v2(10.0, 0.0),
+            &Vec2::new(0.0, 0.0),
+            &Vec2::new(10.0, 0.0),
             &wall,
             Sense::None,
             &cone_only,
@@ -527,9 +561,9 @@ mod tests {
     fn escapes_u_trap_without_entering_it() {
         let u = trap();
         for (start, goal) in [
-            (v2(500.0, 330.0), v2(500.0, 700.0)),
-            (v2(497.0, 300.0), v2(505.0, 700.0)),
-            (v2(530.0, 320.0), v2(470.0, 680.0)),
+            (Vec2::new(500.0, 330.0), Vec2::new(500.0, 700.0)),
+            (Vec2::new(497.0, 300.0), Vec2::new(505.0, 700.0)),
+            (Vec2::new(530.0, 320.0), Vec2::new(470.0, 680.0)),
         ] {
             let tr = run_to_goal(
                 start,
@@ -557,8 +591,8 @@ mod tests {
     #[test]
     fn u_fixture_is_a_real_trap_without_avoidance() {
         let tr = run_to_goal(
-            v2(500.0, 330.0),
-            v2(500.0, 700.0),
+            Vec2::new(500.0, 330.0),
+            Vec2::new(500.0, 700.0),
             &[trap()],
             150,
             100.0,
@@ -575,8 +609,8 @@ mod tests {
     fn escapes_from_inside_the_u() {
         let u = trap();
         let tr = run_to_goal(
-            v2(500.0, 480.0),
-            v2(500.0, 700.0),
+            Vec2::new(500.0, 480.0),
+            Vec2::new(500.0, 700.0),
             &[u],
             200,
             100.0,
@@ -590,8 +624,8 @@ mod tests {
     fn passes_convex_box_and_gap() {
         let boxes = vec![rect(470.0, 450.0, 530.0, 480.0)];
         let tr = run_to_goal(
-            v2(500.0, 350.0),
-            v2(500.0, 600.0),
+            Vec2::new(500.0, 350.0),
+            Vec2::new(500.0, 600.0),
             &boxes,
             100,
             100.0,
@@ -605,8 +639,8 @@ mod tests {
             rect(506.0, 450.0, 580.0, 470.0),
         ];
         let tr = run_to_goal(
-            v2(480.0, 350.0),
-            v2(510.0, 600.0),
+            Vec2::new(480.0, 350.0),
+            Vec2::new(510.0, 600.0),
             &blocks,
             100,
             100.0,
@@ -621,19 +655,16 @@ mod tests {
         // The Sense frame gives the points as a set: any order must give the same step (but for
         // exact ties of the two nearest, which the generic positions below avoid).
         let p = Params::default();
-        let mut pts = sample_polygon_boundary(&u_shape(40.0, -30.0, 60.0, 60.0, 4.0), 2.0);
-        pts.extend(sample_polygon_boundary(
-            &rect(-50.0, 30.0, -20.0, 34.0),
-            2.0,
-        ));
+        let mut pts = sample_boundary(&u_shape(40.0, -30.0, 60.0, 60.0, 4.0), 2.0);
+        pts.extend(sample_boundary(&rect(-50.0, 30.0, -20.0, 34.0), 2.0));
         let mut reordered = pts.clone();
         reordered.reverse();
         reordered.rotate_left(17);
         let mut cases = std::collections::BTreeSet::new();
         for i in 0..400 {
             let a = i as f64 * 0.37 + 0.0123;
-            let x = v2(30.0 * (a * 0.7).cos(), 25.0 * (a * 1.3).sin());
-            let v_if = v2(a.cos(), a.sin()) * 10.0;
+            let x = Vec2::new(30.0 * (a * 0.7).cos(), 25.0 * (a * 1.3).sin());
+            let v_if = Vec2::new(a.cos(), a.sin()) * 10.0;
             for prev in [Sense::None, Sense::Clockwise, Sense::CounterClockwise] {
                 let o = avoid(&x, &v_if, &pts, prev, &p);
                 let r = avoid(&x, &v_if, &reordered, prev, &p);

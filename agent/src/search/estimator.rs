@@ -7,9 +7,9 @@
 //! deterministic multi-start Nelder–Mead is used instead (spec §5 item 15),
 //! seeded on the circle of the strongest detector, which the target lies on.
 
-use crate::search::geometry::{v2, Vec2};
 use serde::{Deserialize, Serialize};
 use std::f64::consts::TAU;
+use swarm::geometry::Vec2;
 
 /// Residual norm of the objective.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -111,8 +111,8 @@ pub fn nelder_mead<F: Fn(&Vec2) -> f64>(
 ) -> (Vec2, f64) {
     let mut s = [
         (x0, f(&x0)),
-        (x0 + v2(step, 0.0), f(&(x0 + v2(step, 0.0)))),
-        (x0 + v2(0.0, step), f(&(x0 + v2(0.0, step)))),
+        (x0 + Vec2::new(step, 0.0), f(&(x0 + Vec2::new(step, 0.0)))),
+        (x0 + Vec2::new(0.0, step), f(&(x0 + Vec2::new(0.0, step)))),
     ];
     for _ in 0..max_iter {
         sort3(&mut s);
@@ -188,7 +188,7 @@ pub fn estimate(dets: &[Detection], p: &Params) -> Option<Estimate> {
     let mut starts: Vec<Vec2> = (0..p.n_starts)
         .map(|k| {
             let a = TAU * k as f64 / p.n_starts as f64;
-            strongest.position + v2(a.cos(), a.sin()) * strongest.distance.max(0.0)
+            strongest.position + Vec2::new(a.cos(), a.sin()) * strongest.distance.max(0.0)
         })
         .collect();
     starts.push(used.iter().map(|d| d.position).sum::<Vec2>() / used.len() as f64);
@@ -244,22 +244,30 @@ mod tests {
     fn recovers_noise_free_target_within_one_unit() {
         let cases = [
             (
-                v2(500.0, 520.0),
-                vec![v2(450.0, 480.0), v2(560.0, 500.0), v2(510.0, 600.0)],
+                Vec2::new(500.0, 520.0),
+                vec![
+                    Vec2::new(450.0, 480.0),
+                    Vec2::new(560.0, 500.0),
+                    Vec2::new(510.0, 600.0),
+                ],
             ),
             (
-                v2(0.0, 0.0),
+                Vec2::new(0.0, 0.0),
                 vec![
-                    v2(-60.0, 10.0),
-                    v2(30.0, 70.0),
-                    v2(40.0, -50.0),
-                    v2(5.0, 5.0),
+                    Vec2::new(-60.0, 10.0),
+                    Vec2::new(30.0, 70.0),
+                    Vec2::new(40.0, -50.0),
+                    Vec2::new(5.0, 5.0),
                 ],
             ),
             // target outside the detectors' triangle
             (
-                v2(300.0, 300.0),
-                vec![v2(220.0, 250.0), v2(240.0, 230.0), v2(215.0, 215.0)],
+                Vec2::new(300.0, 300.0),
+                vec![
+                    Vec2::new(220.0, 250.0),
+                    Vec2::new(240.0, 230.0),
+                    Vec2::new(215.0, 215.0),
+                ],
             ),
         ];
         for p in [
@@ -282,10 +290,14 @@ mod tests {
     fn nearly_collinear_detectors_pick_the_strongest_side() {
         // Detectors on a line; the mirror image of the target across the line
         // fits equally well. Any estimate must be one of the two mirror points.
-        let target = v2(50.0, 20.0);
-        let robots = [v2(0.0, 0.0), v2(40.0, 0.0), v2(90.0, 0.0)];
+        let target = Vec2::new(50.0, 20.0);
+        let robots = [
+            Vec2::new(0.0, 0.0),
+            Vec2::new(40.0, 0.0),
+            Vec2::new(90.0, 0.0),
+        ];
         let e = estimate(&exact(target, &robots), &Params::default()).unwrap();
-        let mirror = v2(50.0, -20.0);
+        let mirror = Vec2::new(50.0, -20.0);
         let err = (e.position - target)
             .norm()
             .min((e.position - mirror).norm());
@@ -297,12 +309,12 @@ mod tests {
         let cp = calibration::Params::default();
         let mut rng = ChaCha8Rng::seed_from_u64(11);
         let cal = Calibration::build(&cp, &mut rng);
-        let target = v2(400.0, 400.0);
+        let target = Vec2::new(400.0, 400.0);
         let robots = [
-            v2(380.0, 390.0),
-            v2(415.0, 385.0),
-            v2(405.0, 420.0),
-            v2(370.0, 420.0),
+            Vec2::new(380.0, 390.0),
+            Vec2::new(415.0, 385.0),
+            Vec2::new(405.0, 420.0),
+            Vec2::new(370.0, 420.0),
         ];
         let dets: Vec<Detection> = robots
             .iter()
@@ -323,15 +335,22 @@ mod tests {
 
     #[test]
     fn too_few_detectors_gives_none() {
-        let d = exact(v2(0.0, 0.0), &[v2(1.0, 1.0), v2(5.0, 0.0)]);
+        let d = exact(
+            Vec2::new(0.0, 0.0),
+            &[Vec2::new(1.0, 1.0), Vec2::new(5.0, 0.0)],
+        );
         assert!(estimate(&d, &Params::default()).is_none());
     }
 
     #[test]
     fn deterministic() {
         let d = exact(
-            v2(12.3, 45.6),
-            &[v2(0.0, 0.0), v2(30.0, 10.0), v2(10.0, 70.0)],
+            Vec2::new(12.3, 45.6),
+            &[
+                Vec2::new(0.0, 0.0),
+                Vec2::new(30.0, 10.0),
+                Vec2::new(10.0, 70.0),
+            ],
         );
         let a = estimate(&d, &Params::default()).unwrap();
         let b = estimate(&d, &Params::default()).unwrap();
@@ -345,7 +364,11 @@ mod tests {
         for a in vals {
             for b in vals {
                 for c in vals {
-                    let mut s = [(v2(0.0, 0.0), a), (v2(1.0, 0.0), b), (v2(2.0, 0.0), c)];
+                    let mut s = [
+                        (Vec2::new(0.0, 0.0), a),
+                        (Vec2::new(1.0, 0.0), b),
+                        (Vec2::new(2.0, 0.0), c),
+                    ];
                     let mut want = s;
                     want.sort_by(|x, y| x.1.total_cmp(&y.1));
                     sort3(&mut s);
@@ -358,8 +381,8 @@ mod tests {
     #[test]
     fn nelder_mead_minimises_a_quadratic() {
         let f = |x: &Vec2| (x.x - 3.0).powi(2) + 10.0 * (x.y + 1.0).powi(2);
-        let (x, fx) = nelder_mead(&f, v2(0.0, 0.0), 1.0, 500, 1e-14);
-        assert!((x - v2(3.0, -1.0)).norm() < 1e-5 && fx < 1e-9);
+        let (x, fx) = nelder_mead(&f, Vec2::new(0.0, 0.0), 1.0, 500, 1e-14);
+        assert!((x - Vec2::new(3.0, -1.0)).norm() < 1e-5 && fx < 1e-9);
     }
 
     /// Random detection sets like a subgroup's: 3-12 detectors within L_T of a target,
@@ -369,14 +392,14 @@ mod tests {
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
         (0..n)
             .map(|_| {
-                let t = v2(rng.gen_range(0.0..1000.0), rng.gen_range(0.0..1000.0));
+                let t = Vec2::new(rng.gen_range(0.0..1000.0), rng.gen_range(0.0..1000.0));
                 let k = rng.gen_range(3..=12);
                 (0..k)
                     .map(|_| {
                         let a: f64 = rng.gen_range(0.0..TAU);
                         let r: f64 = rng.gen_range(3.0..100.0);
                         Detection {
-                            position: t + v2(a.cos(), a.sin()) * r,
+                            position: t + Vec2::new(a.cos(), a.sin()) * r,
                             distance: (r * (1.0 + rng.gen_range(-0.15..0.15))).max(1.0),
                             signal: 1e5 / (r * r),
                         }

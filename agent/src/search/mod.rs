@@ -4,19 +4,17 @@
 //! where the paper is silent.
 
 pub mod arba;
-pub mod boundary;
 pub mod bsoa;
 pub mod calibration;
 pub mod estimator;
-pub mod geometry;
 pub mod subgroup;
 pub mod svf;
 pub mod tpepso;
-pub mod virtual_force;
 
 #[cfg(test)]
 mod testkit;
 
+use crate::kernels::virtual_force;
 use serde::{Deserialize, Serialize};
 
 /// Every kernel's tunables in one place (each section defaults to the

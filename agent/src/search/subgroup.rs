@@ -2,10 +2,10 @@
 //! target choice (eqs. 2-3), Type II attachment, and the closed-loop
 //! adjustment that caps a subgroup at g_max with Table 1's priority.
 
-use crate::search::geometry::Vec2;
 use rand::Rng;
 use serde::{Deserialize, Serialize};
 use std::cmp::Ordering;
+use swarm::geometry::Vec2;
 
 /// Target identifier (targets are told apart by frequency, paper §2.1).
 pub type TargetId = usize;
@@ -173,7 +173,6 @@ pub fn is_kept(members: &[Member], i: usize, p: &Params) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::search::geometry::v2;
     use rand::SeedableRng;
     use rand_chacha::ChaCha8Rng;
 
@@ -273,19 +272,19 @@ mod tests {
     fn type_ii_attaches_to_nearest_type_i_within_range() {
         let p = Params::default();
         let ti = [
-            (8, v2(0.0, 0.0)),
-            (79, v2(100.0, 0.0)),
-            (3, v2(1000.0, 0.0)),
+            (8, Vec2::new(0.0, 0.0)),
+            (79, Vec2::new(100.0, 0.0)),
+            (3, Vec2::new(1000.0, 0.0)),
         ];
         assert_eq!(
-            communicating_robot(&v2(60.0, 0.0), &ti, &p),
+            communicating_robot(&Vec2::new(60.0, 0.0), &ti, &p),
             Some((79, 40.0))
         );
         assert_eq!(
-            communicating_robot(&v2(50.0, 0.0), &ti, &p),
+            communicating_robot(&Vec2::new(50.0, 0.0), &ti, &p),
             Some((8, 50.0))
         );
-        assert_eq!(communicating_robot(&v2(-400.0, 0.0), &ti, &p), None);
+        assert_eq!(communicating_robot(&Vec2::new(-400.0, 0.0), &ti, &p), None);
     }
 
     #[test]

@@ -13,10 +13,11 @@
 //!   attraction) and away from it when nearer, by at most `max_correction`;
 //! * release when nothing lies in the desired direction within L_B.
 
+use crate::kernels::obstacles::blocked_at;
 use crate::search::bsoa::obstacle_ahead;
-use crate::search::geometry::{angle_between, blocked_at, cross, rotate, Vec2};
 use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;
+use swarm::geometry::{angle_between, cross, rotate, Vec2};
 
 /// Wall-following state carried between steps.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -118,7 +119,7 @@ pub fn avoid(x: &Vec2, v_if: &Vec2, obstacle_points: &[Vec2], state: Follow, p: 
         _ => Vec2::new(-to_q1.y, to_q1.x),
     };
     let wall_side = |t: &Vec2| {
-        if cross(t, &to_q1) > 0.0 {
+        if cross(*t, to_q1) > 0.0 {
             Follow::WallOnLeft
         } else {
             Follow::WallOnRight
@@ -171,8 +172,8 @@ pub fn avoid(x: &Vec2, v_if: &Vec2, obstacle_points: &[Vec2], state: Follow, p: 
 mod tests {
     use super::*;
     use crate::search::bsoa;
-    use crate::search::geometry::{sample_polygon_boundary, v2};
     use crate::search::testkit::{rect, run_to_goal, u_shape};
+    use swarm::geometry::sample_boundary;
 
     fn svf_runner(p: Params) -> impl FnMut(&Vec2, &Vec2, &[Vec2]) -> Vec2 {
         let mut st = Follow::None;
@@ -190,14 +191,32 @@ mod tests {
     #[test]
     fn engages_only_when_close_and_blocked() {
         let p = Params::default();
-        let wall = sample_polygon_boundary(&rect(50.0, -40.0, 54.0, 40.0), 2.0);
-        let o = avoid(&v2(0.0, 0.0), &v2(10.0, 0.0), &wall, Follow::None, &p);
-        assert_eq!((o.follow, o.velocity), (Follow::None, v2(10.0, 0.0)));
-        let o = avoid(&v2(35.0, 5.0), &v2(10.0, 0.0), &wall, Follow::None, &p);
+        let wall = sample_boundary(&rect(50.0, -40.0, 54.0, 40.0), 2.0);
+        let o = avoid(
+            &Vec2::new(0.0, 0.0),
+            &Vec2::new(10.0, 0.0),
+            &wall,
+            Follow::None,
+            &p,
+        );
+        assert_eq!((o.follow, o.velocity), (Follow::None, Vec2::new(10.0, 0.0)));
+        let o = avoid(
+            &Vec2::new(35.0, 5.0),
+            &Vec2::new(10.0, 0.0),
+            &wall,
+            Follow::None,
+            &p,
+        );
         assert_ne!(o.follow, Follow::None);
         assert!((o.velocity.norm() - 10.0).abs() < 1e-9);
         // heading parallel to the wall: not engaged
-        let o = avoid(&v2(40.0, 0.0), &v2(0.0, 10.0), &wall, Follow::None, &p);
+        let o = avoid(
+            &Vec2::new(40.0, 0.0),
+            &Vec2::new(0.0, 10.0),
+            &wall,
+            Follow::None,
+            &p,
+        );
         assert_eq!(o.follow, Follow::None);
     }
 
@@ -205,13 +224,10 @@ mod tests {
     fn follows_a_long_wall_at_the_stand_off_and_keeps_its_side() {
         let p = Params::default();
         let polys = [rect(-500.0, 0.0, 500.0, 4.0)];
-        let pts: Vec<Vec2> = polys
-            .iter()
-            .flat_map(|q| sample_polygon_boundary(q, 2.0))
-            .collect();
+        let pts: Vec<Vec2> = polys.iter().flat_map(|q| sample_boundary(q, 2.0)).collect();
         // goal on the far side of the wall, slightly to the right
-        let goal = v2(40.0, 300.0);
-        let mut x = v2(0.0, -15.0);
+        let goal = Vec2::new(40.0, 300.0);
+        let mut x = Vec2::new(0.0, -15.0);
         let mut st = Follow::None;
         for _ in 0..30 {
             let v_if = (goal - x).normalize() * 10.0;
@@ -236,8 +252,8 @@ mod tests {
     fn goes_around_a_convex_box() {
         let boxes = vec![rect(470.0, 450.0, 530.0, 480.0)];
         let tr = run_to_goal(
-            v2(500.0, 350.0),
-            v2(500.0, 600.0),
+            Vec2::new(500.0, 350.0),
+            Vec2::new(500.0, 600.0),
             &boxes,
             100,
             100.0,
@@ -250,7 +266,7 @@ mod tests {
     #[test]
     fn gets_out_of_a_u_trap_but_with_a_longer_path_than_bsoa() {
         let u = vec![u_shape(440.0, 450.0, 120.0, 85.0, 15.0)];
-        let (start, goal) = (v2(500.0, 330.0), v2(500.0, 700.0));
+        let (start, goal) = (Vec2::new(500.0, 330.0), Vec2::new(500.0, 700.0));
         let tr = run_to_goal(start, goal, &u, 300, 100.0, svf_runner(Params::default()));
         assert_eq!(tr.crossed, None);
         assert!(tr.reached.is_some(), "stuck at {:?}", tr.path.last());

@@ -1,27 +1,32 @@
 //! Test fixtures shared by the obstacle-avoidance tests: obstacle polygons,
 //! their sampled boundary points, and a goal-seeking stepping loop.
 
-use crate::search::geometry::{sample_polygon_boundary, segment_hits_polygon, v2, Vec2};
+use swarm::geometry::{sample_boundary, segment_hits_polygon, Vec2};
 
 /// A U-shaped (non-convex) obstacle with its mouth facing down (-y).
 /// Outer box [x0, x0+w] × [y0, y0+h], walls `t` thick; the cavity is
 /// [x0+t, x0+w−t] × [y0, y0+h−t].
 pub fn u_shape(x0: f64, y0: f64, w: f64, h: f64, t: f64) -> Vec<Vec2> {
     vec![
-        v2(x0, y0),
-        v2(x0 + t, y0),
-        v2(x0 + t, y0 + h - t),
-        v2(x0 + w - t, y0 + h - t),
-        v2(x0 + w - t, y0),
-        v2(x0 + w, y0),
-        v2(x0 + w, y0 + h),
-        v2(x0, y0 + h),
+        Vec2::new(x0, y0),
+        Vec2::new(x0 + t, y0),
+        Vec2::new(x0 + t, y0 + h - t),
+        Vec2::new(x0 + w - t, y0 + h - t),
+        Vec2::new(x0 + w - t, y0),
+        Vec2::new(x0 + w, y0),
+        Vec2::new(x0 + w, y0 + h),
+        Vec2::new(x0, y0 + h),
     ]
 }
 
 /// Axis-aligned rectangle.
 pub fn rect(x0: f64, y0: f64, x1: f64, y1: f64) -> Vec<Vec2> {
-    vec![v2(x0, y0), v2(x1, y0), v2(x1, y1), v2(x0, y1)]
+    vec![
+        Vec2::new(x0, y0),
+        Vec2::new(x1, y0),
+        Vec2::new(x1, y1),
+        Vec2::new(x0, y1),
+    ]
 }
 
 /// Outcome of [`run_to_goal`].
@@ -45,10 +50,7 @@ pub fn run_to_goal<F: FnMut(&Vec2, &Vec2, &[Vec2]) -> Vec2>(
     sense_range: f64,
     mut avoid: F,
 ) -> Trace {
-    let pts: Vec<Vec2> = polys
-        .iter()
-        .flat_map(|p| sample_polygon_boundary(p, 2.0))
-        .collect();
+    let pts: Vec<Vec2> = polys.iter().flat_map(|p| sample_boundary(p, 2.0)).collect();
     let mut x = start;
     let mut tr = Trace {
         path: vec![x],
@@ -69,7 +71,7 @@ pub fn run_to_goal<F: FnMut(&Vec2, &Vec2, &[Vec2]) -> Vec2>(
         let v = avoid(&x, &v_if, &sensed);
         assert!(v.norm() <= 10.0 + 1e-9, "speed {} > V_max", v.norm());
         let nx = x + v;
-        if tr.crossed.is_none() && polys.iter().any(|p| segment_hits_polygon(&x, &nx, p)) {
+        if tr.crossed.is_none() && polys.iter().any(|p| segment_hits_polygon(x, nx, p)) {
             tr.crossed = Some(t);
         }
         x = nx;

@@ -5,9 +5,9 @@
 //!   V_if(t+1) = V_i(t) + α (V_ip(t+1) − V_i(t))
 //!   X_if(t+1) = X_i(t) + V_i(t+1)                                            (11)
 
-use crate::search::geometry::{clamp_norm, Vec2};
 use rand::Rng;
 use serde::{Deserialize, Serialize};
+use swarm::geometry::{clamp_norm, Vec2};
 
 /// Which cooperative-search rule to run.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -135,7 +135,6 @@ pub fn update_best(best: &mut Option<(Vec2, f64)>, position: Vec2, fitness: f64)
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::search::geometry::v2;
     use rand::SeedableRng;
     use rand_chacha::ChaCha8Rng;
 
@@ -149,7 +148,7 @@ mod tests {
         steps: usize,
         seed: u64,
     ) -> (Vec<f64>, Option<usize>) {
-        let target = v2(600.0, 600.0);
+        let target = Vec2::new(600.0, 600.0);
         let fitness = |x: &Vec2| 1e4 / (x - target).norm_squared().max(1e-12);
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
         let mut x: Vec<Vec2> = (0..6)
@@ -157,7 +156,7 @@ mod tests {
                 // a non-collinear blob ~100 from the target (with scalar r's a
                 // collinear swarm at rest stays on its line under EPSO)
                 let a = std::f64::consts::TAU * k as f64 / 6.0;
-                target + v2(-80.0, -60.0) + v2(a.cos(), a.sin()) * 15.0
+                target + Vec2::new(-80.0, -60.0) + Vec2::new(a.cos(), a.sin()) * 15.0
             })
             .collect();
         let mut v = [Vec2::zeros(); 6];
@@ -217,7 +216,7 @@ mod tests {
                 per_dimension_random,
                 ..Params::default()
             };
-            let (d, found) = run(&p, Variant::Tpepso, Some(v2(600.0, 600.0)), 400, 1);
+            let (d, found) = run(&p, Variant::Tpepso, Some(Vec2::new(600.0, 600.0)), 400, 1);
             assert!(found.is_some_and(|t| t < 150), "found at {found:?}");
             for di in &d {
                 assert!(*di < 1.0, "final distances {d:?}");
@@ -234,9 +233,21 @@ mod tests {
         let steps = 600;
         let (mut t_tp, mut t_ep) = (0usize, 0usize);
         for seed in 0..10 {
-            let (d, a) = run(&p, Variant::Tpepso, Some(v2(600.0, 600.0)), steps, seed);
+            let (d, a) = run(
+                &p,
+                Variant::Tpepso,
+                Some(Vec2::new(600.0, 600.0)),
+                steps,
+                seed,
+            );
             assert!(d.iter().all(|x| *x < 1.0), "seed {seed}: {d:?}");
-            let (_, b) = run(&p, Variant::Epso, Some(v2(600.0, 600.0)), steps, seed);
+            let (_, b) = run(
+                &p,
+                Variant::Epso,
+                Some(Vec2::new(600.0, 600.0)),
+                steps,
+                seed,
+            );
             t_tp += a.unwrap();
             t_ep += b.unwrap_or(steps);
         }
@@ -251,7 +262,7 @@ mod tests {
             w: 3.0,
             ..Params::default()
         };
-        let (d, _) = run(&p, Variant::Tpepso, Some(v2(600.0, 600.0)), 400, 1);
+        let (d, _) = run(&p, Variant::Tpepso, Some(Vec2::new(600.0, 600.0)), 400, 1);
         assert!(d.iter().any(|x| *x > 5.0), "{d:?}");
     }
 
@@ -259,11 +270,11 @@ mod tests {
     fn speed_clamp_and_draw_count() {
         let p = Params::default();
         let s = State {
-            position: v2(0.0, 0.0),
-            velocity: v2(10.0, 0.0),
-            personal_best: v2(1000.0, 0.0),
-            subgroup_best: v2(1000.0, 1000.0),
-            target_estimate: Some(v2(0.0, 1000.0)),
+            position: Vec2::new(0.0, 0.0),
+            velocity: Vec2::new(10.0, 0.0),
+            personal_best: Vec2::new(1000.0, 0.0),
+            subgroup_best: Vec2::new(1000.0, 1000.0),
+            target_estimate: Some(Vec2::new(0.0, 1000.0)),
         };
         let mut a = ChaCha8Rng::seed_from_u64(5);
         let v = desired_velocity(&s, Variant::Tpepso, &p, &mut a);
@@ -279,20 +290,20 @@ mod tests {
         // r drawn = (r1, r2, r3); check V_if against eq. (11) computed here.
         let p = Params::default();
         let s = State {
-            position: v2(1.0, 2.0),
-            velocity: v2(0.5, -0.5),
-            personal_best: v2(3.0, 2.0),
-            subgroup_best: v2(1.0, 6.0),
-            target_estimate: Some(v2(-1.0, 2.0)),
+            position: Vec2::new(1.0, 2.0),
+            velocity: Vec2::new(0.5, -0.5),
+            personal_best: Vec2::new(3.0, 2.0),
+            subgroup_best: Vec2::new(1.0, 6.0),
+            target_estimate: Some(Vec2::new(-1.0, 2.0)),
         };
         let mut rng = ChaCha8Rng::seed_from_u64(8);
         let mut copy = rng.clone();
         let (r1, r2, r3): (f64, f64, f64) = (copy.gen(), copy.gen(), copy.gen());
         let v = desired_velocity(&s, Variant::Tpepso, &p, &mut rng);
         let vip = s.velocity * 0.5
-            + v2(2.0, 0.0) * (1.0 * r1)
-            + v2(0.0, 4.0) * (1.2 * r2)
-            + v2(-2.0, 0.0) * (1.2 * r3);
+            + Vec2::new(2.0, 0.0) * (1.0 * r1)
+            + Vec2::new(0.0, 4.0) * (1.2 * r2)
+            + Vec2::new(-2.0, 0.0) * (1.2 * r3);
         let want = s.velocity + (vip - s.velocity) * 0.1;
         assert!((v - want).norm() < 1e-12);
     }
@@ -300,9 +311,9 @@ mod tests {
     #[test]
     fn best_tracking() {
         let mut b = None;
-        assert!(update_best(&mut b, v2(0.0, 0.0), 1.0));
-        assert!(!update_best(&mut b, v2(1.0, 0.0), 1.0));
-        assert!(update_best(&mut b, v2(2.0, 0.0), 2.0));
-        assert_eq!(b, Some((v2(2.0, 0.0), 2.0)));
+        assert!(update_best(&mut b, Vec2::new(0.0, 0.0), 1.0));
+        assert!(!update_best(&mut b, Vec2::new(1.0, 0.0), 1.0));
+        assert!(update_best(&mut b, Vec2::new(2.0, 0.0), 2.0));
+        assert_eq!(b, Some((Vec2::new(2.0, 0.0), 2.0)));
     }
 }

@@ -2,20 +2,26 @@
 //! baselines): the per-robot loop of spec 2.9 for one robot, from its Sense frame and its radio
 //! inbox only.
 //!
-//! Per tick (messages heard were sent at the previous tick):
-//! 1. A robot whose arrival sensor fired (ENTITY_DONE_BY_YOU) declares: it broadcasts the find
-//!    for `declare_ticks` ticks and stands still for good (spec 5 item 8).
-//! 2. Found targets (own find, `Found` messages, and the gossiped found lists) are excluded.
-//! 3. Type I: own signals above I_min, roulette of eqs. (2)-(3) keeping the previous choice.
-//!    Otherwise Type II: the subgroup of the nearest Type I robot heard within R_cm.
-//! 4. Closed-loop adjustment (Table 1) over itself and the candidates of the same target it
-//!    heard: kept -> cooperative, dropped -> roaming.
-//! 5. Cooperative: pb_i and sgb (fitness = own I_ij; sgb from the members' pbs heard), T_est
-//!    from >= 3 detections (own and heard) via the calibration inverse (mode *T), eq. (11)
-//!    (modes *T, *E) or the bat rule of search/arba.rs (modes *A).
-//!    Roaming: eq. (5) repulsion of the two nearest robots heard, heading kept without force.
-//! 6. Obstacle layer (BSOA or SVF) on the desired velocity, every tick, in every state.
-//! 7. Broadcast the status (position, detections, candidacy, pb, found list).
+//! Per tick (messages heard were sent at the previous tick), one method of `Search` a step
+//! (the letters are spec 2.9's):
+//! 1. `arrival` (2g): a robot whose arrival sensor fired (ENTITY_DONE_BY_YOU) declares: it
+//!    broadcasts the find for `declare_ticks` ticks and stands still for good (spec 5 item 8).
+//! 2. `listen` (2a): found targets (own find, `Found` messages, and the gossiped found lists)
+//!    are excluded; one status per robot heard.
+//! 3. `own_signals`, `candidacy` (2b, 2c): Type I: own signals above I_min, roulette of
+//!    eqs. (2)-(3) keeping the previous choice. Otherwise Type II: the subgroup of the nearest
+//!    Type I robot heard within R_cm.
+//! 4. `closed_loop_adjustment` (2d, Table 1) over itself and the candidates of the same target
+//!    it heard: kept -> cooperative, dropped -> roaming.
+//! 5. `subgroup_memory` (2e): pb_i and sgb (fitness = own I_ij; sgb from the members' pbs
+//!    heard).
+//! 6. `cooperative_velocity` (2e): T_est from >= 3 detections (own and heard) via the
+//!    calibration inverse (`target_estimate`, mode *T), eq. (11) (modes *T, *E) or the bat
+//!    rule of search/arba.rs (modes *A), then `subgroup_separation`.
+//!    `roaming_velocity` (2e): eq. (5) repulsion of the two nearest robots heard, heading kept
+//!    without force.
+//! 7. `obstacle_layer` (2f): BSOA or SVF on the desired velocity, every tick, in every state.
+//! 8. `broadcast` (2b): the status (position, detections, candidacy, pb, found list).
 //!
 //! Choices where the paper is silent (each is a field of [`Params`] or noted here):
 //! * Messages: one `Status` per tick per active robot (8 + ~20 bytes per detection / found id);
@@ -49,11 +55,11 @@ pub mod params;
 pub use messages::{Candidacy, Msg, Status, WireRole};
 pub use params::{parse_mode, parse_params, validate_search, ObstacleLayer, Params, SearchLayer};
 
+use crate::kernels::virtual_force;
 use crate::search::calibration::{self, Calibration};
 use crate::search::estimator::{self, Detection};
-use crate::search::geometry::{clamp_norm, v2, Vec2};
 use crate::search::subgroup::{self, Member, Role};
-use crate::search::{arba, bsoa, svf, tpepso, virtual_force};
+use crate::search::{arba, bsoa, svf, tpepso};
 use messages::{pack, unpack, TargetSet};
 use rand::Rng;
 use rand_chacha::ChaCha8Rng;
@@ -61,6 +67,7 @@ use std::collections::BTreeMap;
 use std::collections::BTreeSet;
 use std::sync::{Arc, Mutex};
 use swarm::frames::{ENTITY_DONE_BY_YOU, STATE_DEFAULT as STATE_ROAMING};
+use swarm::geometry::{clamp_norm, Vec2};
 use swarm::scenario::Scenario;
 use swarm::scenario::{Check, ConfigError};
 use swarm::sections::search::{STATE_COOPERATIVE, STATE_DECLARED};
@@ -192,7 +199,7 @@ impl Search {
             found: BTreeSet::new(),
             choice: None,
             memory: None,
-            last_vel: v2(a.cos(), a.sin()) * v_max,
+            last_vel: Vec2::new(a.cos(), a.sin()) * v_max,
             sf: bsoa::Sense::None,
             follow: svf::Follow::None,
             bat: arba::Bat::new(&p.arba),
@@ -275,7 +282,7 @@ impl Search {
                     ..
                 }) if !self.found.contains(target) => {
                     let q = unpack(st.pos);
-                    Some((*from as usize, v2(q[0], q[1]), *target))
+                    Some((*from as usize, Vec2::new(q[0], q[1]), *target))
                 }
                 _ => None,
             })
@@ -342,7 +349,7 @@ fn heard_positions(heard: &[(u32, &Status)]) -> Vec<Vec2> {
         .iter()
         .map(|(_, st)| {
             let q = unpack(st.pos);
-            v2(q[0], q[1])
+            Vec2::new(q[0], q[1])
         })
         .collect()
 }
@@ -372,32 +379,48 @@ fn role_of(w: WireRole) -> Role {
     }
 }
 
-impl Behaviour for Search {
-    type Msg = Msg;
+/// The subgroup bests a kept member moves by (pb_i and sgb, TPEPSO's memory) and its own
+/// signal of the target.
+#[derive(Debug, Clone, Copy)]
+struct Bests {
+    /// The own signal I_ij of the target, if sensed at all.
+    own: Option<f64>,
+    /// The fitness of this tick: own I_ij, or `type2_initial_fitness` without a signal.
+    fitness: f64,
+    /// pb_i (position, fitness).
+    pb: (Vec2, f64),
+    /// sgb (position, fitness).
+    sgb: (Vec2, f64),
+}
 
-    fn step_refs(&mut self, s: &Sense, inbox: &[&Received<Msg>], out: &mut Outbox<Msg>) -> Command {
-        if let Mode::Declared { target } = self.mode {
-            return self.declared_step(target, out, 0);
-        }
-        // 1. Arrival sensor: this robot found a target at the last move.
-        if let Some(t) = s
+/// The paper's loop of spec 2.9, one step of one robot, in the order [`Behaviour::step_refs`]
+/// calls them.
+impl Search {
+    /// Step 2g (spec 5 item 8): the arrival sensor fired at the last move (ENTITY_DONE_BY_YOU)
+    /// for the returned target (the lowest id if several): every target it fired for is found,
+    /// the robot declares and forgets its subgroup.
+    fn arrival(&mut self, s: &Sense) -> Option<u32> {
+        let t = s
             .entities()
             .iter()
             .filter(|g| g.flags & ENTITY_DONE_BY_YOU != 0)
             .map(|g| g.id)
-            .min()
-        {
-            for g in s.entities() {
-                if g.flags & ENTITY_DONE_BY_YOU != 0 {
-                    self.found.insert(g.id);
-                }
+            .min()?;
+        for g in s.entities() {
+            if g.flags & ENTITY_DONE_BY_YOU != 0 {
+                self.found.insert(g.id);
             }
-            self.mode = Mode::Declared { target: t };
-            self.memory = None;
-            self.declare_left = self.p.declare_ticks;
-            return self.declared_step(t, out, EVENT_TARGET_DECLARED);
         }
-        // 2. What the radio says (the inbox is ordered by sender, then sequence).
+        self.mode = Mode::Declared { target: t };
+        self.memory = None;
+        self.declare_left = self.p.declare_ticks;
+        Some(t)
+    }
+
+    /// Step 2a, the radio half (what robots within R_cm said last tick): takes the found
+    /// targets of every `Found` and every status's gossip, and returns the statuses of the
+    /// other robots, one per sender (the last; the inbox is ordered by sender, then sequence).
+    fn listen<'a>(&mut self, inbox: &[&'a Received<Msg>]) -> Vec<(u32, &'a Status)> {
         let mut heard: Vec<(u32, &Status)> = Vec::with_capacity(inbox.len());
         // Most statuses gossip targets this robot already knows: a sorted-slice check skips
         // the set inserts (which would change nothing).
@@ -424,38 +447,51 @@ impl Behaviour for Search {
         heard.reverse();
         heard.dedup_by_key(|(from, _)| *from);
         heard.reverse();
+        heard
+    }
 
-        let me = v2(s.pos[0], s.pos[1]);
-        let i_min = self.p.subgroup.i_min;
-        // 3. Own signals of targets not known to be found.
-        let signals: Vec<(usize, f64)> = s
-            .entities()
+    /// Step 2a, the sensor half: the own signals I_ij (eq. 33) of targets not known to be
+    /// found, as (target, intensity).
+    fn own_signals(&self, s: &Sense) -> Vec<(usize, f64)> {
+        s.entities()
             .iter()
             .filter(|g| g.flags == 0 && !self.found.contains(&g.id))
             .map(|g| (g.id as usize, g.value))
-            .collect();
-        let cand = self.candidacy(&me, &signals, &heard);
+            .collect()
+    }
 
-        // 4. Closed-loop adjustment over what this robot heard.
-        let mut member = false;
-        if let Some((t, role, _)) = cand {
-            let mut members = vec![Member {
-                robot: self.robot as usize,
-                role,
-            }];
-            members.extend(heard.iter().filter_map(|(from, st)| {
-                st.candidacy
-                    .as_ref()
-                    .filter(|c| c.target == t)
-                    .map(|c| Member {
-                        robot: *from as usize,
-                        role: role_of(c.role),
-                    })
-            }));
-            // Table 1's ranking, of which this robot needs only its own place.
-            member = subgroup::is_kept(&members, 0, &self.p.subgroup);
-        }
-        // Subgroup memory (pb_i, sgb).
+    /// Step 2d, the closed-loop adjustment (Table 1) over this robot and the candidacies for
+    /// the same target heard last tick: is this robot kept in the subgroup (cut to g_max)?
+    /// Table 1's ranking, of which this robot needs only its own place.
+    fn closed_loop_adjustment(&self, target: u32, role: Role, heard: &[(u32, &Status)]) -> bool {
+        let mut members = vec![Member {
+            robot: self.robot as usize,
+            role,
+        }];
+        members.extend(heard.iter().filter_map(|(from, st)| {
+            st.candidacy
+                .as_ref()
+                .filter(|c| c.target == target)
+                .map(|c| Member {
+                    robot: *from as usize,
+                    role: role_of(c.role),
+                })
+        }));
+        subgroup::is_kept(&members, 0, &self.p.subgroup)
+    }
+
+    /// Step 2e, the memory half (TPEPSO's pb_i and sgb, eq. 11): a memory of a found target is
+    /// forgotten; a kept member of `kept` starts a fresh memory (and a fresh ARBA bat) for a
+    /// new target, or after a gap unless `keep_memory_across_gaps`, then updates pb_i from its
+    /// own fitness and sgb from pb_i and the members' pbs heard. A robot not kept forgets
+    /// unless `keep_memory_across_gaps`. Returns the bests of a kept member.
+    fn subgroup_memory(
+        &mut self,
+        kept: Option<u32>,
+        me: Vec2,
+        signals: &[(usize, f64)],
+        heard: &[(u32, &Status)],
+    ) -> Option<Bests> {
         let was_member_of = match self.mode {
             Mode::Cooperative { target, .. } => Some(target),
             _ => None,
@@ -465,129 +501,173 @@ impl Behaviour for Search {
                 self.memory = None;
             }
         }
-        self.last_estimate = None;
-        // Own calibrated distance to the subgroup's target, if sensed (obstacle horizon).
-        let mut horizon: Option<f64> = None;
-        let v_if = match (cand, member) {
-            (Some((t, role, _)), true) => {
-                let fresh = match self.memory {
-                    Some(m) if m.target == t => {
-                        !self.p.keep_memory_across_gaps && was_member_of != Some(t)
+        let Some(t) = kept else {
+            if !self.p.keep_memory_across_gaps {
+                self.memory = None;
+            }
+            return None;
+        };
+        let fresh = match self.memory {
+            Some(m) if m.target == t => !self.p.keep_memory_across_gaps && was_member_of != Some(t),
+            _ => true,
+        };
+        if fresh {
+            self.memory = Some(Memory {
+                target: t,
+                pb: None,
+                sgb: None,
+            });
+            self.bat = arba::Bat::new(&self.p.arba);
+        }
+        let own = signals.iter().find(|(id, _)| *id as u32 == t).map(|x| x.1);
+        let fitness = own.unwrap_or(self.p.type2_initial_fitness);
+        let mem = self.memory.as_mut().expect("set above");
+        tpepso::update_best(&mut mem.pb, me, fitness);
+        let pb = mem.pb.expect("set above");
+        tpepso::update_best(&mut mem.sgb, pb.0, pb.1);
+        for (_, st) in heard {
+            if let Some(c) = &st.candidacy {
+                if c.target == t && c.member {
+                    if let Some((q, f)) = c.pb {
+                        let q = unpack(q);
+                        tpepso::update_best(&mut mem.sgb, Vec2::new(q[0], q[1]), f as f64);
                     }
-                    _ => true,
-                };
-                if fresh {
-                    self.memory = Some(Memory {
-                        target: t,
-                        pb: None,
-                        sgb: None,
-                    });
-                    self.bat = arba::Bat::new(&self.p.arba);
-                }
-                let own = signals.iter().find(|(id, _)| *id as u32 == t).map(|x| x.1);
-                horizon = own.filter(|i| *i > i_min).map(|i| self.cal.inverse(i));
-                let fitness = own.unwrap_or(self.p.type2_initial_fitness);
-                let mem = self.memory.as_mut().expect("set above");
-                tpepso::update_best(&mut mem.pb, me, fitness);
-                let pb = mem.pb.expect("set above");
-                tpepso::update_best(&mut mem.sgb, pb.0, pb.1);
-                for (_, st) in &heard {
-                    if let Some(c) = &st.candidacy {
-                        if c.target == t && c.member {
-                            if let Some((q, f)) = c.pb {
-                                let q = unpack(q);
-                                tpepso::update_best(&mut mem.sgb, v2(q[0], q[1]), f as f64);
-                            }
-                        }
-                    }
-                }
-                let sgb = mem.sgb.expect("set above");
-                // T_est (eqs. 6-10) from own and heard detections of t above I_min.
-                let estimate = if self.layer == SearchLayer::Tpepso {
-                    let mut dets: Vec<Detection> = Vec::new();
-                    if let Some(i) = own.filter(|i| *i > i_min) {
-                        dets.push(Detection {
-                            position: me,
-                            distance: self.cal.inverse(i),
-                            signal: i,
-                        });
-                    }
-                    for (_, st) in &heard {
-                        for &(tt, i) in &st.detections {
-                            let i = i as f64;
-                            if tt == t && i > i_min {
-                                let q = unpack(st.pos);
-                                dets.push(Detection {
-                                    position: v2(q[0], q[1]),
-                                    distance: self.cal.inverse(i),
-                                    signal: i,
-                                });
-                            }
-                        }
-                    }
-                    estimator::estimate(&dets, &self.p.estimator).map(|e| e.position)
-                } else {
-                    None
-                };
-                self.last_estimate = estimate;
-                let state = tpepso::State {
-                    position: me,
-                    velocity: v2(s.vel[0], s.vel[1]),
-                    personal_best: pb.0,
-                    subgroup_best: sgb.0,
-                    target_estimate: estimate,
-                };
-                self.mode = Mode::Cooperative { target: t, role };
-                let v = match self.layer {
-                    SearchLayer::Arba => arba::desired_velocity(
-                        &mut self.bat,
-                        me,
-                        state.velocity,
-                        sgb.0,
-                        fitness,
-                        &self.p.arba,
-                        &mut self.rng_bat,
-                    ),
-                    layer => {
-                        let variant = if layer == SearchLayer::Tpepso {
-                            tpepso::Variant::Tpepso
-                        } else {
-                            tpepso::Variant::Epso
-                        };
-                        tpepso::desired_velocity(&state, variant, &self.p.tpepso, &mut self.rng_pso)
-                    }
-                };
-                if self.p.subgroup_separation > 0.0 {
-                    let others = heard_positions(&heard);
-                    let f = virtual_force::Params {
-                        l_r: self.p.subgroup_separation / 2.0,
-                        ..self.p.virtual_force.clone()
-                    };
-                    clamp_norm(
-                        v + virtual_force::roaming_force(&me, &others, &f),
-                        self.v_max,
-                    )
-                } else {
-                    v
                 }
             }
-            _ => {
-                if !self.p.keep_memory_across_gaps {
-                    self.memory = None;
+        }
+        let sgb = mem.sgb.expect("set above");
+        Some(Bests {
+            own,
+            fitness,
+            pb,
+            sgb,
+        })
+    }
+
+    /// Step 2e, T_est (eqs. 6-10): the target position from the own detection and those of
+    /// `target` heard, each above I_min, distances by the calibration inverse G^{-1} (eq. 6);
+    /// None below `estimator.min_detectors` (spec 5 item 14).
+    fn target_estimate(
+        &self,
+        target: u32,
+        me: Vec2,
+        own: Option<f64>,
+        heard: &[(u32, &Status)],
+    ) -> Option<Vec2> {
+        let i_min = self.p.subgroup.i_min;
+        let mut dets: Vec<Detection> = Vec::new();
+        if let Some(i) = own.filter(|i| *i > i_min) {
+            dets.push(Detection {
+                position: me,
+                distance: self.cal.inverse(i),
+                signal: i,
+            });
+        }
+        for (_, st) in heard {
+            for &(tt, i) in &st.detections {
+                let i = i as f64;
+                if tt == target && i > i_min {
+                    let q = unpack(st.pos);
+                    dets.push(Detection {
+                        position: Vec2::new(q[0], q[1]),
+                        distance: self.cal.inverse(i),
+                        signal: i,
+                    });
                 }
-                self.mode = Mode::Roaming;
-                let others = heard_positions(&heard);
-                virtual_force::roaming_velocity(&me, &others, &self.last_vel, &self.p.virtual_force)
+            }
+        }
+        estimator::estimate(&dets, &self.p.estimator).map(|e| e.position)
+    }
+
+    /// Step 2e, cooperative velocity of a kept member: V_if by eq. (11) (TPEPSO with T_est in
+    /// modes *T, EPSO without it in modes *E) or by ARBA's bat rule (modes *A), then kept
+    /// apart from the robots heard by eq. (5) within `subgroup_separation`. Returns V_if and
+    /// the own calibrated distance to the target if sensed (the obstacle layer's horizon).
+    fn cooperative_velocity(
+        &mut self,
+        s: &Sense,
+        me: Vec2,
+        (target, role): (u32, Role),
+        b: Bests,
+        heard: &[(u32, &Status)],
+    ) -> (Vec2, Option<f64>) {
+        let i_min = self.p.subgroup.i_min;
+        let horizon = b.own.filter(|i| *i > i_min).map(|i| self.cal.inverse(i));
+        let estimate = if self.layer == SearchLayer::Tpepso {
+            self.target_estimate(target, me, b.own, heard)
+        } else {
+            None
+        };
+        self.last_estimate = estimate;
+        let state = tpepso::State {
+            position: me,
+            velocity: Vec2::new(s.vel[0], s.vel[1]),
+            personal_best: b.pb.0,
+            subgroup_best: b.sgb.0,
+            target_estimate: estimate,
+        };
+        self.mode = Mode::Cooperative { target, role };
+        let v = match self.layer {
+            SearchLayer::Arba => arba::desired_velocity(
+                &mut self.bat,
+                me,
+                state.velocity,
+                b.sgb.0,
+                b.fitness,
+                &self.p.arba,
+                &mut self.rng_bat,
+            ),
+            layer => {
+                let variant = if layer == SearchLayer::Tpepso {
+                    tpepso::Variant::Tpepso
+                } else {
+                    tpepso::Variant::Epso
+                };
+                tpepso::desired_velocity(&state, variant, &self.p.tpepso, &mut self.rng_pso)
             }
         };
-        // 6. Obstacle layer, every tick, every state.
+        (self.subgroup_separation(v, me, heard), horizon)
+    }
+
+    /// [chosen] Members keep apart: eq. (5) repulsion of the two nearest robots heard with
+    /// L_R = `subgroup_separation` / 2 added to V_if, within V_max (0: off).
+    fn subgroup_separation(&self, v: Vec2, me: Vec2, heard: &[(u32, &Status)]) -> Vec2 {
+        if self.p.subgroup_separation > 0.0 {
+            let others = heard_positions(heard);
+            let f = virtual_force::Params {
+                l_r: self.p.subgroup_separation / 2.0,
+                ..self.p.virtual_force.clone()
+            };
+            clamp_norm(
+                v + virtual_force::roaming_force(&me, &others, &f),
+                self.v_max,
+            )
+        } else {
+            v
+        }
+    }
+
+    /// Step 2e, roaming velocity (paper 3.1, Fig. 2): V_if = V_max along f_vr1 + f_vr2, the
+    /// eq. (5) repulsion of the two nearest robots heard; the heading of the last commanded
+    /// velocity without a force (spec 5 item 5).
+    fn roaming_velocity(&mut self, me: Vec2, heard: &[(u32, &Status)]) -> Vec2 {
+        self.mode = Mode::Roaming;
+        let others = heard_positions(heard);
+        virtual_force::roaming_velocity(&me, &others, &self.last_vel, &self.p.virtual_force)
+    }
+
+    /// Step 2f, the obstacle layer, every tick and in every state: BSOA (Table 2, eqs. 12-22)
+    /// or SVF turns V_if into V_i(t+1), at most V_max (eq. 4; a non-finite result stands
+    /// still). A cooperative robot ignores obstacle points beyond its calibrated distance to
+    /// the target plus `goal_horizon_margin`. Remembers V_i(t+1) for roaming.
+    fn obstacle_layer(&mut self, s: &Sense, me: Vec2, v_if: Vec2, horizon: Option<f64>) -> Vec2 {
         let horizon = match (self.mode, horizon) {
             (Mode::Cooperative { .. }, Some(d)) if self.p.goal_horizon_margin >= 0.0 => {
                 d + self.p.goal_horizon_margin
             }
             _ => f64::INFINITY,
         };
-        let sensed = s.obstacle_points().iter().map(|q| v2(q[0], q[1]));
+        let sensed = s.obstacle_points().iter().map(|q| Vec2::new(q[0], q[1]));
         let v = match self.obstacle {
             ObstacleLayer::Bsoa => {
                 let o = bsoa::avoid_within(&me, &v_if, sensed, horizon, self.sf, &self.p.bsoa);
@@ -612,7 +692,21 @@ impl Behaviour for Search {
             v = Vec2::zeros();
         }
         self.last_vel = v;
-        // 7. Status broadcast.
+        v
+    }
+
+    /// Step 2b's broadcast (and what 2c, 2d and 2e need of others): the status of this tick,
+    /// to every robot within R_cm: position, detections above I_min, candidacy (with pb_i if
+    /// kept) and the found targets.
+    fn broadcast(
+        &mut self,
+        s: &Sense,
+        signals: &[(usize, f64)],
+        cand: Option<(u32, Role, Option<u32>)>,
+        member: bool,
+        out: &mut Outbox<Msg>,
+    ) {
+        let i_min = self.p.subgroup.i_min;
         let mut detections: Vec<(u32, f32)> = signals
             .iter()
             .filter(|(_, i)| *i > i_min)
@@ -638,6 +732,43 @@ impl Behaviour for Search {
         };
         out.broadcast(Msg::Status(status.clone()));
         self.last_status = Some(status);
+    }
+}
+
+impl Behaviour for Search {
+    type Msg = Msg;
+
+    /// One step of the loop of spec 2.9 (see the module doc); messages heard were sent at the
+    /// previous tick.
+    fn step_refs(&mut self, s: &Sense, inbox: &[&Received<Msg>], out: &mut Outbox<Msg>) -> Command {
+        if let Mode::Declared { target } = self.mode {
+            return self.declared_step(target, out, 0);
+        }
+        // 1. Arrival: this robot found a target at the last move.
+        if let Some(t) = self.arrival(s) {
+            return self.declared_step(t, out, EVENT_TARGET_DECLARED);
+        }
+        // 2. The radio: found targets and the statuses heard.
+        let heard = self.listen(inbox);
+        let me = Vec2::new(s.pos[0], s.pos[1]);
+        // 3. Candidacy: Type I by own signals (eqs. 2-3), else Type II.
+        let signals = self.own_signals(s);
+        let cand = self.candidacy(&me, &signals, &heard);
+        // 4. Closed-loop adjustment (Table 1).
+        let kept = cand.filter(|&(t, role, _)| self.closed_loop_adjustment(t, role, &heard));
+        let member = kept.is_some();
+        // 5. Subgroup memory (pb_i, sgb).
+        let bests = self.subgroup_memory(kept.map(|c| c.0), me, &signals, &heard);
+        // 6. Cooperative velocity (eq. 11, ARBA) or roaming velocity (eq. 5).
+        self.last_estimate = None;
+        let (v_if, horizon) = match (kept, bests) {
+            (Some((t, role, _)), Some(b)) => self.cooperative_velocity(s, me, (t, role), b, &heard),
+            _ => (self.roaming_velocity(me, &heard), None),
+        };
+        // 7. Obstacle layer (BSOA or SVF).
+        let v = self.obstacle_layer(s, me, v_if, horizon);
+        // 8. Status broadcast.
+        self.broadcast(s, &signals, cand, member, out);
         Command {
             cmd: [v.x, v.y],
             events: if member {

@@ -3,9 +3,9 @@
 //! Every section defaults to the paper's values (Table 4) or the spec's suggestions
 //! (spec/search.md section 5); a key that is not a field is an error.
 
+use crate::kernels::virtual_force;
 use crate::search::{
-    arba, bsoa, calibration, estimator, subgroup, svf, tpepso, virtual_force,
-    Params as KernelParams,
+    arba, bsoa, calibration, estimator, subgroup, svf, tpepso, Params as KernelParams,
 };
 use serde::{Deserialize, Serialize};
 use swarm::scenario::Scenario;

@@ -81,9 +81,12 @@ fn type1_robot_picks_its_target_and_heads_for_the_estimate() {
         m => panic!("{m:?}"),
     }
     let est = r.last_estimate().expect("three detectors give T_est");
-    assert!((est - v2(target[0], target[1])).norm() < 3.0, "{est:?}");
-    let v = v2(c.cmd[0], c.cmd[1]);
-    let to = v2(target[0] - me[0], target[1] - me[1]);
+    assert!(
+        (est - Vec2::new(target[0], target[1])).norm() < 3.0,
+        "{est:?}"
+    );
+    let v = Vec2::new(c.cmd[0], c.cmd[1]);
+    let to = Vec2::new(target[0] - me[0], target[1] - me[1]);
     assert!(
         v.norm() > 0.0 && v.dot(&to) / (v.norm() * to.norm()) > 0.99,
         "{v:?}"
@@ -460,13 +463,13 @@ fn arba_robot_flies_to_the_subgroup_best_heard_on_the_radio() {
         assert_eq!(c.events & 0xff, STATE_COOPERATIVE, "{mode}");
         let (sgb, _) = r.subgroup_best().expect("sgb");
         assert!(
-            (sgb - v2(best[0], best[1])).norm() < 1e-3,
+            (sgb - Vec2::new(best[0], best[1])).norm() < 1e-3,
             "{mode}: {sgb:?}"
         );
         // At rest, it either flies by frequency (f_i (X* − X_i)) or walks to within A_i V_max
         // of X*, 55 away: either way towards X*, at most V_max.
-        let v = v2(c.cmd[0], c.cmd[1]);
-        let to = v2(best[0] - me[0], best[1] - me[1]);
+        let v = Vec2::new(c.cmd[0], c.cmd[1]);
+        let to = Vec2::new(best[0] - me[0], best[1] - me[1]);
         assert!(
             speed(&c) > 0.0 && speed(&c) <= sc.robot.v_max + 1e-9,
             "{mode}: {v:?}"

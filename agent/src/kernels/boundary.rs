@@ -7,9 +7,9 @@
 //! clockwise and counter-clockwise angular ends. N_P = 2 is a *continuous*
 //! view, N_P > 2 a *discontinuous* one, N_P = 0 means fully surrounded.
 
-use crate::search::geometry::{angle_of, Vec2};
 use serde::{Deserialize, Serialize};
 use std::f64::consts::{PI, TAU};
+use swarm::geometry::{angle_of, Vec2};
 
 /// Tunables of the boundary scan.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -297,10 +297,18 @@ fn scan_points(mut pts: Vec<(f64, f64, Vec2)>, p: &Params, width: Option<f64>) -
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::search::geometry::{sample_polygon_boundary, v2};
+    use swarm::geometry::sample_boundary;
 
     fn rect(x0: f64, y0: f64, x1: f64, y1: f64) -> Vec<Vec2> {
-        sample_polygon_boundary(&[v2(x0, y0), v2(x1, y0), v2(x1, y1), v2(x0, y1)], 2.0)
+        sample_boundary(
+            &[
+                Vec2::new(x0, y0),
+                Vec2::new(x1, y0),
+                Vec2::new(x1, y1),
+                Vec2::new(x0, y1),
+            ],
+            2.0,
+        )
     }
 
     fn close(a: &Vec2, b: &Vec2) -> bool {
@@ -310,7 +318,7 @@ mod tests {
     #[test]
     fn empty_view() {
         let s = scan(
-            &v2(0.0, 0.0),
+            &Vec2::new(0.0, 0.0),
             &rect(200.0, 0.0, 210.0, 10.0),
             100.0,
             &Params::default(),
@@ -323,13 +331,13 @@ mod tests {
     fn continuous_view_of_one_wall() {
         // A horizontal wall from x=-30 to 30 at y=40, robot at origin.
         let wall = rect(-30.0, 40.0, 30.0, 44.0);
-        let s = scan(&v2(0.0, 0.0), &wall, 100.0, &Params::default());
+        let s = scan(&Vec2::new(0.0, 0.0), &wall, 100.0, &Params::default());
         assert!(s.is_continuous(), "arcs: {:?}", s.arcs);
         assert_eq!(s.n_p(), 2);
         let bp = s.boundary_points();
         // Angular extremes are the near corners (30,40) then (-30,40) CCW.
-        assert!(close(&bp[0], &v2(30.0, 40.0)), "{:?}", bp[0]);
-        assert!(close(&bp[1], &v2(-30.0, 40.0)), "{:?}", bp[1]);
+        assert!(close(&bp[0], &Vec2::new(30.0, 40.0)), "{:?}", bp[0]);
+        assert!(close(&bp[1], &Vec2::new(-30.0, 40.0)), "{:?}", bp[1]);
         assert_eq!(s.gap_partner(0), 1);
         assert_eq!(s.gap_partner(1), 0);
         assert!(s.gap_width(1) > PI);
@@ -341,17 +349,17 @@ mod tests {
         let mut pts = rect(-50.0, 40.0, -20.0, 45.0);
         pts.extend(rect(-5.0, 40.0, 5.0, 45.0));
         pts.extend(rect(20.0, 40.0, 50.0, 45.0));
-        let s = scan(&v2(0.0, 0.0), &pts, 100.0, &Params::default());
+        let s = scan(&Vec2::new(0.0, 0.0), &pts, 100.0, &Params::default());
         assert!(s.is_discontinuous());
         assert_eq!(s.n_p(), 6);
         let bp = s.boundary_points();
         let want = [
-            v2(50.0, 40.0),
-            v2(20.0, 45.0),
-            v2(5.0, 40.0),
-            v2(-5.0, 40.0),
-            v2(-20.0, 45.0),
-            v2(-50.0, 40.0),
+            Vec2::new(50.0, 40.0),
+            Vec2::new(20.0, 45.0),
+            Vec2::new(5.0, 40.0),
+            Vec2::new(-5.0, 40.0),
+            Vec2::new(-20.0, 45.0),
+            Vec2::new(-50.0, 40.0),
         ];
         for (g, w) in bp.iter().zip(want.iter()) {
             assert!(close(g, w), "got {g:?}, want {w:?}");
@@ -371,7 +379,7 @@ mod tests {
         // one continuous arc.
         let mut pts = rect(-20.0, 30.0, 5.0, 32.0);
         pts.extend(rect(0.0, 60.0, 30.0, 62.0));
-        let s = scan(&v2(0.0, 0.0), &pts, 100.0, &Params::default());
+        let s = scan(&Vec2::new(0.0, 0.0), &pts, 100.0, &Params::default());
         assert!(s.is_continuous(), "{:?}", s.arcs.len());
     }
 
@@ -379,17 +387,17 @@ mod tests {
     fn arc_across_the_pi_seam_is_not_split() {
         // Wall to the west (angles around ±π).
         let wall = rect(-40.0, -20.0, -36.0, 20.0);
-        let s = scan(&v2(0.0, 0.0), &wall, 100.0, &Params::default());
+        let s = scan(&Vec2::new(0.0, 0.0), &wall, 100.0, &Params::default());
         assert!(s.is_continuous());
-        assert!(close(&s.arcs[0].cw_end, &v2(-36.0, 20.0)));
-        assert!(close(&s.arcs[0].ccw_end, &v2(-36.0, -20.0)));
+        assert!(close(&s.arcs[0].cw_end, &Vec2::new(-36.0, 20.0)));
+        assert!(close(&s.arcs[0].ccw_end, &Vec2::new(-36.0, -20.0)));
     }
 
     #[test]
     fn wall_leaving_range_ends_on_the_sensing_circle() {
         // A long wall: its arc ends where the wall leaves the 100 circle.
         let wall = rect(-300.0, 50.0, 300.0, 52.0);
-        let s = scan(&v2(0.0, 0.0), &wall, 100.0, &Params::default());
+        let s = scan(&Vec2::new(0.0, 0.0), &wall, 100.0, &Params::default());
         assert!(s.is_continuous());
         for p in s.boundary_points() {
             let d = p.norm();
@@ -400,7 +408,7 @@ mod tests {
     #[test]
     fn surrounded_and_far_points() {
         let ring = rect(-20.0, -20.0, 20.0, 20.0);
-        let s = scan(&v2(0.0, 0.0), &ring, 100.0, &Params::default());
+        let s = scan(&Vec2::new(0.0, 0.0), &ring, 100.0, &Params::default());
         assert!(s.surrounded);
         assert_eq!(s.n_p(), 0);
         assert_eq!(s.n_in_range, ring.len());
@@ -411,12 +419,12 @@ mod tests {
         // Two walls 8 units apart, 20 units ahead: a real opening.
         let mut pts = rect(-40.0, 20.0, -4.0, 22.0);
         pts.extend(rect(4.0, 20.0, 40.0, 22.0));
-        let s = scan(&v2(0.0, 0.0), &pts, 100.0, &Params::default());
+        let s = scan(&Vec2::new(0.0, 0.0), &pts, 100.0, &Params::default());
         assert_eq!(s.n_p(), 4);
         // The same walls touching (gap closed to 1 sample spacing) are one arc.
         let mut pts = rect(-40.0, 20.0, -1.0, 22.0);
         pts.extend(rect(1.0, 20.0, 40.0, 22.0));
-        assert!(scan(&v2(0.0, 0.0), &pts, 100.0, &Params::default()).is_continuous());
+        assert!(scan(&Vec2::new(0.0, 0.0), &pts, 100.0, &Params::default()).is_continuous());
     }
 
     #[test]
@@ -434,7 +442,7 @@ mod tests {
                 pts.extend(rect(x0, y0, x0 + w, y0 + h));
             }
             for _ in 0..rng.gen_range(0..30) {
-                let q = v2(rng.gen_range(-100.0..100.0), rng.gen_range(-100.0..100.0));
+                let q = Vec2::new(rng.gen_range(-100.0..100.0), rng.gen_range(-100.0..100.0));
                 pts.push(q);
                 if rng.gen_bool(0.2) {
                     pts.push(q);
@@ -444,15 +452,15 @@ mod tests {
         }
         // Points exactly behind one another and on the ±π seam.
         shapes.push(vec![
-            v2(-10.0, 0.0),
-            v2(-20.0, 0.0),
-            v2(-30.0, -0.0),
-            v2(5.0, 5.0),
+            Vec2::new(-10.0, 0.0),
+            Vec2::new(-20.0, 0.0),
+            Vec2::new(-30.0, -0.0),
+            Vec2::new(5.0, 5.0),
         ]);
         shapes.push(rect(-50.0, -1.0, -40.0, 1.0));
         let (mut kinds, mut binned_ran) = (std::collections::BTreeSet::new(), 0);
         for pts in &shapes {
-            for x in [v2(0.0, 0.0), v2(0.3, -0.7)] {
+            for x in [Vec2::new(0.0, 0.0), Vec2::new(0.3, -0.7)] {
                 let a = scan(&x, pts, 100.0, &p);
                 let b = scan_with(&x, pts, 100.0, &p, None);
                 assert_eq!(a, b, "x {x:?} points {pts:?}");

@@ -1,9 +1,11 @@
-//! Simplified virtual-force model, eq. (5), and the roaming rule of paper
-//! §3.1 / Fig. 2 (spec §2.3-2.4): a roaming robot is repelled by its two
-//! nearest robots and moves at V_max along the net force.
+//! Simplified virtual-force model, eq. (5) of the search paper, and its roaming rule of paper
+//! §3.1 / Fig. 2 (spec §2.3-2.4): a roaming robot is repelled by its two nearest robots and
+//! moves at V_max along the net force. Shared: the search behaviour's roaming and subgroup
+//! separation, BSOA's eq. (21) weights, and roam's repulsions use [`magnitude`].
 
-use crate::search::geometry::Vec2;
+use crate::kernels::nearest::TwoNearest;
 use serde::{Deserialize, Serialize};
+use swarm::geometry::Vec2;
 
 /// Tunables of the virtual-force model.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -79,24 +81,18 @@ pub fn two_nearest(x: &Vec2, others: &[Vec2]) -> Vec<usize> {
     nearest_two(x, others).into_iter().flatten().collect()
 }
 
-/// [`two_nearest`] in one pass, without sorting or allocating: keeps the two smallest
-/// (distance, index) keys, comparing distances strictly so that a tie keeps the lower index.
+/// The two robots of `others` nearest to `x` in one pass ([`TwoNearest`]; coincident robots
+/// and NaN distances are skipped, as the filter of a sort would).
 fn nearest_two(x: &Vec2, others: &[Vec2]) -> [Option<usize>; 2] {
-    let mut best: [Option<(f64, usize)>; 2] = [None, None];
+    let mut best = TwoNearest::default();
     for (i, o) in others.iter().enumerate() {
         let d = (o - x).norm();
-        // Coincident robots are skipped (and NaN distances, as the filter of a sort would).
         if d <= 1e-9 || d.is_nan() {
             continue;
         }
-        match best {
-            [Some(b0), _] if d < b0.0 => best = [Some((d, i)), Some(b0)],
-            [Some(_), Some(b1)] if d >= b1.0 => {}
-            [Some(_), _] => best[1] = Some((d, i)),
-            [None, _] => best[0] = Some((d, i)),
-        }
+        best.offer(d, i);
     }
-    best.map(|b| b.map(|(_, i)| i))
+    [best.first(), best.second()].map(|b| b.map(|(_, i)| i))
 }
 
 /// f_i = f_vr1 + f_vr2: repulsion of the two nearest robots (Fig. 2).
@@ -130,7 +126,6 @@ pub fn roaming_velocity(x: &Vec2, others: &[Vec2], previous_velocity: &Vec2, p: 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::search::geometry::v2;
 
     #[test]
     fn eq5_values_and_cutoff() {
@@ -144,12 +139,12 @@ mod tests {
     #[test]
     fn repulsion_and_attraction_directions() {
         let p = Params::default();
-        let f = repulsion(&v2(0.0, 0.0), &v2(10.0, 0.0), 100.0, &p);
+        let f = repulsion(&Vec2::new(0.0, 0.0), &Vec2::new(10.0, 0.0), 100.0, &p);
         assert!(f.x < 0.0 && f.y.abs() < 1e-12);
-        let a = attraction(&v2(0.0, 0.0), &v2(10.0, 0.0), &p);
+        let a = attraction(&Vec2::new(0.0, 0.0), &Vec2::new(10.0, 0.0), &p);
         assert!(a.x > 0.0);
         assert_eq!(
-            repulsion(&v2(1.0, 1.0), &v2(1.0, 1.0), 100.0, &p),
+            repulsion(&Vec2::new(1.0, 1.0), &Vec2::new(1.0, 1.0), 100.0, &p),
             Vec2::zeros()
         );
     }
@@ -157,9 +152,14 @@ mod tests {
     #[test]
     fn roaming_uses_only_two_nearest() {
         let p = Params::default();
-        let x = v2(0.0, 0.0);
+        let x = Vec2::new(0.0, 0.0);
         // Two near robots to the east/north-east, a crowd far west ignored.
-        let others = [v2(-90.0, 0.0), v2(10.0, 0.0), v2(-95.0, 1.0), v2(0.0, 20.0)];
+        let others = [
+            Vec2::new(-90.0, 0.0),
+            Vec2::new(10.0, 0.0),
+            Vec2::new(-95.0, 1.0),
+            Vec2::new(0.0, 20.0),
+        ];
         assert_eq!(two_nearest(&x, &others), vec![1, 3]);
         let v = roaming_velocity(&x, &others, &Vec2::zeros(), &p);
         assert!((v.norm() - 10.0).abs() < 1e-9);
@@ -170,11 +170,11 @@ mod tests {
 
     #[test]
     fn two_nearest_matches_sorting_all() {
-        let x = v2(0.0, 0.0);
+        let x = Vec2::new(0.0, 0.0);
         let mut others: Vec<Vec2> = (0..40)
-            .map(|i| v2(((i * 37) % 11) as f64 - 5.0, ((i * 53) % 7) as f64 - 3.0))
+            .map(|i| Vec2::new(((i * 37) % 11) as f64 - 5.0, ((i * 53) % 7) as f64 - 3.0))
             .collect();
-        others.push(v2(f64::NAN, 0.0));
+        others.push(Vec2::new(f64::NAN, 0.0));
         for n in 0..others.len() {
             let o = &others[..n];
             let mut idx: Vec<(f64, usize)> = o
@@ -192,10 +192,10 @@ mod tests {
     #[test]
     fn roaming_without_neighbours_keeps_heading() {
         let p = Params::default();
-        let others = [v2(500.0, 0.0)];
-        let v = roaming_velocity(&v2(0.0, 0.0), &others, &v2(0.0, 3.0), &p);
-        assert!((v - v2(0.0, 10.0)).norm() < 1e-12);
-        let v0 = roaming_velocity(&v2(0.0, 0.0), &[], &Vec2::zeros(), &p);
+        let others = [Vec2::new(500.0, 0.0)];
+        let v = roaming_velocity(&Vec2::new(0.0, 0.0), &others, &Vec2::new(0.0, 3.0), &p);
+        assert!((v - Vec2::new(0.0, 10.0)).norm() < 1e-12);
+        let v0 = roaming_velocity(&Vec2::new(0.0, 0.0), &[], &Vec2::zeros(), &p);
         assert_eq!(v0, Vec2::zeros());
     }
 }
