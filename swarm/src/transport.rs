@@ -11,10 +11,17 @@ use crate::scenario::Scenario;
 use crate::{AgentRuntime, Behaviour};
 use iceoryx2::prelude::*;
 use iceoryx2::service::port_factory::publish_subscribe::PortFactory;
+use iceoryx2::service::port_factory::PortFactory as _;
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Arc;
 
+mod error;
+pub use error::{Port, ServiceId, TransportError, TransportResult};
+
+/// A boxed error of any kind, and a result with it: what a process's run loop returns when
+/// it mixes transport, file and scenario errors (the world process does). The functions here
+/// return the typed [`TransportError`], which converts into it with `?`.
 pub type Error = Box<dyn std::error::Error + Send + Sync>;
 pub type Result<T> = std::result::Result<T, Error>;
 
@@ -44,22 +51,25 @@ pub fn root_for(prefix: &str) -> PathBuf {
     PathBuf::from(IOX2_ROOT).join(format!("{prefix}iox2"))
 }
 
-pub(crate) fn err(what: &str, e: impl std::fmt::Debug) -> Error {
-    format!("{what}: {e:?}").into()
-}
-
 /// The iceoryx2 configuration of one run.
 /// Expired publisher connections a subscriber keeps readable (see `run_config`).
 pub const EXPIRED_CONNECTIONS: usize = 4;
 
-pub fn run_config(prefix: &str) -> Result<Config> {
+pub fn run_config(prefix: &str) -> TransportResult<Config> {
     let mut c = Config::default();
-    c.global.prefix = FileName::new(prefix.as_bytes()).map_err(|e| err("iceoryx2 prefix", e))?;
+    c.global.prefix =
+        FileName::new(prefix.as_bytes()).map_err(|source| TransportError::Prefix {
+            prefix: prefix.to_string(),
+            source,
+        })?;
     let root = root_for(prefix);
     let mut root_s = root.display().to_string();
     root_s.push('/');
-    c.global
-        .set_root_path(&Path::new(root_s.as_bytes()).map_err(|e| err("iceoryx2 root path", e))?);
+    let root_path = Path::new(root_s.as_bytes()).map_err(|source| TransportError::RootPath {
+        path: root_s.clone(),
+        source,
+    })?;
+    c.global.set_root_path(&root_path);
     // Implicit dead-node cleanup scans every node of the run on each service open: with N
     // agents opening ~N links each that is O(N^2) node checks at start-up (8 s for 50 robots
     // on this VM). The world cleans dead nodes explicitly when a robot dies instead.
@@ -77,17 +87,28 @@ pub fn run_config(prefix: &str) -> Result<Config> {
 }
 
 /// A node of this run. Signal handling is left to our own code.
-pub fn node(config: &Config, name: &str) -> Result<Node<ipc::Service>> {
+pub fn node(config: &Config, name: &str) -> TransportResult<Node<ipc::Service>> {
+    let node_name = NodeName::new(name).map_err(|source| TransportError::NodeName {
+        name: name.to_string(),
+        source,
+    })?;
     NodeBuilder::new()
         .config(config)
-        .name(&NodeName::new(name).map_err(|e| err("node name", e))?)
+        .name(&node_name)
         .signal_handling_mode(SignalHandlingMode::Disabled)
         .create::<ipc::Service>()
-        .map_err(|e| err("create node", e))
+        .map_err(|source| TransportError::Node {
+            name: name.to_string(),
+            source,
+        })
 }
 
-fn service_name(s: &str) -> Result<ServiceName> {
-    ServiceName::new(s).map_err(|e| err("service name", e))
+/// The iceoryx2 name of a service.
+pub fn service_name(service: &ServiceId) -> TransportResult<ServiceName> {
+    ServiceName::new(&service.name()).map_err(|source| TransportError::ServiceName {
+        service: service.clone(),
+        source,
+    })
 }
 
 pub fn sense_name(robot: u32) -> String {
@@ -133,9 +154,14 @@ pub fn radio_max_borrowed(sc: &Scenario) -> usize {
 }
 
 /// The world's side: creates (`create == true`) or opens robot i's three services.
-pub fn sense_service(node: &Node<ipc::Service>, robot: u32, create: bool) -> Result<SenseService> {
+pub fn sense_service(
+    node: &Node<ipc::Service>,
+    robot: u32,
+    create: bool,
+) -> TransportResult<SenseService> {
+    let id = ServiceId::Sense(robot);
     let b = node
-        .service_builder(&service_name(&sense_name(robot))?)
+        .service_builder(&service_name(&id)?)
         .publish_subscribe::<Sense>();
     if create {
         b.max_publishers(1 + RESTART_SLACK)
@@ -144,15 +170,26 @@ pub fn sense_service(node: &Node<ipc::Service>, robot: u32, create: bool) -> Res
             .subscriber_max_buffer_size(1)
             .history_size(0)
             .create()
-            .map_err(|e| err("create sense service", e))
+            .map_err(|source| TransportError::Create {
+                service: id,
+                source,
+            })
     } else {
-        b.open().map_err(|e| err("open sense service", e))
+        b.open().map_err(|source| TransportError::Open {
+            service: id,
+            source,
+        })
     }
 }
 
-pub fn act_service(node: &Node<ipc::Service>, robot: u32, create: bool) -> Result<ActService> {
+pub fn act_service(
+    node: &Node<ipc::Service>,
+    robot: u32,
+    create: bool,
+) -> TransportResult<ActService> {
+    let id = ServiceId::Act(robot);
     let b = node
-        .service_builder(&service_name(&act_name(robot))?)
+        .service_builder(&service_name(&id)?)
         .publish_subscribe::<Action>();
     if create {
         b.max_publishers(1 + RESTART_SLACK)
@@ -161,9 +198,15 @@ pub fn act_service(node: &Node<ipc::Service>, robot: u32, create: bool) -> Resul
             .subscriber_max_buffer_size(2)
             .history_size(0)
             .create()
-            .map_err(|e| err("create act service", e))
+            .map_err(|source| TransportError::Create {
+                service: id,
+                source,
+            })
     } else {
-        b.open().map_err(|e| err("open act service", e))
+        b.open().map_err(|source| TransportError::Open {
+            service: id,
+            source,
+        })
     }
 }
 
@@ -172,9 +215,10 @@ pub fn radio_service(
     robot: u32,
     sc: &Scenario,
     create: bool,
-) -> Result<RadioService> {
+) -> TransportResult<RadioService> {
+    let id = ServiceId::Radio(robot);
     let b = node
-        .service_builder(&service_name(&radio_name(robot))?)
+        .service_builder(&service_name(&id)?)
         .publish_subscribe::<[u8]>()
         .user_header::<RadioHeader>();
     if create {
@@ -186,15 +230,22 @@ pub fn radio_service(
             .subscriber_max_borrowed_samples(radio_max_borrowed(sc))
             .history_size(0)
             .create()
-            .map_err(|e| err("create radio service", e))
+            .map_err(|source| TransportError::Create {
+                service: id,
+                source,
+            })
     } else {
-        b.open().map_err(|e| err("open radio service", e))
+        b.open().map_err(|source| TransportError::Open {
+            service: id,
+            source,
+        })
     }
 }
 
-pub fn status_service(node: &Node<ipc::Service>, create: bool) -> Result<StatusService> {
+pub fn status_service(node: &Node<ipc::Service>, create: bool) -> TransportResult<StatusService> {
+    let id = ServiceId::Status;
     let b = node
-        .service_builder(&service_name(STATUS_NAME)?)
+        .service_builder(&service_name(&id)?)
         .publish_subscribe::<WorldStatus>();
     if create {
         b.max_publishers(1)
@@ -202,15 +253,22 @@ pub fn status_service(node: &Node<ipc::Service>, create: bool) -> Result<StatusS
             .max_nodes(6)
             .subscriber_max_buffer_size(1)
             .create()
-            .map_err(|e| err("create status service", e))
+            .map_err(|source| TransportError::Create {
+                service: id,
+                source,
+            })
     } else {
-        b.open().map_err(|e| err("open status service", e))
+        b.open().map_err(|source| TransportError::Open {
+            service: id,
+            source,
+        })
     }
 }
 
-pub fn control_service(node: &Node<ipc::Service>, create: bool) -> Result<ControlService> {
+pub fn control_service(node: &Node<ipc::Service>, create: bool) -> TransportResult<ControlService> {
+    let id = ServiceId::Control;
     let b = node
-        .service_builder(&service_name(CONTROL_NAME)?)
+        .service_builder(&service_name(&id)?)
         .publish_subscribe::<Control>();
     if create {
         b.max_publishers(4)
@@ -219,9 +277,15 @@ pub fn control_service(node: &Node<ipc::Service>, create: bool) -> Result<Contro
             .subscriber_max_buffer_size(256)
             .enable_safe_overflow(false)
             .create()
-            .map_err(|e| err("create control service", e))
+            .map_err(|source| TransportError::Create {
+                service: id,
+                source,
+            })
     } else {
-        b.open().map_err(|e| err("open control service", e))
+        b.open().map_err(|source| TransportError::Open {
+            service: id,
+            source,
+        })
     }
 }
 
@@ -229,13 +293,16 @@ pub fn control_service(node: &Node<ipc::Service>, create: bool) -> Result<Contro
 pub fn radio_publisher(
     svc: &RadioService,
     sc: &Scenario,
-) -> Result<iceoryx2::port::publisher::Publisher<ipc::Service, [u8], RadioHeader>> {
+) -> TransportResult<iceoryx2::port::publisher::Publisher<ipc::Service, [u8], RadioHeader>> {
     svc.publisher_builder()
         .initial_max_slice_len(sc.radio.max_message_bytes as usize)
         .allocation_strategy(AllocationStrategy::Static)
         .max_loaned_samples(1)
         .create()
-        .map_err(|e| err("create radio publisher", e))
+        .map_err(|source| TransportError::Publisher {
+            service: ServiceId::from(svc.name().as_str()),
+            source,
+        })
 }
 
 /// The radio's send side in shared memory: loans exactly the message's bytes in the robot's
