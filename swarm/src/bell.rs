@@ -11,7 +11,9 @@
 //! tick to release (iceoryx2 signals each listener), about 37 us each on this VM (see
 //! spec/iceoryx2-and-peers.md), against one FUTEX_WAKE for all.
 
-use crate::transport::{service_name, ServiceId, TransportError, TransportResult};
+use crate::transport::{
+    event, EventCapacity, EventService, Reach, ServiceId, TransportError, TransportResult,
+};
 use iceoryx2::port::listener::Listener;
 use iceoryx2::port::notifier::Notifier;
 use iceoryx2::prelude::*;
@@ -25,8 +27,6 @@ const SLACK: usize = 8;
 const DOWN: &str = "tick/down";
 const UP: &str = "tick/up";
 
-type EventService = iceoryx2::service::port_factory::event::PortFactory<ipc::Service>;
-
 /// One process's end of the two event services.
 pub struct EventBell {
     notifier: Notifier<ipc::Service>,
@@ -39,47 +39,27 @@ fn services(
     create: bool,
 ) -> TransportResult<(EventService, EventService)> {
     let n = robots as usize + SLACK;
-    let (down_id, up_id) = (ServiceId::from(DOWN), ServiceId::from(UP));
-    let down = node.service_builder(&service_name(&down_id)?).event();
-    let up = node.service_builder(&service_name(&up_id)?).event();
-    if create {
-        let down = down
-            .max_listeners(n)
-            .max_notifiers(2)
-            .max_nodes(n + 2)
-            .create()
-            .map_err(|source| TransportError::CreateEvent {
-                service: down_id,
-                source,
-            })?;
-        let up = up
-            .max_listeners(2)
-            .max_notifiers(n)
-            .max_nodes(n + 2)
-            .create()
-            .map_err(|source| TransportError::CreateEvent {
-                service: up_id,
-                source,
-            })?;
-        Ok((down, up))
-    } else {
-        let down = down.open().map_err(|source| TransportError::OpenEvent {
-            service: down_id,
-            source,
-        })?;
-        let up = up.open().map_err(|source| TransportError::OpenEvent {
-            service: up_id,
-            source,
-        })?;
-        Ok((down, up))
-    }
+    let down = Reach::create_if(create, || EventCapacity {
+        listeners: n,
+        notifiers: 2,
+        nodes: n + 2,
+    });
+    let up = Reach::create_if(create, || EventCapacity {
+        listeners: 2,
+        notifiers: n,
+        nodes: n + 2,
+    });
+    Ok((
+        event(node, ServiceId::from(DOWN), down)?,
+        event(node, ServiceId::from(UP), up)?,
+    ))
 }
 
 fn notifier(svc: &EventService) -> TransportResult<Notifier<ipc::Service>> {
     svc.notifier_builder()
         .create()
         .map_err(|source| TransportError::Notifier {
-            service: ServiceId::from(svc.name().as_str()),
+            service: ServiceId::of(svc),
             source,
         })
 }
@@ -88,7 +68,7 @@ fn listener(svc: &EventService) -> TransportResult<Listener<ipc::Service>> {
     svc.listener_builder()
         .create()
         .map_err(|source| TransportError::Listener {
-            service: ServiceId::from(svc.name().as_str()),
+            service: ServiceId::of(svc),
             source,
         })
 }

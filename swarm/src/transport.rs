@@ -10,14 +10,17 @@ use crate::frames::{Action, Control, RadioHeader, Sense, WorldStatus};
 use crate::scenario::Scenario;
 use crate::{AgentRuntime, Behaviour};
 use iceoryx2::prelude::*;
-use iceoryx2::service::port_factory::publish_subscribe::PortFactory;
-use iceoryx2::service::port_factory::PortFactory as _;
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Arc;
 
 mod error;
-pub use error::{Port, ServiceId, TransportError, TransportResult};
+mod service;
+pub use error::{Port, TransportError, TransportResult};
+pub use service::{
+    event, pub_sub, service_name, EventCapacity, EventService, PubSubCapacity, PubSubService,
+    Reach, ServiceId, ShmPayload, CONTROL_NAME, STATUS_NAME,
+};
 
 /// A boxed error of any kind, and a result with it: what a process's run loop returns when
 /// it mixes transport, file and scenario errors (the world process does). The functions here
@@ -25,11 +28,11 @@ pub use error::{Port, ServiceId, TransportError, TransportResult};
 pub type Error = Box<dyn std::error::Error + Send + Sync>;
 pub type Result<T> = std::result::Result<T, Error>;
 
-pub type SenseService = PortFactory<ipc::Service, Sense, ()>;
-pub type ActService = PortFactory<ipc::Service, Action, ()>;
-pub type RadioService = PortFactory<ipc::Service, [u8], RadioHeader>;
-pub type StatusService = PortFactory<ipc::Service, WorldStatus, ()>;
-pub type ControlService = PortFactory<ipc::Service, Control, ()>;
+pub type SenseService = PubSubService<Sense, ()>;
+pub type ActService = PubSubService<Action, ()>;
+pub type RadioService = PubSubService<[u8], RadioHeader>;
+pub type StatusService = PubSubService<WorldStatus, ()>;
+pub type ControlService = PubSubService<Control, ()>;
 
 /// Where iceoryx2 keeps a run's node and service folders: on tmpfs, in a folder named with the
 /// run's prefix (`/dev/shm/<prefix>iox2/`). On this VM /tmp is ext4, where creating iceoryx2's
@@ -103,26 +106,6 @@ pub fn node(config: &Config, name: &str) -> TransportResult<Node<ipc::Service>> 
         })
 }
 
-/// The iceoryx2 name of a service.
-pub fn service_name(service: &ServiceId) -> TransportResult<ServiceName> {
-    ServiceName::new(&service.name()).map_err(|source| TransportError::ServiceName {
-        service: service.clone(),
-        source,
-    })
-}
-
-pub fn sense_name(robot: u32) -> String {
-    format!("robot/{robot}/sense")
-}
-pub fn act_name(robot: u32) -> String {
-    format!("robot/{robot}/act")
-}
-pub fn radio_name(robot: u32) -> String {
-    format!("robot/{robot}/radio")
-}
-pub const STATUS_NAME: &str = "world/state";
-pub const CONTROL_NAME: &str = "run/control";
-
 /// Slack for a restarted agent whose dead predecessor's ports are not cleaned yet.
 const RESTART_SLACK: usize = 1;
 
@@ -153,140 +136,125 @@ pub fn radio_max_borrowed(sc: &Scenario) -> usize {
     radio_held_per_link(sc) + 1
 }
 
-/// The world's side: creates (`create == true`) or opens robot i's three services.
+/// Sense frames: the world publishes, the robot's agent subscribes; the latest frame only.
+pub fn sense_capacity() -> PubSubCapacity {
+    PubSubCapacity {
+        publishers: 1 + RESTART_SLACK,
+        subscribers: 1 + RESTART_SLACK,
+        nodes: 2 + 2 * RESTART_SLACK,
+        buffer: 1,
+        borrowed: None,
+        history: Some(0),
+        safe_overflow: None,
+    }
+}
+
+/// Action frames: the agent publishes, the world subscribes; this tick's and the next's.
+pub fn act_capacity() -> PubSubCapacity {
+    PubSubCapacity {
+        buffer: 2,
+        ..sense_capacity()
+    }
+}
+
+/// A robot's radio: its agent publishes, every other robot may subscribe (see
+/// `radio_max_subscribers`); the world holds the service open.
+pub fn radio_capacity(sc: &Scenario) -> PubSubCapacity {
+    let subscribers = radio_max_subscribers(sc);
+    PubSubCapacity {
+        publishers: 1 + RESTART_SLACK,
+        subscribers,
+        nodes: subscribers + 1 + RESTART_SLACK + 1,
+        buffer: radio_buffer(sc),
+        borrowed: Some(radio_max_borrowed(sc)),
+        history: Some(0),
+        safe_overflow: None,
+    }
+}
+
+/// The world's status: the world publishes; the orchestrator and tools subscribe.
+pub fn status_capacity() -> PubSubCapacity {
+    PubSubCapacity {
+        publishers: 1,
+        subscribers: 4,
+        nodes: 6,
+        buffer: 1,
+        borrowed: None,
+        history: None,
+        safe_overflow: None,
+    }
+}
+
+/// The control channel: the orchestrator (and tools) publish, the world subscribes. Nothing
+/// is dropped: a full buffer fails the send instead.
+pub fn control_capacity() -> PubSubCapacity {
+    PubSubCapacity {
+        publishers: 4,
+        subscribers: 1,
+        nodes: 6,
+        buffer: 256,
+        borrowed: None,
+        history: None,
+        safe_overflow: Some(false),
+    }
+}
+
+/// Robot i's Sense service: the world creates it (`create`), the agent opens it.
 pub fn sense_service(
     node: &Node<ipc::Service>,
     robot: u32,
     create: bool,
 ) -> TransportResult<SenseService> {
-    let id = ServiceId::Sense(robot);
-    let b = node
-        .service_builder(&service_name(&id)?)
-        .publish_subscribe::<Sense>();
-    if create {
-        b.max_publishers(1 + RESTART_SLACK)
-            .max_subscribers(1 + RESTART_SLACK)
-            .max_nodes(2 + 2 * RESTART_SLACK)
-            .subscriber_max_buffer_size(1)
-            .history_size(0)
-            .create()
-            .map_err(|source| TransportError::Create {
-                service: id,
-                source,
-            })
-    } else {
-        b.open().map_err(|source| TransportError::Open {
-            service: id,
-            source,
-        })
-    }
+    pub_sub(
+        node,
+        ServiceId::Sense(robot),
+        Reach::create_if(create, sense_capacity),
+    )
 }
 
+/// Robot i's Action service: the world creates it (`create`), the agent opens it.
 pub fn act_service(
     node: &Node<ipc::Service>,
     robot: u32,
     create: bool,
 ) -> TransportResult<ActService> {
-    let id = ServiceId::Act(robot);
-    let b = node
-        .service_builder(&service_name(&id)?)
-        .publish_subscribe::<Action>();
-    if create {
-        b.max_publishers(1 + RESTART_SLACK)
-            .max_subscribers(1 + RESTART_SLACK)
-            .max_nodes(2 + 2 * RESTART_SLACK)
-            .subscriber_max_buffer_size(2)
-            .history_size(0)
-            .create()
-            .map_err(|source| TransportError::Create {
-                service: id,
-                source,
-            })
-    } else {
-        b.open().map_err(|source| TransportError::Open {
-            service: id,
-            source,
-        })
-    }
+    pub_sub(
+        node,
+        ServiceId::Act(robot),
+        Reach::create_if(create, act_capacity),
+    )
 }
 
+/// Robot i's radio service: the world creates it (`create`), agents open it.
 pub fn radio_service(
     node: &Node<ipc::Service>,
     robot: u32,
     sc: &Scenario,
     create: bool,
 ) -> TransportResult<RadioService> {
-    let id = ServiceId::Radio(robot);
-    let b = node
-        .service_builder(&service_name(&id)?)
-        .publish_subscribe::<[u8]>()
-        .user_header::<RadioHeader>();
-    if create {
-        let subs = radio_max_subscribers(sc);
-        b.max_publishers(1 + RESTART_SLACK)
-            .max_subscribers(subs)
-            .max_nodes(subs + 1 + RESTART_SLACK + 1)
-            .subscriber_max_buffer_size(radio_buffer(sc))
-            .subscriber_max_borrowed_samples(radio_max_borrowed(sc))
-            .history_size(0)
-            .create()
-            .map_err(|source| TransportError::Create {
-                service: id,
-                source,
-            })
-    } else {
-        b.open().map_err(|source| TransportError::Open {
-            service: id,
-            source,
-        })
-    }
+    pub_sub(
+        node,
+        ServiceId::Radio(robot),
+        Reach::create_if(create, || radio_capacity(sc)),
+    )
 }
 
+/// The world's status service: the world creates it (`create`), the orchestrator opens it.
 pub fn status_service(node: &Node<ipc::Service>, create: bool) -> TransportResult<StatusService> {
-    let id = ServiceId::Status;
-    let b = node
-        .service_builder(&service_name(&id)?)
-        .publish_subscribe::<WorldStatus>();
-    if create {
-        b.max_publishers(1)
-            .max_subscribers(4)
-            .max_nodes(6)
-            .subscriber_max_buffer_size(1)
-            .create()
-            .map_err(|source| TransportError::Create {
-                service: id,
-                source,
-            })
-    } else {
-        b.open().map_err(|source| TransportError::Open {
-            service: id,
-            source,
-        })
-    }
+    pub_sub(
+        node,
+        ServiceId::Status,
+        Reach::create_if(create, status_capacity),
+    )
 }
 
+/// The control service: the world creates it (`create`), the orchestrator opens it.
 pub fn control_service(node: &Node<ipc::Service>, create: bool) -> TransportResult<ControlService> {
-    let id = ServiceId::Control;
-    let b = node
-        .service_builder(&service_name(&id)?)
-        .publish_subscribe::<Control>();
-    if create {
-        b.max_publishers(4)
-            .max_subscribers(1)
-            .max_nodes(6)
-            .subscriber_max_buffer_size(256)
-            .enable_safe_overflow(false)
-            .create()
-            .map_err(|source| TransportError::Create {
-                service: id,
-                source,
-            })
-    } else {
-        b.open().map_err(|source| TransportError::Open {
-            service: id,
-            source,
-        })
-    }
+    pub_sub(
+        node,
+        ServiceId::Control,
+        Reach::create_if(create, control_capacity),
+    )
 }
 
 /// Radio publisher of robot i (fixed-size slots: no reallocation, no lost dynamic samples).
@@ -300,7 +268,7 @@ pub fn radio_publisher(
         .max_loaned_samples(1)
         .create()
         .map_err(|source| TransportError::Publisher {
-            service: ServiceId::from(svc.name().as_str()),
+            service: ServiceId::of(svc),
             source,
         })
 }

@@ -6,6 +6,7 @@
 //! binaries print an error with `{e}` alone at their edge: nothing is lost when a caller only
 //! keeps `to_string()`.
 
+use super::ServiceId;
 use iceoryx2::node::NodeCreationFailure;
 use iceoryx2::port::listener::{ListenerCreateError, ListenerWaitError};
 use iceoryx2::port::notifier::{NotifierCreateError, NotifierNotifyError};
@@ -19,77 +20,6 @@ use iceoryx2::service::builder::publish_subscribe::{
 };
 use iceoryx2::service::service_name::ServiceNameError;
 use std::fmt;
-
-/// One iceoryx2 service of a run.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub enum ServiceId {
-    /// `robot/<i>/sense`: the world's Sense frames for robot i.
-    Sense(u32),
-    /// `robot/<i>/act`: robot i's Action frames.
-    Act(u32),
-    /// `robot/<i>/radio`: robot i's radio messages.
-    Radio(u32),
-    /// `world/state`: the world's status for the orchestrator.
-    Status,
-    /// `run/control`: the orchestrator's commands to the world.
-    Control,
-    /// Any other service (the iceoryx2-event bell, the benchmarks' raw services).
-    Named(String),
-}
-
-impl ServiceId {
-    /// The iceoryx2 service name.
-    pub fn name(&self) -> String {
-        match self {
-            ServiceId::Sense(r) => format!("robot/{r}/sense"),
-            ServiceId::Act(r) => format!("robot/{r}/act"),
-            ServiceId::Radio(r) => format!("robot/{r}/radio"),
-            ServiceId::Status => super::STATUS_NAME.to_string(),
-            ServiceId::Control => super::CONTROL_NAME.to_string(),
-            ServiceId::Named(n) => n.clone(),
-        }
-    }
-
-    /// The robot the service belongs to, if it is one robot's.
-    pub fn robot(&self) -> Option<u32> {
-        match self {
-            ServiceId::Sense(r) | ServiceId::Act(r) | ServiceId::Radio(r) => Some(*r),
-            _ => None,
-        }
-    }
-}
-
-impl fmt::Display for ServiceId {
-    fn fmt(&self, f: &mut fmt::Formatter) -> fmt::Result {
-        f.write_str(&self.name())
-    }
-}
-
-impl From<&str> for ServiceId {
-    /// The service of this name: a robot's or the run's own when the name is one of theirs.
-    fn from(name: &str) -> ServiceId {
-        let robots = |kind: &str| -> Option<u32> {
-            name.strip_prefix("robot/")?
-                .strip_suffix(kind)?
-                .strip_suffix('/')?
-                .parse()
-                .ok()
-        };
-        if let Some(r) = robots("sense") {
-            ServiceId::Sense(r)
-        } else if let Some(r) = robots("act") {
-            ServiceId::Act(r)
-        } else if let Some(r) = robots("radio") {
-            ServiceId::Radio(r)
-        } else if name == super::STATUS_NAME {
-            ServiceId::Status
-        } else if name == super::CONTROL_NAME {
-            ServiceId::Control
-        } else {
-            ServiceId::Named(name.to_string())
-        }
-    }
-}
 
 /// The port of a service an error happened on.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -271,29 +201,5 @@ mod tests {
         assert_eq!(e.robot(), Some(7));
         let cause = e.source().expect("iceoryx2's error is the source");
         assert_eq!(cause.to_string(), "PublishSubscribeOpenError::DoesNotExist");
-    }
-
-    #[test]
-    fn service_names_are_the_runs_names() {
-        assert_eq!(ServiceId::Sense(3).name(), "robot/3/sense");
-        assert_eq!(ServiceId::Act(0).name(), "robot/0/act");
-        assert_eq!(ServiceId::Status.name(), "world/state");
-        assert_eq!(ServiceId::Control.name(), "run/control");
-        assert_eq!(ServiceId::from("tick/down").robot(), None);
-        // A name read back from iceoryx2 is the service it names.
-        for id in [
-            ServiceId::Sense(3),
-            ServiceId::Act(12),
-            ServiceId::Radio(4095),
-            ServiceId::Status,
-            ServiceId::Control,
-            ServiceId::from("lat/down"),
-        ] {
-            assert_eq!(ServiceId::from(id.name().as_str()), id);
-        }
-        assert_eq!(
-            ServiceId::from("robot/x/radio"),
-            ServiceId::Named("robot/x/radio".into())
-        );
     }
 }
