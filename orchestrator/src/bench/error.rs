@@ -106,9 +106,6 @@ pub enum BenchError {
     /// What a benchmark left in /dev/shm (it must leave nothing).
     #[error("left in /dev/shm: {files:?}")]
     Leftovers { files: Vec<String> },
-    /// `bench latency` failed (temporary: its errors are still text).
-    #[error("{0}")]
-    Latency(String),
     /// `bench memory` failed (memory.rs's errors are text).
     #[error("{0}")]
     Memory(String),

@@ -244,13 +244,11 @@ pub fn bench(a: BenchArgs) -> i32 {
         BenchWhat::Latency { json, quick } => {
             print_machine();
             finish(
-                latency::run(quick)
-                    .map_err(BenchError::Latency)
-                    .and_then(|r| {
-                        latency::print(&r);
-                        out.latency = Some(r);
-                        write_json(&json, &out)
-                    }),
+                latency::run(quick).and_then(|r| {
+                    latency::print(&r);
+                    out.latency = Some(r);
+                    write_json(&json, &out)
+                }),
                 "latency",
             )
         }
@@ -333,7 +331,7 @@ pub fn bench(a: BenchArgs) -> i32 {
             print_machine();
             let t = std::time::Instant::now();
             let r = (|| -> BenchResult<()> {
-                let l = latency::run(quick).map_err(BenchError::Latency)?;
+                let l = latency::run(quick)?;
                 latency::print(&l);
                 out.latency = Some(l);
                 println!();
