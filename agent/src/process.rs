@@ -7,7 +7,7 @@ use std::collections::BTreeMap;
 use std::sync::atomic::AtomicUsize;
 use std::sync::Arc;
 use std::time::Duration;
-use swarm::barrier::{TickBarrier, Wake};
+use swarm::barrier::{BarrierError, TickBarrier, Wake};
 use swarm::frames::RadioHeader;
 use swarm::scenario::Scenario;
 use swarm::transport::{self, ServiceId, ShmTx, TransportError};
@@ -20,11 +20,8 @@ pub enum AgentError {
     #[error(transparent)]
     Transport(#[from] TransportError),
     /// The run's tick barrier segment could not be opened.
-    #[error("open the tick barrier /dev/shm/{prefix}tick: {source}")]
-    Barrier {
-        prefix: String,
-        source: std::io::Error,
-    },
+    #[error(transparent)]
+    Barrier(#[from] BarrierError),
 }
 
 pub type Result<T> = std::result::Result<T, AgentError>;
@@ -96,10 +93,7 @@ fn run_loop<B: Behaviour>(args: &AgentArgs, mut rt: AgentRuntime<B>) -> Result<i
             })?;
     let radio_svc = transport::radio_service(&node, robot, sc, false)?;
     let radio_pub = transport::radio_publisher(&radio_svc, sc)?;
-    let barrier = TickBarrier::open(&args.prefix).map_err(|source| AgentError::Barrier {
-        prefix: args.prefix.clone(),
-        source,
-    })?;
+    let barrier = TickBarrier::open(&args.prefix)?;
     let world_pid = barrier.world_pid();
     let bell = match sc.runtime.barrier {
         swarm::scenario::BarrierKind::Futex => None,

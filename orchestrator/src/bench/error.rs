@@ -2,6 +2,7 @@
 
 use std::path::PathBuf;
 use std::process::ExitStatus;
+use swarm::barrier::BarrierError;
 use swarm::scenario::ConfigError;
 use swarm::transport::TransportError;
 
@@ -37,11 +38,8 @@ pub enum BenchError {
         mode: &'static str,
         source: Box<BenchError>,
     },
-    #[error("tick barrier /dev/shm/{prefix}tick: {source}")]
-    Barrier {
-        prefix: String,
-        source: std::io::Error,
-    },
+    #[error(transparent)]
+    Barrier(#[from] BarrierError),
     #[error("spawn bench child {kind}: {source}")]
     Spawn {
         kind: String,

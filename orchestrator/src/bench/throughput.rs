@@ -157,10 +157,7 @@ fn one(n: u32, size: usize, enc: &str, ticks: u64) -> BenchResult<Row> {
     let prefix = tick::bench_prefix(&format!("tput-{n}-{size}-{enc}"));
     let r = (|| -> BenchResult<Row> {
         let sc = scenario(n, size);
-        let barrier = TickBarrier::create(&prefix, n).map_err(|source| BenchError::Barrier {
-            prefix: prefix.clone(),
-            source,
-        })?;
+        let barrier = TickBarrier::create(&prefix, n)?;
         let config = transport::run_config(&prefix)?;
         let node = transport::node(&config, "bench-tput")?;
         let _services = (0..n)
@@ -294,10 +291,7 @@ struct Ports {
 impl Ports {
     fn open(a: &ChildArgs, sc: &Scenario) -> BenchResult<Ports> {
         let (n, me) = (a.robots, a.index);
-        let barrier = TickBarrier::open(&a.prefix).map_err(|source| BenchError::Barrier {
-            prefix: a.prefix.clone(),
-            source,
-        })?;
+        let barrier = TickBarrier::open(&a.prefix)?;
         let config = transport::run_config(&a.prefix)?;
         let node = transport::node(&config, &format!("bench-tput-{me}"))?;
         let own = transport::radio_service(&node, me, sc, false)?;

@@ -380,10 +380,7 @@ fn raw_iox2(n: u32, rounds: u64) -> BenchResult<Stats> {
 fn futex_floor(n: u32, rounds: u64) -> BenchResult<Stats> {
     let prefix = bench_prefix("futex");
     let result = (|| {
-        let b = TickBarrier::create(&prefix, n).map_err(|source| BenchError::Barrier {
-            prefix: prefix.clone(),
-            source,
-        })?;
+        let b = TickBarrier::create(&prefix, n)?;
         let children = spawn_children("futex", &prefix, n)?;
         let t = Instant::now();
         while b.ready_count() < n {

@@ -165,10 +165,7 @@ fn cell(path: Path, size: usize, mode: Mode, rounds: u64) -> BenchResult<Vec<u64
     let warm = (rounds / 10).max(5);
     let total = rounds + warm;
     let r = (|| -> BenchResult<Vec<u64>> {
-        let barrier = TickBarrier::create(&prefix, 2).map_err(|source| BenchError::Barrier {
-            prefix: prefix.clone(),
-            source,
-        })?;
+        let barrier = TickBarrier::create(&prefix, 2)?;
         // Round 0 is "released" by the parent itself; expected = 1 arms the child's ack wait.
         barrier.release(0, 1);
         let extra = [
@@ -279,10 +276,7 @@ fn wait_parent<T>(
 
 /// The child's end of the barrier.
 fn open_barrier(a: &ChildArgs) -> BenchResult<TickBarrier> {
-    TickBarrier::open(&a.prefix).map_err(|source| BenchError::Barrier {
-        prefix: a.prefix.clone(),
-        source,
-    })
+    TickBarrier::open(&a.prefix).map_err(BenchError::from)
 }
 
 // ---- the child side ----

@@ -125,8 +125,9 @@ mod tests {
         )
         .unwrap_err();
         assert!(matches!(e, BenchError::Timeout(Peer::Parent)), "{e}");
-        // 20, 40, 60 ms: past 50 ms after the third sleep.
-        assert_eq!(sleeps, 3);
+        // Each sleep lasts at least 20 ms, so 50 ms have passed after the third at the latest
+        // (sooner when the machine is busy and a sleep overshoots).
+        assert!((1..=3).contains(&sleeps), "{sleeps} sleeps");
         assert_eq!(e.to_string(), "timed out waiting for the parent");
     }
 }
