@@ -3,14 +3,16 @@
 //!
 //! - `tick` (tick.rs): the runtime's lock-step tick next to a raw iceoryx2 round and the futex
 //!   floor;
-//! - `latency` (latency.rs): one-hop p50 / p99 between two processes for the runtime's own paths
-//!   (a radio message, a Sense frame), raw iceoryx2 publish-subscribe and a copying baseline
-//!   (Unix domain socket + bincode), busy-poll and blocking-wake;
+//! - `latency` (latency/, one file per path): one-hop p50 / p99 between two processes for the
+//!   runtime's own paths (a radio message, a Sense frame), raw iceoryx2 publish-subscribe and a
+//!   copying baseline (Unix domain socket + bincode), busy-poll and blocking-wake;
 //! - `throughput` (throughput.rs): radio messages and bytes delivered per second with N robots
 //!   all broadcasting every tick;
 //! - `memory` (memory.rs): RSS and open files per agent and /dev/shm files per run, against N;
 //! - `search` (search.rs): robot-steps per second of the in-process executor on the search
 //!   scenario.
+//!
+//! Failures are `BenchError`s (error.rs), printed only here at the edge (`finish`).
 //!
 //! Cross-process numbers come from real child processes (`orchestrator __bench-child KIND`),
 //! each in its own iceoryx2 prefix that is removed afterwards.
