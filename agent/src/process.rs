@@ -7,11 +7,24 @@ use std::collections::BTreeMap;
 use std::sync::atomic::AtomicUsize;
 use std::sync::Arc;
 use std::time::Duration;
-use swarm::barrier::{TickBarrier, Wake};
+use swarm::barrier::{BarrierError, TickBarrier, Wake};
 use swarm::frames::RadioHeader;
 use swarm::scenario::Scenario;
-use swarm::transport::{self, Result, ShmTx};
+use swarm::transport::{self, ServiceId, ShmTx, TransportError};
 use swarm::{AgentRuntime, Behaviour};
+
+/// Why an agent process stopped before the run ended.
+#[derive(Debug, thiserror::Error)]
+pub enum AgentError {
+    /// An iceoryx2 call failed (which service, and iceoryx2's error, are in it).
+    #[error(transparent)]
+    Transport(#[from] TransportError),
+    /// The run's tick barrier segment could not be opened.
+    #[error(transparent)]
+    Barrier(#[from] BarrierError),
+}
+
+pub type Result<T> = std::result::Result<T, AgentError>;
 
 pub struct AgentArgs {
     pub robot: u32,
@@ -65,12 +78,19 @@ fn run_loop<B: Behaviour>(args: &AgentArgs, mut rt: AgentRuntime<B>) -> Result<i
         .subscriber_builder()
         .buffer_size(1)
         .create()
-        .map_err(|e| format!("sense subscriber: {e:?}"))?;
+        .map_err(|source| TransportError::Subscriber {
+            service: ServiceId::Sense(robot),
+            source,
+        })?;
     let act_svc = transport::act_service(&node, robot, false)?;
-    let act_pub = act_svc
-        .publisher_builder()
-        .create()
-        .map_err(|e| format!("act publisher: {e:?}"))?;
+    let act_pub =
+        act_svc
+            .publisher_builder()
+            .create()
+            .map_err(|source| TransportError::Publisher {
+                service: ServiceId::Act(robot),
+                source,
+            })?;
     let radio_svc = transport::radio_service(&node, robot, sc, false)?;
     let radio_pub = transport::radio_publisher(&radio_svc, sc)?;
     let barrier = TickBarrier::open(&args.prefix)?;
@@ -106,7 +126,10 @@ fn run_loop<B: Behaviour>(args: &AgentArgs, mut rt: AgentRuntime<B>) -> Result<i
         let mut latest = None;
         while let Some(s) = sense_sub
             .receive()
-            .map_err(|e| format!("sense receive: {e:?}"))?
+            .map_err(|source| TransportError::Receive {
+                service: ServiceId::Sense(robot),
+                source,
+            })?
         {
             latest = Some(s);
         }
@@ -158,7 +181,10 @@ fn run_loop<B: Behaviour>(args: &AgentArgs, mut rt: AgentRuntime<B>) -> Result<i
                     .subscriber_builder()
                     .buffer_size(transport::radio_buffer(sc))
                     .create()
-                    .map_err(|e| format!("radio subscriber: {e:?}"))?;
+                    .map_err(|source| TransportError::Subscriber {
+                        service: ServiceId::Radio(r),
+                        source,
+                    })?;
                 Ok(Link {
                     _service: svc,
                     sub,
@@ -173,11 +199,17 @@ fn run_loop<B: Behaviour>(args: &AgentArgs, mut rt: AgentRuntime<B>) -> Result<i
         }
         let sample = act_pub
             .loan_uninit()
-            .map_err(|e| format!("act loan: {e:?}"))?;
+            .map_err(|source| TransportError::Loan {
+                service: ServiceId::Act(robot),
+                source,
+            })?;
         sample
             .write_payload(action)
             .send()
-            .map_err(|e| format!("act send: {e:?}"))?;
+            .map_err(|source| TransportError::Send {
+                service: ServiceId::Act(robot),
+                source,
+            })?;
         drop(sense);
         barrier.ack_with(robot, k, bell);
         done = k + 1;

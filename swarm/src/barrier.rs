@@ -46,6 +46,32 @@ pub struct TickBarrier {
 unsafe impl Send for TickBarrier {}
 unsafe impl Sync for TickBarrier {}
 
+/// Why the barrier segment could not be created or opened.
+#[derive(Debug, thiserror::Error)]
+pub enum BarrierError {
+    #[error("create the tick barrier /dev/shm/{segment}: {source}")]
+    Create {
+        segment: String,
+        source: std::io::Error,
+    },
+    #[error("open the tick barrier /dev/shm/{segment}: {source}")]
+    Open {
+        segment: String,
+        source: std::io::Error,
+    },
+    /// The segment is smaller than its header: not a barrier of this runtime.
+    #[error("the tick barrier /dev/shm/{segment} is too small: {bytes} bytes")]
+    TooSmall { segment: String, bytes: usize },
+    /// The world has not finished writing the segment (or it is not a barrier at all).
+    #[error("the tick barrier /dev/shm/{segment} is not initialised")]
+    Uninitialised { segment: String },
+}
+
+/// The segment's name in /dev/shm.
+fn segment(prefix: &str) -> String {
+    format!("{prefix}tick")
+}
+
 pub enum Wake {
     Tick(u64),
     Timeout,
@@ -99,7 +125,14 @@ impl TickBarrier {
     }
 
     /// Creates the segment (world side). Fails if it exists.
-    pub fn create(prefix: &str, robots: u32) -> std::io::Result<TickBarrier> {
+    pub fn create(prefix: &str, robots: u32) -> Result<TickBarrier, BarrierError> {
+        Self::create_io(prefix, robots).map_err(|source| BarrierError::Create {
+            segment: segment(prefix),
+            source,
+        })
+    }
+
+    fn create_io(prefix: &str, robots: u32) -> std::io::Result<TickBarrier> {
         let name = shm_name(prefix);
         let len = Self::size_for(robots);
         // SAFETY: plain POSIX calls with checked results.
@@ -127,26 +160,38 @@ impl TickBarrier {
     }
 
     /// Opens the existing segment (agent and orchestrator side).
-    pub fn open(prefix: &str) -> std::io::Result<TickBarrier> {
+    pub fn open(prefix: &str) -> Result<TickBarrier, BarrierError> {
         let name = shm_name(prefix);
+        let open_error = |source| BarrierError::Open {
+            segment: segment(prefix),
+            source,
+        };
         // SAFETY: plain POSIX calls with checked results.
         unsafe {
             let fd = libc::shm_open(name.as_ptr(), libc::O_RDWR, 0);
             if fd < 0 {
-                return Err(std::io::Error::last_os_error());
+                return Err(open_error(std::io::Error::last_os_error()));
             }
             let mut st: libc::stat = std::mem::zeroed();
-            if libc::fstat(fd, &mut st) != 0
-                || (st.st_size as usize) < std::mem::size_of::<Header>()
-            {
+            if libc::fstat(fd, &mut st) != 0 {
+                let e = std::io::Error::last_os_error();
                 libc::close(fd);
-                return Err(std::io::Error::other("barrier segment too small"));
+                return Err(open_error(e));
+            }
+            if (st.st_size as usize) < std::mem::size_of::<Header>() {
+                libc::close(fd);
+                return Err(BarrierError::TooSmall {
+                    segment: segment(prefix),
+                    bytes: st.st_size as usize,
+                });
             }
             let len = st.st_size as usize;
             let robots = ((len - std::mem::size_of::<Header>()) / SLOT_BYTES) as u32;
-            let b = Self::map(fd, len, robots)?;
+            let b = Self::map(fd, len, robots).map_err(open_error)?;
             if b.header().magic.load(Ordering::Acquire) != MAGIC {
-                return Err(std::io::Error::other("barrier segment not initialised"));
+                return Err(BarrierError::Uninitialised {
+                    segment: segment(prefix),
+                });
             }
             Ok(b)
         }
@@ -397,6 +442,50 @@ pub fn unlink(prefix: &str) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A segment of `len` zero bytes under the barrier's name for `prefix`.
+    fn raw_segment(prefix: &str, len: usize) {
+        let name = shm_name(prefix);
+        // SAFETY: plain POSIX calls; the fd is closed at once.
+        unsafe {
+            let fd = libc::shm_open(name.as_ptr(), libc::O_CREAT | libc::O_RDWR, 0o600);
+            assert!(fd >= 0);
+            assert_eq!(libc::ftruncate(fd, len as libc::off_t), 0);
+            libc::close(fd);
+        }
+    }
+
+    #[test]
+    fn errors_name_the_segment() {
+        let prefix = format!("swbe{}_", std::process::id());
+        struct Unlink(String);
+        impl Drop for Unlink {
+            fn drop(&mut self) {
+                unlink(&self.0);
+            }
+        }
+        let _unlink = Unlink(prefix.clone());
+        let seg = format!("{prefix}tick");
+        let e = TickBarrier::open(&prefix).err().expect("no segment yet");
+        assert!(matches!(e, BarrierError::Open { .. }), "{e}");
+        assert!(e.to_string().contains(&format!("/dev/shm/{seg}")), "{e}");
+
+        let _b = TickBarrier::create(&prefix, 2).unwrap();
+        let e = TickBarrier::create(&prefix, 2).err().expect("exists");
+        assert!(matches!(e, BarrierError::Create { ref segment, .. } if *segment == seg));
+        unlink(&prefix);
+
+        raw_segment(&prefix, 8);
+        let e = TickBarrier::open(&prefix).err().expect("too small");
+        assert!(matches!(e, BarrierError::TooSmall { bytes: 8, .. }), "{e}");
+        unlink(&prefix);
+
+        // Big enough, but its magic word was never written.
+        raw_segment(&prefix, std::mem::size_of::<Header>() + SLOT_BYTES);
+        let e = TickBarrier::open(&prefix).err().expect("uninitialised");
+        assert!(matches!(e, BarrierError::Uninitialised { .. }), "{e}");
+        unlink(&prefix);
+    }
 
     #[test]
     fn release_ack_round_across_threads() {

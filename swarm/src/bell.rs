@@ -11,7 +11,9 @@
 //! tick to release (iceoryx2 signals each listener), about 37 us each on this VM (see
 //! spec/iceoryx2-and-peers.md), against one FUTEX_WAKE for all.
 
-use crate::transport::{err, Result};
+use crate::transport::{
+    event, EventCapacity, EventService, Reach, ServiceId, TransportError, TransportResult,
+};
 use iceoryx2::port::listener::Listener;
 use iceoryx2::port::notifier::Notifier;
 use iceoryx2::prelude::*;
@@ -20,6 +22,10 @@ use std::time::Duration;
 /// Extra ports beyond one per robot: restarted agents open new ones before the dead ones'
 /// are cleaned, and the world needs its own.
 const SLACK: usize = 8;
+
+/// The bell's two event services: the world rings agents down, agents ring the world up.
+const DOWN: &str = "tick/down";
+const UP: &str = "tick/up";
 
 /// One process's end of the two event services.
 pub struct EventBell {
@@ -31,63 +37,58 @@ fn services(
     node: &Node<ipc::Service>,
     robots: u32,
     create: bool,
-) -> Result<(
-    iceoryx2::service::port_factory::event::PortFactory<ipc::Service>,
-    iceoryx2::service::port_factory::event::PortFactory<ipc::Service>,
-)> {
+) -> TransportResult<(EventService, EventService)> {
     let n = robots as usize + SLACK;
-    let name = |s: &str| ServiceName::new(s).map_err(|e| err("service name", e));
-    let down = node.service_builder(&name("tick/down")?).event();
-    let up = node.service_builder(&name("tick/up")?).event();
-    if create {
-        let down = down
-            .max_listeners(n)
-            .max_notifiers(2)
-            .max_nodes(n + 2)
-            .create()
-            .map_err(|e| err("create tick/down", e))?;
-        let up = up
-            .max_listeners(2)
-            .max_notifiers(n)
-            .max_nodes(n + 2)
-            .create()
-            .map_err(|e| err("create tick/up", e))?;
-        Ok((down, up))
-    } else {
-        let down = down.open().map_err(|e| err("open tick/down", e))?;
-        let up = up.open().map_err(|e| err("open tick/up", e))?;
-        Ok((down, up))
-    }
+    let down = Reach::create_if(create, || EventCapacity {
+        listeners: n,
+        notifiers: 2,
+        nodes: n + 2,
+    });
+    let up = Reach::create_if(create, || EventCapacity {
+        listeners: 2,
+        notifiers: n,
+        nodes: n + 2,
+    });
+    Ok((
+        event(node, ServiceId::from(DOWN), down)?,
+        event(node, ServiceId::from(UP), up)?,
+    ))
+}
+
+fn notifier(svc: &EventService) -> TransportResult<Notifier<ipc::Service>> {
+    svc.notifier_builder()
+        .create()
+        .map_err(|source| TransportError::Notifier {
+            service: ServiceId::of(svc),
+            source,
+        })
+}
+
+fn listener(svc: &EventService) -> TransportResult<Listener<ipc::Service>> {
+    svc.listener_builder()
+        .create()
+        .map_err(|source| TransportError::Listener {
+            service: ServiceId::of(svc),
+            source,
+        })
 }
 
 impl EventBell {
     /// The world's end: creates both services (before any agent starts).
-    pub fn world(node: &Node<ipc::Service>, robots: u32) -> Result<EventBell> {
+    pub fn world(node: &Node<ipc::Service>, robots: u32) -> TransportResult<EventBell> {
         let (down, up) = services(node, robots, true)?;
         Ok(EventBell {
-            notifier: down
-                .notifier_builder()
-                .create()
-                .map_err(|e| err("tick/down notifier", e))?,
-            listener: up
-                .listener_builder()
-                .create()
-                .map_err(|e| err("tick/up listener", e))?,
+            notifier: notifier(&down)?,
+            listener: listener(&up)?,
         })
     }
 
     /// An agent's end.
-    pub fn agent(node: &Node<ipc::Service>, robots: u32) -> Result<EventBell> {
+    pub fn agent(node: &Node<ipc::Service>, robots: u32) -> TransportResult<EventBell> {
         let (down, up) = services(node, robots, false)?;
         Ok(EventBell {
-            listener: down
-                .listener_builder()
-                .create()
-                .map_err(|e| err("tick/down listener", e))?,
-            notifier: up
-                .notifier_builder()
-                .create()
-                .map_err(|e| err("tick/up notifier", e))?,
+            listener: listener(&down)?,
+            notifier: notifier(&up)?,
         })
     }
 

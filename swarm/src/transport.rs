@@ -10,19 +10,29 @@ use crate::frames::{Action, Control, RadioHeader, Sense, WorldStatus};
 use crate::scenario::Scenario;
 use crate::{AgentRuntime, Behaviour};
 use iceoryx2::prelude::*;
-use iceoryx2::service::port_factory::publish_subscribe::PortFactory;
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Arc;
 
+mod error;
+mod service;
+pub use error::{Port, TransportError, TransportResult};
+pub use service::{
+    event, pub_sub, service_name, EventCapacity, EventService, PubSubCapacity, PubSubService,
+    Reach, ServiceId, ShmPayload, CONTROL_NAME, STATUS_NAME,
+};
+
+/// A boxed error of any kind, and a result with it: what a process's run loop returns when
+/// it mixes transport, file and scenario errors (the world process does). The functions here
+/// return the typed [`TransportError`], which converts into it with `?`.
 pub type Error = Box<dyn std::error::Error + Send + Sync>;
 pub type Result<T> = std::result::Result<T, Error>;
 
-pub type SenseService = PortFactory<ipc::Service, Sense, ()>;
-pub type ActService = PortFactory<ipc::Service, Action, ()>;
-pub type RadioService = PortFactory<ipc::Service, [u8], RadioHeader>;
-pub type StatusService = PortFactory<ipc::Service, WorldStatus, ()>;
-pub type ControlService = PortFactory<ipc::Service, Control, ()>;
+pub type SenseService = PubSubService<Sense, ()>;
+pub type ActService = PubSubService<Action, ()>;
+pub type RadioService = PubSubService<[u8], RadioHeader>;
+pub type StatusService = PubSubService<WorldStatus, ()>;
+pub type ControlService = PubSubService<Control, ()>;
 
 /// Where iceoryx2 keeps a run's node and service folders: on tmpfs, in a folder named with the
 /// run's prefix (`/dev/shm/<prefix>iox2/`). On this VM /tmp is ext4, where creating iceoryx2's
@@ -44,22 +54,25 @@ pub fn root_for(prefix: &str) -> PathBuf {
     PathBuf::from(IOX2_ROOT).join(format!("{prefix}iox2"))
 }
 
-pub(crate) fn err(what: &str, e: impl std::fmt::Debug) -> Error {
-    format!("{what}: {e:?}").into()
-}
-
 /// The iceoryx2 configuration of one run.
 /// Expired publisher connections a subscriber keeps readable (see `run_config`).
 pub const EXPIRED_CONNECTIONS: usize = 4;
 
-pub fn run_config(prefix: &str) -> Result<Config> {
+pub fn run_config(prefix: &str) -> TransportResult<Config> {
     let mut c = Config::default();
-    c.global.prefix = FileName::new(prefix.as_bytes()).map_err(|e| err("iceoryx2 prefix", e))?;
+    c.global.prefix =
+        FileName::new(prefix.as_bytes()).map_err(|source| TransportError::Prefix {
+            prefix: prefix.to_string(),
+            source,
+        })?;
     let root = root_for(prefix);
     let mut root_s = root.display().to_string();
     root_s.push('/');
-    c.global
-        .set_root_path(&Path::new(root_s.as_bytes()).map_err(|e| err("iceoryx2 root path", e))?);
+    let root_path = Path::new(root_s.as_bytes()).map_err(|source| TransportError::RootPath {
+        path: root_s.clone(),
+        source,
+    })?;
+    c.global.set_root_path(&root_path);
     // Implicit dead-node cleanup scans every node of the run on each service open: with N
     // agents opening ~N links each that is O(N^2) node checks at start-up (8 s for 50 robots
     // on this VM). The world cleans dead nodes explicitly when a robot dies instead.
@@ -77,30 +90,21 @@ pub fn run_config(prefix: &str) -> Result<Config> {
 }
 
 /// A node of this run. Signal handling is left to our own code.
-pub fn node(config: &Config, name: &str) -> Result<Node<ipc::Service>> {
+pub fn node(config: &Config, name: &str) -> TransportResult<Node<ipc::Service>> {
+    let node_name = NodeName::new(name).map_err(|source| TransportError::NodeName {
+        name: name.to_string(),
+        source,
+    })?;
     NodeBuilder::new()
         .config(config)
-        .name(&NodeName::new(name).map_err(|e| err("node name", e))?)
+        .name(&node_name)
         .signal_handling_mode(SignalHandlingMode::Disabled)
         .create::<ipc::Service>()
-        .map_err(|e| err("create node", e))
+        .map_err(|source| TransportError::Node {
+            name: name.to_string(),
+            source,
+        })
 }
-
-fn service_name(s: &str) -> Result<ServiceName> {
-    ServiceName::new(s).map_err(|e| err("service name", e))
-}
-
-pub fn sense_name(robot: u32) -> String {
-    format!("robot/{robot}/sense")
-}
-pub fn act_name(robot: u32) -> String {
-    format!("robot/{robot}/act")
-}
-pub fn radio_name(robot: u32) -> String {
-    format!("robot/{robot}/radio")
-}
-pub const STATUS_NAME: &str = "world/state";
-pub const CONTROL_NAME: &str = "run/control";
 
 /// Slack for a restarted agent whose dead predecessor's ports are not cleaned yet.
 const RESTART_SLACK: usize = 1;
@@ -132,110 +136,141 @@ pub fn radio_max_borrowed(sc: &Scenario) -> usize {
     radio_held_per_link(sc) + 1
 }
 
-/// The world's side: creates (`create == true`) or opens robot i's three services.
-pub fn sense_service(node: &Node<ipc::Service>, robot: u32, create: bool) -> Result<SenseService> {
-    let b = node
-        .service_builder(&service_name(&sense_name(robot))?)
-        .publish_subscribe::<Sense>();
-    if create {
-        b.max_publishers(1 + RESTART_SLACK)
-            .max_subscribers(1 + RESTART_SLACK)
-            .max_nodes(2 + 2 * RESTART_SLACK)
-            .subscriber_max_buffer_size(1)
-            .history_size(0)
-            .create()
-            .map_err(|e| err("create sense service", e))
-    } else {
-        b.open().map_err(|e| err("open sense service", e))
+/// Sense frames: the world publishes, the robot's agent subscribes; the latest frame only.
+pub fn sense_capacity() -> PubSubCapacity {
+    PubSubCapacity {
+        publishers: 1 + RESTART_SLACK,
+        subscribers: 1 + RESTART_SLACK,
+        nodes: 2 + 2 * RESTART_SLACK,
+        buffer: 1,
+        borrowed: None,
+        history: Some(0),
+        safe_overflow: None,
     }
 }
 
-pub fn act_service(node: &Node<ipc::Service>, robot: u32, create: bool) -> Result<ActService> {
-    let b = node
-        .service_builder(&service_name(&act_name(robot))?)
-        .publish_subscribe::<Action>();
-    if create {
-        b.max_publishers(1 + RESTART_SLACK)
-            .max_subscribers(1 + RESTART_SLACK)
-            .max_nodes(2 + 2 * RESTART_SLACK)
-            .subscriber_max_buffer_size(2)
-            .history_size(0)
-            .create()
-            .map_err(|e| err("create act service", e))
-    } else {
-        b.open().map_err(|e| err("open act service", e))
+/// Action frames: the agent publishes, the world subscribes; this tick's and the next's.
+pub fn act_capacity() -> PubSubCapacity {
+    PubSubCapacity {
+        buffer: 2,
+        ..sense_capacity()
     }
 }
 
+/// A robot's radio: its agent publishes, every other robot may subscribe (see
+/// `radio_max_subscribers`); the world holds the service open.
+pub fn radio_capacity(sc: &Scenario) -> PubSubCapacity {
+    let subscribers = radio_max_subscribers(sc);
+    PubSubCapacity {
+        publishers: 1 + RESTART_SLACK,
+        subscribers,
+        nodes: subscribers + 1 + RESTART_SLACK + 1,
+        buffer: radio_buffer(sc),
+        borrowed: Some(radio_max_borrowed(sc)),
+        history: Some(0),
+        safe_overflow: None,
+    }
+}
+
+/// The world's status: the world publishes; the orchestrator and tools subscribe.
+pub fn status_capacity() -> PubSubCapacity {
+    PubSubCapacity {
+        publishers: 1,
+        subscribers: 4,
+        nodes: 6,
+        buffer: 1,
+        borrowed: None,
+        history: None,
+        safe_overflow: None,
+    }
+}
+
+/// The control channel: the orchestrator (and tools) publish, the world subscribes. Nothing
+/// is dropped: a full buffer fails the send instead.
+pub fn control_capacity() -> PubSubCapacity {
+    PubSubCapacity {
+        publishers: 4,
+        subscribers: 1,
+        nodes: 6,
+        buffer: 256,
+        borrowed: None,
+        history: None,
+        safe_overflow: Some(false),
+    }
+}
+
+/// Robot i's Sense service: the world creates it (`create`), the agent opens it.
+pub fn sense_service(
+    node: &Node<ipc::Service>,
+    robot: u32,
+    create: bool,
+) -> TransportResult<SenseService> {
+    pub_sub(
+        node,
+        ServiceId::Sense(robot),
+        Reach::create_if(create, sense_capacity),
+    )
+}
+
+/// Robot i's Action service: the world creates it (`create`), the agent opens it.
+pub fn act_service(
+    node: &Node<ipc::Service>,
+    robot: u32,
+    create: bool,
+) -> TransportResult<ActService> {
+    pub_sub(
+        node,
+        ServiceId::Act(robot),
+        Reach::create_if(create, act_capacity),
+    )
+}
+
+/// Robot i's radio service: the world creates it (`create`), agents open it.
 pub fn radio_service(
     node: &Node<ipc::Service>,
     robot: u32,
     sc: &Scenario,
     create: bool,
-) -> Result<RadioService> {
-    let b = node
-        .service_builder(&service_name(&radio_name(robot))?)
-        .publish_subscribe::<[u8]>()
-        .user_header::<RadioHeader>();
-    if create {
-        let subs = radio_max_subscribers(sc);
-        b.max_publishers(1 + RESTART_SLACK)
-            .max_subscribers(subs)
-            .max_nodes(subs + 1 + RESTART_SLACK + 1)
-            .subscriber_max_buffer_size(radio_buffer(sc))
-            .subscriber_max_borrowed_samples(radio_max_borrowed(sc))
-            .history_size(0)
-            .create()
-            .map_err(|e| err("create radio service", e))
-    } else {
-        b.open().map_err(|e| err("open radio service", e))
-    }
+) -> TransportResult<RadioService> {
+    pub_sub(
+        node,
+        ServiceId::Radio(robot),
+        Reach::create_if(create, || radio_capacity(sc)),
+    )
 }
 
-pub fn status_service(node: &Node<ipc::Service>, create: bool) -> Result<StatusService> {
-    let b = node
-        .service_builder(&service_name(STATUS_NAME)?)
-        .publish_subscribe::<WorldStatus>();
-    if create {
-        b.max_publishers(1)
-            .max_subscribers(4)
-            .max_nodes(6)
-            .subscriber_max_buffer_size(1)
-            .create()
-            .map_err(|e| err("create status service", e))
-    } else {
-        b.open().map_err(|e| err("open status service", e))
-    }
+/// The world's status service: the world creates it (`create`), the orchestrator opens it.
+pub fn status_service(node: &Node<ipc::Service>, create: bool) -> TransportResult<StatusService> {
+    pub_sub(
+        node,
+        ServiceId::Status,
+        Reach::create_if(create, status_capacity),
+    )
 }
 
-pub fn control_service(node: &Node<ipc::Service>, create: bool) -> Result<ControlService> {
-    let b = node
-        .service_builder(&service_name(CONTROL_NAME)?)
-        .publish_subscribe::<Control>();
-    if create {
-        b.max_publishers(4)
-            .max_subscribers(1)
-            .max_nodes(6)
-            .subscriber_max_buffer_size(256)
-            .enable_safe_overflow(false)
-            .create()
-            .map_err(|e| err("create control service", e))
-    } else {
-        b.open().map_err(|e| err("open control service", e))
-    }
+/// The control service: the world creates it (`create`), the orchestrator opens it.
+pub fn control_service(node: &Node<ipc::Service>, create: bool) -> TransportResult<ControlService> {
+    pub_sub(
+        node,
+        ServiceId::Control,
+        Reach::create_if(create, control_capacity),
+    )
 }
 
 /// Radio publisher of robot i (fixed-size slots: no reallocation, no lost dynamic samples).
 pub fn radio_publisher(
     svc: &RadioService,
     sc: &Scenario,
-) -> Result<iceoryx2::port::publisher::Publisher<ipc::Service, [u8], RadioHeader>> {
+) -> TransportResult<iceoryx2::port::publisher::Publisher<ipc::Service, [u8], RadioHeader>> {
     svc.publisher_builder()
         .initial_max_slice_len(sc.radio.max_message_bytes as usize)
         .allocation_strategy(AllocationStrategy::Static)
         .max_loaned_samples(1)
         .create()
-        .map_err(|e| err("create radio publisher", e))
+        .map_err(|source| TransportError::Publisher {
+            service: ServiceId::of(svc),
+            source,
+        })
 }
 
 /// The radio's send side in shared memory: loans exactly the message's bytes in the robot's

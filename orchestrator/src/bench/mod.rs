@@ -3,23 +3,28 @@
 //!
 //! - `tick` (tick.rs): the runtime's lock-step tick next to a raw iceoryx2 round and the futex
 //!   floor;
-//! - `latency` (latency.rs): one-hop p50 / p99 between two processes for the runtime's own paths
-//!   (a radio message, a Sense frame), raw iceoryx2 publish-subscribe and a copying baseline
-//!   (Unix domain socket + bincode), busy-poll and blocking-wake;
+//! - `latency` (latency/, one file per path): one-hop p50 / p99 between two processes for the
+//!   runtime's own paths (a radio message, a Sense frame), raw iceoryx2 publish-subscribe and a
+//!   copying baseline (Unix domain socket + bincode), busy-poll and blocking-wake;
 //! - `throughput` (throughput.rs): radio messages and bytes delivered per second with N robots
 //!   all broadcasting every tick;
 //! - `memory` (memory.rs): RSS and open files per agent and /dev/shm files per run, against N;
 //! - `search` (search.rs): robot-steps per second of the in-process executor on the search
 //!   scenario.
 //!
+//! Failures are `BenchError`s (error.rs), printed only here at the edge (`finish`).
+//!
 //! Cross-process numbers come from real child processes (`orchestrator __bench-child KIND`),
 //! each in its own iceoryx2 prefix that is removed afterwards.
 
+mod error;
 mod latency;
 mod memory;
 mod search;
 mod throughput;
 mod tick;
+
+pub use error::{BenchError, BenchResult};
 
 use clap::{Args, Subcommand};
 use serde::Serialize;
@@ -185,15 +190,25 @@ struct AllJson {
     memory: Option<Vec<memory::Row>>,
 }
 
-fn write_json<T: Serialize>(path: &Option<PathBuf>, v: &T) -> Result<(), String> {
+fn write_json<T: Serialize>(path: &Option<PathBuf>, v: &T) -> BenchResult<()> {
     if let Some(p) = path {
-        std::fs::write(p, serde_json::to_string_pretty(v).expect("json"))
-            .map_err(|e| format!("{}: {e}", p.display()))?;
+        std::fs::write(p, serde_json::to_string_pretty(v).expect("json")).map_err(|source| {
+            BenchError::File {
+                path: p.clone(),
+                source,
+            }
+        })?;
     }
     Ok(())
 }
 
-fn finish(r: Result<(), String>, what: &str) -> i32 {
+/// `bench memory`, whose errors are still text, as a typed result.
+fn memory_run(sizes: &[u32], quick: bool) -> BenchResult<Vec<memory::Row>> {
+    memory::run(sizes, quick).map_err(BenchError::Memory)
+}
+
+/// The binary's edge: the error as text, and the exit code.
+fn finish(r: BenchResult<()>, what: &str) -> i32 {
     match r {
         Ok(()) => 0,
         Err(e) => {
@@ -266,7 +281,7 @@ pub fn bench(a: BenchArgs) -> i32 {
                 vec![10, 25, 50, 100]
             });
             finish(
-                memory::run(&sizes, quick).and_then(|r| {
+                memory_run(&sizes, quick).and_then(|r| {
                     memory::print(&r);
                     out.memory = Some(r);
                     write_json(&json, &out)
@@ -317,7 +332,7 @@ pub fn bench(a: BenchArgs) -> i32 {
         BenchWhat::All { json, quick } => {
             print_machine();
             let t = std::time::Instant::now();
-            let r = (|| -> Result<(), String> {
+            let r = (|| -> BenchResult<()> {
                 let l = latency::run(quick)?;
                 latency::print(&l);
                 out.latency = Some(l);
@@ -340,7 +355,7 @@ pub fn bench(a: BenchArgs) -> i32 {
                 } else {
                     vec![10, 25, 50, 100]
                 };
-                let m = memory::run(&msizes, quick)?;
+                let m = memory_run(&msizes, quick)?;
                 memory::print(&m);
                 out.memory = Some(m);
                 write_json(&json, &out)
@@ -383,8 +398,12 @@ fn spawn_child(
     index: u32,
     extra: &[String],
     piped: bool,
-) -> Result<Child, String> {
-    let exe = std::env::current_exe().map_err(|e| e.to_string())?;
+) -> BenchResult<Child> {
+    let spawn_error = |source| BenchError::Spawn {
+        kind: kind.to_string(),
+        source,
+    };
+    let exe = std::env::current_exe().map_err(spawn_error)?;
     Command::new(exe)
         .args([
             "__bench-child",
@@ -403,7 +422,7 @@ fn spawn_child(
         })
         .process_group(0)
         .spawn()
-        .map_err(|e| format!("spawn bench child: {e}"))
+        .map_err(spawn_error)
 }
 
 /// CLOCK_MONOTONIC in nanoseconds: one clock for every process of the machine, so a time
@@ -438,12 +457,12 @@ fn count_files(dir: &Path) -> usize {
 }
 
 /// No `sw*` entry may stay in /dev/shm after a benchmark: says which did.
-fn check_no_leftovers(prefix: &str) -> Result<(), String> {
-    let left = swarm::cleanup::shm_files(prefix);
-    if left.is_empty() {
+fn check_no_leftovers(prefix: &str) -> BenchResult<()> {
+    let files = swarm::cleanup::shm_files(prefix);
+    if files.is_empty() {
         Ok(())
     } else {
-        Err(format!("left in /dev/shm: {left:?}"))
+        Err(BenchError::Leftovers { files })
     }
 }
 

@@ -7,6 +7,7 @@
 //! behaviour's step and its move. The loop time excludes start-up (world and behaviour
 //! construction, the per-robot offline calibration).
 
+use super::{BenchError, BenchResult};
 use crate::inprocess;
 use serde::Serialize;
 use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
@@ -27,12 +28,12 @@ pub struct Row {
 }
 
 /// The bench's scenario: the embedded default with these robots, seed and mode.
-fn scenario(robots: u32, mode: &str, seed: u64) -> Result<Scenario, String> {
+fn scenario(robots: u32, mode: &str, seed: u64) -> BenchResult<Scenario> {
     let mut sc = Scenario::default();
     sc.run.robots = robots;
     sc.run.seed = seed;
     sc.search.mode = mode.to_string();
-    crate::prepare::prepare_from(&mut sc, "bench search").map_err(|e| e.to_string())?;
+    crate::prepare::prepare_from(&mut sc, "bench search")?;
     Ok(sc)
 }
 
@@ -49,13 +50,13 @@ pub struct Sweep {
     pub robot_steps_per_s: f64,
 }
 
-pub fn sweep(robots: u32, mode: &str, seeds: u64, jobs: usize) -> Result<Sweep, String> {
+pub fn sweep(robots: u32, mode: &str, seeds: u64, jobs: usize) -> BenchResult<Sweep> {
     let scs: Vec<Scenario> = (1..=seeds)
         .map(|seed| scenario(robots, mode, seed))
         .collect::<Result<_, _>>()?;
     let next = AtomicUsize::new(0);
     let steps = AtomicU64::new(0);
-    let failure: Mutex<Option<String>> = Mutex::new(None);
+    let failure: Mutex<Option<std::io::Error>> = Mutex::new(None);
     let t0 = Instant::now();
     std::thread::scope(|scope| {
         for _ in 0..jobs.max(1) {
@@ -65,9 +66,7 @@ pub fn sweep(robots: u32, mode: &str, seeds: u64, jobs: usize) -> Result<Sweep, 
                         Ok(s) => {
                             steps.fetch_add(s.robots as u64 * s.ticks, Ordering::SeqCst);
                         }
-                        Err(e) => {
-                            *failure.lock().unwrap_or_else(|e| e.into_inner()) = Some(e.to_string())
-                        }
+                        Err(e) => *failure.lock().unwrap_or_else(|e| e.into_inner()) = Some(e),
                     }
                 }
             });
@@ -75,7 +74,7 @@ pub fn sweep(robots: u32, mode: &str, seeds: u64, jobs: usize) -> Result<Sweep, 
     });
     let wall_seconds = t0.elapsed().as_secs_f64().max(1e-9);
     if let Some(e) = failure.into_inner().unwrap_or_else(|e| e.into_inner()) {
-        return Err(e);
+        return Err(BenchError::InProcess(e));
     }
     let robot_steps = steps.into_inner();
     Ok(Sweep {
@@ -96,7 +95,7 @@ pub fn print_sweep(s: &Sweep) {
     );
 }
 
-pub fn run(robots: u32, mode: &str, seeds: u64, threads: usize) -> Result<Vec<Row>, String> {
+pub fn run(robots: u32, mode: &str, seeds: u64, threads: usize) -> BenchResult<Vec<Row>> {
     let mut rows = Vec::new();
     for seed in 1..=seeds {
         let sc = scenario(robots, mode, seed)?;
@@ -107,8 +106,8 @@ pub fn run(robots: u32, mode: &str, seeds: u64, threads: usize) -> Result<Vec<Ro
             threads,
             &mut |_| {},
         )
-        .map_err(|e| e.to_string())?;
-        let v = serde_json::to_value(&s).map_err(|e| e.to_string())?;
+        .map_err(BenchError::InProcess)?;
+        let v = serde_json::to_value(&s).expect("a summary is plain data");
         let ticks = v["ticks"].as_u64().unwrap_or(0);
         let wall = v["wall_seconds"].as_f64().unwrap_or(0.0);
         let startup = v["startup_seconds"].as_f64().unwrap_or(0.0);

@@ -14,7 +14,7 @@
 //! link's messages and drop them unread. They are what any runtime that carries this traffic
 //! over iceoryx2 pays on this machine, so runtime / raw is what our radio path adds.
 
-use super::{check_no_leftovers, spawn_child, tick, ByteBuf, ChildArgs};
+use super::{check_no_leftovers, spawn_child, tick, BenchError, BenchResult, ByteBuf, ChildArgs};
 use iceoryx2::port::subscriber::Subscriber;
 use iceoryx2::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -26,7 +26,7 @@ use std::time::{Duration, Instant};
 use swarm::barrier::{TickBarrier, Wake};
 use swarm::frames::{RadioHeader, MAX_NEIGHBOURS};
 use swarm::scenario::Scenario;
-use swarm::transport::ShmTx;
+use swarm::transport::{ServiceId, ShmTx, TransportError};
 use swarm::{cleanup, transport, AgentRuntime, Behaviour, Blob, Command, Outbox, Received, Sense};
 use world::output::percentile;
 
@@ -76,12 +76,10 @@ fn scenario(robots: u32, size: usize) -> Scenario {
     sc
 }
 
-pub fn run(robots: u32, quick: bool) -> Result<Vec<Row>, String> {
-    if !(2..=MAX_NEIGHBOURS as u32 + 1).contains(&robots) {
-        return Err(format!(
-            "--robots {robots} is out of range: allowed 2..={}",
-            MAX_NEIGHBOURS + 1
-        ));
+pub fn run(robots: u32, quick: bool) -> BenchResult<Vec<Row>> {
+    let (min, max) = (2, MAX_NEIGHBOURS as u32 + 1);
+    if !(min..=max).contains(&robots) {
+        return Err(BenchError::Robots { robots, min, max });
     }
     CASES
         .iter()
@@ -151,17 +149,20 @@ pub fn print(rows: &[Row]) {
     println!("     raw = raw iceoryx2 on the same services, barrier and link counting: loan, copy in, send; receive, drop unread.");
 }
 
-fn one(n: u32, size: usize, enc: &str, ticks: u64) -> Result<Row, String> {
+/// Seconds the children have to get ready, and to acknowledge one tick.
+const READY_S: u64 = 120;
+const ACK_S: u64 = 10;
+
+fn one(n: u32, size: usize, enc: &str, ticks: u64) -> BenchResult<Row> {
     let prefix = tick::bench_prefix(&format!("tput-{n}-{size}-{enc}"));
-    let r = (|| -> Result<Row, String> {
+    let r = (|| -> BenchResult<Row> {
         let sc = scenario(n, size);
-        let barrier = TickBarrier::create(&prefix, n).map_err(|e| format!("barrier: {e}"))?;
-        let config = transport::run_config(&prefix).map_err(|e| e.to_string())?;
-        let node = transport::node(&config, "bench-tput").map_err(|e| e.to_string())?;
+        let barrier = TickBarrier::create(&prefix, n)?;
+        let config = transport::run_config(&prefix)?;
+        let node = transport::node(&config, "bench-tput")?;
         let _services = (0..n)
             .map(|i| transport::radio_service(&node, i, &sc, true))
-            .collect::<Result<Vec<_>, _>>()
-            .map_err(|e| e.to_string())?;
+            .collect::<Result<Vec<_>, _>>()?;
         let extra = [
             "--size".to_string(),
             size.to_string(),
@@ -176,17 +177,23 @@ fn one(n: u32, size: usize, enc: &str, ticks: u64) -> Result<Row, String> {
         for i in 0..n {
             children.push(spawn_child("tput", &prefix, i, &extra, true)?);
         }
-        let result = (|| -> Result<Row, String> {
+        let result = (|| -> BenchResult<Row> {
             let t = Instant::now();
             while barrier.ready_count() < n {
-                if children
+                if let Some(status) = children
                     .iter_mut()
-                    .any(|c| matches!(c.try_wait(), Ok(Some(_))))
+                    .find_map(|c| c.try_wait().ok().flatten())
                 {
-                    return Err("a bench child exited early".into());
+                    return Err(BenchError::ChildExited {
+                        kind: "tput".into(),
+                        status,
+                    });
                 }
-                if t.elapsed() > Duration::from_secs(120) {
-                    return Err("bench children did not get ready".into());
+                if t.elapsed() > Duration::from_secs(READY_S) {
+                    return Err(BenchError::ChildNotReady {
+                        kind: "tput".into(),
+                        seconds: READY_S,
+                    });
                 }
                 std::thread::sleep(Duration::from_millis(5));
             }
@@ -201,8 +208,11 @@ fn one(n: u32, size: usize, enc: &str, ticks: u64) -> Result<Row, String> {
                 barrier.release(k, n);
                 while !(0..n).all(|i| barrier.acked(i, k)) {
                     barrier.wait_acks(Duration::from_millis(500));
-                    if t.elapsed() > Duration::from_secs(10) {
-                        return Err(format!("tick {k}: a child did not acknowledge"));
+                    if t.elapsed() > Duration::from_secs(ACK_S) {
+                        return Err(BenchError::NoAck {
+                            tick: k,
+                            seconds: ACK_S,
+                        });
                     }
                 }
                 if k >= warm {
@@ -219,7 +229,7 @@ fn one(n: u32, size: usize, enc: &str, ticks: u64) -> Result<Row, String> {
                 }
                 let mut it = s.split_whitespace();
                 if it.next() != Some("delivered") {
-                    return Err(format!("bench child said {s:?}"));
+                    return Err(BenchError::ChildOutput { output: s });
                 }
                 delivered += it.next().and_then(|v| v.parse::<u64>().ok()).unwrap_or(0);
             }
@@ -279,22 +289,24 @@ struct Ports {
 }
 
 impl Ports {
-    fn open(a: &ChildArgs, sc: &Scenario) -> Result<Ports, String> {
+    fn open(a: &ChildArgs, sc: &Scenario) -> BenchResult<Ports> {
         let (n, me) = (a.robots, a.index);
-        let barrier = TickBarrier::open(&a.prefix).map_err(|e| e.to_string())?;
-        let config = transport::run_config(&a.prefix).map_err(|e| e.to_string())?;
-        let node =
-            transport::node(&config, &format!("bench-tput-{me}")).map_err(|e| e.to_string())?;
-        let own = transport::radio_service(&node, me, sc, false).map_err(|e| e.to_string())?;
-        let publisher = transport::radio_publisher(&own, sc).map_err(|e| e.to_string())?;
+        let barrier = TickBarrier::open(&a.prefix)?;
+        let config = transport::run_config(&a.prefix)?;
+        let node = transport::node(&config, &format!("bench-tput-{me}"))?;
+        let own = transport::radio_service(&node, me, sc, false)?;
+        let publisher = transport::radio_publisher(&own, sc)?;
         let mut links = BTreeMap::new();
         for j in (0..n).filter(|&j| j != me) {
-            let svc = transport::radio_service(&node, j, sc, false).map_err(|e| e.to_string())?;
+            let svc = transport::radio_service(&node, j, sc, false)?;
             let sub = svc
                 .subscriber_builder()
                 .buffer_size(transport::radio_buffer(sc))
                 .create()
-                .map_err(|e| format!("radio subscriber: {e:?}"))?;
+                .map_err(|source| TransportError::Subscriber {
+                    service: ServiceId::Radio(j),
+                    source,
+                })?;
             links.insert(j, (svc, sub, Arc::default()));
         }
         Ok(Ports {
@@ -394,7 +406,7 @@ pub fn child(a: &ChildArgs) -> i32 {
     }
 }
 
-fn child_run<M: Make>(a: &ChildArgs) -> Result<(), String> {
+fn child_run<M: Make>(a: &ChildArgs) -> BenchResult<()> {
     let (n, me) = (a.robots, a.index);
     let sc = scenario(n, a.size);
     let ports = Ports::open(a, &sc)?;
@@ -458,7 +470,7 @@ fn child_run<M: Make>(a: &ChildArgs) -> Result<(), String> {
 
 /// The raw iceoryx2 child: the same services, links, barrier and counts as `child_run`, no
 /// runtime (no encode, no range / loss decision, no decode).
-fn child_raw(a: &ChildArgs) -> Result<(), String> {
+fn child_raw(a: &ChildArgs) -> BenchResult<()> {
     let me = a.index;
     let sc = scenario(a.robots, a.size);
     let ports = Ports::open(a, &sc)?;

@@ -8,15 +8,18 @@
 //! - futex floor: N child processes released by one futex word (one FUTEX_WAKE for all) and
 //!   counting themselves back through the same `TickBarrier` the runtime uses, no work.
 
-use super::ChildArgs;
+use super::{BenchError, BenchResult, ChildArgs};
 use crate::processes;
+use iceoryx2::port::listener::Listener;
+use iceoryx2::port::notifier::Notifier;
 use iceoryx2::prelude::*;
 use serde::Serialize;
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 use swarm::barrier::{TickBarrier, Wake};
+use swarm::cleanup;
 use swarm::scenario::{BarrierKind, Scenario};
-use swarm::{cleanup, transport};
+use swarm::transport::{self, EventCapacity, Reach, ServiceId, TransportError};
 use world::output::percentile;
 
 #[derive(Debug, Clone, Serialize)]
@@ -126,7 +129,7 @@ pub fn ticks_for(n: u32, ticks: u64) -> u64 {
     }
 }
 
-pub fn bench_tick(sizes: &[u32], ticks: u64) -> Result<Vec<Row>, String> {
+pub fn bench_tick(sizes: &[u32], ticks: u64) -> BenchResult<Vec<Row>> {
     let mut rows = Vec::new();
     for &n in sizes {
         let ticks = ticks_for(n, ticks);
@@ -136,7 +139,7 @@ pub fn bench_tick(sizes: &[u32], ticks: u64) -> Result<Vec<Row>, String> {
             let mut sc = Scenario::default();
             sc.run.robots = n;
             sc.run.max_ticks = ticks;
-            crate::prepare::prepare_from(&mut sc, "bench tick").map_err(|e| e.to_string())?;
+            crate::prepare::prepare_from(&mut sc, "bench tick")?;
             Some(run_stats(&sc)?)
         } else {
             None
@@ -170,7 +173,7 @@ pub fn bench_tick(sizes: &[u32], ticks: u64) -> Result<Vec<Row>, String> {
 const SEARCH_MAX_ROBOTS: u32 = 200;
 
 /// The runtime itself: the roam scenario with N robots for `ticks` ticks (+ warm-up).
-fn runtime(n: u32, ticks: u64, barrier: BarrierKind) -> Result<Stats, String> {
+fn runtime(n: u32, ticks: u64, barrier: BarrierKind) -> BenchResult<Stats> {
     let mut sc = Scenario::roam();
     sc.run.robots = n;
     sc.runtime.barrier = barrier;
@@ -180,9 +183,8 @@ fn runtime(n: u32, ticks: u64, barrier: BarrierKind) -> Result<Stats, String> {
 }
 
 /// Runs `sc` with the processes executor: the ticks it ran and its steady tick statistics.
-fn run_stats(sc: &Scenario) -> Result<(u64, Stats), String> {
-    sc.validate(&|_| "bench".into())
-        .map_err(|e| e.to_string())?;
+fn run_stats(sc: &Scenario) -> BenchResult<(u64, Stats)> {
+    sc.validate(&|_| "bench".into())?;
     let run_id = crate::runid::new_run_id();
     let dir = std::env::temp_dir().join(format!("swarm-bench-{run_id}"));
     let out = processes::run(processes::ProcessRun {
@@ -190,14 +192,18 @@ fn run_stats(sc: &Scenario) -> Result<(u64, Stats), String> {
         run_id: &run_id,
         run_dir: &dir,
         on_status: &mut |_| {},
-    })?;
+    })
+    .map_err(BenchError::Run)?;
     if out.world_exit != Ok(0) {
-        return Err(format!("runtime run failed: {:?}", out.world_exit));
+        return Err(BenchError::WorldExit(out.world_exit));
     }
-    let s: serde_json::Value = serde_json::from_str(
-        &std::fs::read_to_string(dir.join("summary.json")).map_err(|e| e.to_string())?,
-    )
-    .map_err(|e| e.to_string())?;
+    let path = dir.join("summary.json");
+    let text = std::fs::read_to_string(&path).map_err(|source| BenchError::File {
+        path: path.clone(),
+        source,
+    })?;
+    let s: serde_json::Value =
+        serde_json::from_str(&text).map_err(|source| BenchError::Json { path, source })?;
     let _ = std::fs::remove_dir_all(&dir);
     Ok((
         s["ticks"].as_u64().unwrap_or(0),
@@ -209,8 +215,12 @@ fn run_stats(sc: &Scenario) -> Result<(u64, Stats), String> {
     ))
 }
 
-fn spawn_children(kind: &str, prefix: &str, n: u32) -> Result<Vec<Child>, String> {
-    let exe = std::env::current_exe().map_err(|e| e.to_string())?;
+fn spawn_children(kind: &str, prefix: &str, n: u32) -> BenchResult<Vec<Child>> {
+    let spawn_error = |source| BenchError::Spawn {
+        kind: kind.to_string(),
+        source,
+    };
+    let exe = std::env::current_exe().map_err(spawn_error)?;
     (0..n)
         .map(|i| {
             Command::new(&exe)
@@ -225,7 +235,7 @@ fn spawn_children(kind: &str, prefix: &str, n: u32) -> Result<Vec<Child>, String
                 .stdin(Stdio::null())
                 .process_group(0)
                 .spawn()
-                .map_err(|e| format!("spawn bench child: {e}"))
+                .map_err(spawn_error)
         })
         .collect()
 }
@@ -250,56 +260,98 @@ pub(super) fn bench_prefix(kind: &str) -> String {
     transport::prefix_for(&format!("bench-{kind}-{}", crate::runid::new_run_id()))
 }
 
+/// The raw round's two event services: the parent rings `bench/down` for all children, each
+/// child rings `bench/up` back.
+const DOWN: &str = "bench/down";
+const UP: &str = "bench/up";
+
 fn iox2_services(
     node: &Node<ipc::Service>,
     n: usize,
-) -> Result<
-    (
-        iceoryx2::service::port_factory::event::PortFactory<ipc::Service>,
-        iceoryx2::service::port_factory::event::PortFactory<ipc::Service>,
-    ),
-    String,
-> {
-    let e = |x: &dyn std::fmt::Debug| format!("{x:?}");
-    let down = node
-        .service_builder(&"bench/down".try_into().map_err(|x| e(&x))?)
-        .event()
-        .max_listeners(n + 2)
-        .max_notifiers(2)
-        .max_nodes(n + 4)
-        .open_or_create()
-        .map_err(|x| e(&x))?;
-    let up = node
-        .service_builder(&"bench/up".try_into().map_err(|x| e(&x))?)
-        .event()
-        .max_listeners(2)
-        .max_notifiers(n + 2)
-        .max_nodes(n + 4)
-        .open_or_create()
-        .map_err(|x| e(&x))?;
+) -> BenchResult<(transport::EventService, transport::EventService)> {
+    let down = transport::event(
+        node,
+        ServiceId::from(DOWN),
+        Reach::Create(EventCapacity {
+            listeners: n + 2,
+            notifiers: 2,
+            nodes: n + 4,
+        }),
+    )?;
+    let up = transport::event(
+        node,
+        ServiceId::from(UP),
+        Reach::Create(EventCapacity {
+            listeners: 2,
+            notifiers: n + 2,
+            nodes: n + 4,
+        }),
+    )?;
     Ok((down, up))
 }
 
+fn notifier(svc: &transport::EventService) -> Result<Notifier<ipc::Service>, TransportError> {
+    svc.notifier_builder()
+        .create()
+        .map_err(|source| TransportError::Notifier {
+            service: ServiceId::of(svc),
+            source,
+        })
+}
+
+fn listener(svc: &transport::EventService) -> Result<Listener<ipc::Service>, TransportError> {
+    svc.listener_builder()
+        .create()
+        .map_err(|source| TransportError::Listener {
+            service: ServiceId::of(svc),
+            source,
+        })
+}
+
+/// Waits for events on `listener` (of `svc`) up to `timeout`, calling `each` per activation.
+fn wait(
+    svc: &transport::EventService,
+    listener: &Listener<ipc::Service>,
+    each: impl FnMut(iceoryx2::port::EventActivation),
+    timeout: Duration,
+) -> Result<u64, TransportError> {
+    listener
+        .timed_wait(each, timeout)
+        .map_err(|source| TransportError::Wait {
+            service: ServiceId::of(svc),
+            source,
+        })
+}
+
+fn notify(svc: &transport::EventService, n: &Notifier<ipc::Service>) -> Result<(), TransportError> {
+    n.notify()
+        .map(|_| ())
+        .map_err(|source| TransportError::Notify {
+            service: ServiceId::of(svc),
+            source,
+        })
+}
+
+/// Seconds the bench children of the raw round and the futex floor have to attach.
+const ATTACH_S: u64 = 60;
+
 /// 1 notify to N listeners, N notifications back.
-fn raw_iox2(n: u32, rounds: u64) -> Result<Stats, String> {
+fn raw_iox2(n: u32, rounds: u64) -> BenchResult<Stats> {
     let prefix = bench_prefix("iox2");
     let result = (|| {
-        let config = transport::run_config(&prefix).map_err(|e| e.to_string())?;
-        let node = transport::node(&config, "bench-parent").map_err(|e| e.to_string())?;
+        let config = transport::run_config(&prefix)?;
+        let node = transport::node(&config, "bench-parent")?;
         let (down, up) = iox2_services(&node, n as usize)?;
-        let notifier = down
-            .notifier_builder()
-            .create()
-            .map_err(|e| format!("{e:?}"))?;
-        let listener = up
-            .listener_builder()
-            .create()
-            .map_err(|e| format!("{e:?}"))?;
+        let notifier = notifier(&down)?;
+        let listener = listener(&up)?;
         let children = spawn_children("iox2", &prefix, n)?;
         let t = Instant::now();
         while up.dynamic_config().number_of_notifiers() < n as usize {
-            if t.elapsed() > Duration::from_secs(60) {
-                return Err("bench children did not attach".to_string());
+            if t.elapsed() > Duration::from_secs(ATTACH_S) {
+                return Err(BenchError::ChildNotReady {
+                    kind: "iox2".into(),
+                    seconds: ATTACH_S,
+                });
             }
             std::thread::sleep(Duration::from_millis(5));
         }
@@ -307,12 +359,10 @@ fn raw_iox2(n: u32, rounds: u64) -> Result<Stats, String> {
         let warm = (rounds / 20).max(10);
         for r in 0..rounds + warm {
             let t = Instant::now();
-            notifier.notify().map_err(|e| format!("{e:?}"))?;
+            notify(&down, &notifier)?;
             let mut got = 0u64;
             while got < n as u64 {
-                listener
-                    .timed_wait(|ev| got += ev.count, Duration::from_secs(5))
-                    .map_err(|e| format!("{e:?}"))?;
+                wait(&up, &listener, |ev| got += ev.count, Duration::from_secs(5))?;
             }
             if r >= warm {
                 ns.push(t.elapsed().as_nanos() as u64);
@@ -327,15 +377,18 @@ fn raw_iox2(n: u32, rounds: u64) -> Result<Stats, String> {
 }
 
 /// N processes released by one futex word and counting themselves back.
-fn futex_floor(n: u32, rounds: u64) -> Result<Stats, String> {
+fn futex_floor(n: u32, rounds: u64) -> BenchResult<Stats> {
     let prefix = bench_prefix("futex");
     let result = (|| {
-        let b = TickBarrier::create(&prefix, n).map_err(|e| e.to_string())?;
+        let b = TickBarrier::create(&prefix, n)?;
         let children = spawn_children("futex", &prefix, n)?;
         let t = Instant::now();
         while b.ready_count() < n {
-            if t.elapsed() > Duration::from_secs(60) {
-                return Err("bench children did not attach".to_string());
+            if t.elapsed() > Duration::from_secs(ATTACH_S) {
+                return Err(BenchError::ChildNotReady {
+                    kind: "futex".into(),
+                    seconds: ATTACH_S,
+                });
             }
             std::thread::sleep(Duration::from_millis(5));
         }
@@ -381,34 +434,22 @@ pub fn child(a: &ChildArgs) -> i32 {
             }
         }
         "iox2" => {
-            let run = || -> Result<(), String> {
-                let config = transport::run_config(&a.prefix).map_err(|e| e.to_string())?;
-                let node = transport::node(&config, &format!("bench-{}", a.index))
-                    .map_err(|e| e.to_string())?;
-                let down = node
-                    .service_builder(&"bench/down".try_into().map_err(|e| format!("{e:?}"))?)
-                    .event()
-                    .open()
-                    .map_err(|e| format!("{e:?}"))?;
-                let up = node
-                    .service_builder(&"bench/up".try_into().map_err(|e| format!("{e:?}"))?)
-                    .event()
-                    .open()
-                    .map_err(|e| format!("{e:?}"))?;
-                let listener = down
-                    .listener_builder()
-                    .create()
-                    .map_err(|e| format!("{e:?}"))?;
+            let run = || -> BenchResult<()> {
+                let config = transport::run_config(&a.prefix)?;
+                let node = transport::node(&config, &format!("bench-{}", a.index))?;
+                let down = transport::event(&node, ServiceId::from(DOWN), Reach::Open)?;
+                let up = transport::event(&node, ServiceId::from(UP), Reach::Open)?;
+                let listener = listener(&down)?;
                 // The reply notifier last: the parent counts notifiers to know we are ready.
-                let notifier = up
-                    .notifier_builder()
-                    .create()
-                    .map_err(|e| format!("{e:?}"))?;
+                let notifier = notifier(&up)?;
                 loop {
                     let mut k = 0u64;
-                    listener
-                        .timed_wait(|ev| k += ev.count, Duration::from_millis(500))
-                        .map_err(|e| format!("{e:?}"))?;
+                    wait(
+                        &down,
+                        &listener,
+                        |ev| k += ev.count,
+                        Duration::from_millis(500),
+                    )?;
                     if k == 0 {
                         // No round for a while: is the service still there (parent alive)?
                         if down.dynamic_config().number_of_notifiers() == 0 {
@@ -416,7 +457,7 @@ pub fn child(a: &ChildArgs) -> i32 {
                         }
                     }
                     for _ in 0..k {
-                        notifier.notify().map_err(|e| format!("{e:?}"))?;
+                        notify(&up, &notifier)?;
                     }
                 }
             };
