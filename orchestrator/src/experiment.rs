@@ -389,7 +389,7 @@ fn tabulate(x: &Experiment, results: &[RunResult]) -> Vec<Cell> {
     cells
 }
 
-/// Improvement of `ours` over `other` the paper's way (spec/search.md 4.6): relative reduction
+/// Improvement of `ours` over `other` the paper's way (docs/search.md 4.6): relative reduction
 /// of the mean values summed over the swarm sizes (pooled over the modes of each group).
 fn improvement(
     cells: &[Cell],
@@ -477,7 +477,7 @@ fn report(x: &Experiment, cells: &[Cell], seeds: u32, unavailable: &[(String, St
     }
     let _ = writeln!(
         s,
-        "\n## Headline comparisons (spec/search.md 4.6: relative reduction of the summed means)\n"
+        "\n## Headline comparisons (docs/search.md 4.6: relative reduction of the summed means)\n"
     );
     let _ = writeln!(s, "| comparison | steps: ours | steps: paper's table | energy: ours | energy: paper's table |");
     let _ = writeln!(s, "|---|---|---|---|---|");

@@ -90,7 +90,7 @@ pub enum Kinematics {
     #[default]
     Holonomic,
     /// The command is (v, w): speed |v| <= v_max along the heading and turn rate |w| <= w_max
-    /// (spec/hunting.md eqs. 2.8-2.10: x += v cos(phi), y += v sin(phi), then phi += w).
+    /// (docs/hunting.md eqs. 2.8-2.10: x += v cos(phi), y += v sin(phi), then phi += w).
     Unicycle { w_max: f64 },
 }
 

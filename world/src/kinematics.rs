@@ -9,7 +9,7 @@ use swarm::scenario::Kinematics;
 pub fn intended(k: &Kinematics, pose: [f64; 3], cmd: [f64; 2]) -> ([f64; 2], Option<f64>) {
     match *k {
         Kinematics::Holonomic => (cmd, None),
-        // spec/hunting.md eqs. (2.8)-(2.10): x += v cos(phi) dt, y += v sin(phi) dt, then
+        // docs/hunting.md eqs. (2.8)-(2.10): x += v cos(phi) dt, y += v sin(phi) dt, then
         // phi += w dt, with dt = 1 tick.
         Kinematics::Unicycle { .. } => {
             let (v, w, phi) = (cmd[0], cmd[1], pose[2]);

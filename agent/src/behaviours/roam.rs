@@ -1,4 +1,4 @@
-//! Roaming by virtual force (search paper, spec/search.md 2.3-2.4): full speed along the net
+//! Roaming by virtual force (search paper, docs/search.md 2.3-2.4): full speed along the net
 //! repulsion from the two nearest robots *heard on the radio*, plus repulsion from obstacle
 //! and wall points the robot senses. Each robot broadcasts its position every tick.
 
@@ -100,7 +100,7 @@ pub struct Roam<M = Beacon> {
     /// Eq. (5)'s constants (c, l_1) for the shared kernel.
     force: virtual_force::Params,
     v_max: f64,
-    /// Current heading, kept while no force acts (spec/search.md 5 item 5).
+    /// Current heading, kept while no force acts (docs/search.md 5 item 5).
     heading: f64,
     /// What each bulk beacon carries besides the position (a byte pattern of the robot's id).
     payload: Blob,

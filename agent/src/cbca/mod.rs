@@ -1,4 +1,4 @@
-//! CBCA, the consensus-based coalition algorithm of thesis 003 chapter 4 (spec/hunting.md
+//! CBCA, the consensus-based coalition algorithm of thesis 003 chapter 4 (docs/hunting.md
 //! sections 4, 5, 8), as pure kernels with their tests: the model (sec. 4.1), the score
 //! (4.12)-(4.15), the deadlock-free task graph (4.6)-(4.8), Algorithm 1 (bundle construction),
 //! Algorithm 2 (consensus) with a convergence detector, grouping by local prior information

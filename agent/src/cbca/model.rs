@@ -1,4 +1,4 @@
-//! The model of thesis 003 chapter 4, sec. 4.1 (spec/hunting.md sections 1.1, 1.2, 4.1): robots
+//! The model of thesis 003 chapter 4, sec. 4.1 (docs/hunting.md sections 1.1, 1.2, 4.1): robots
 //! with z = 6 resource types, a task limit l_i and a mileage budget; tasks (targets) with a
 //! required resource vector E_j, a robot count L_j, an initial value V_a, a decay beta_j and a hold
 //! time; and the constraints a path must meet: mileage (2.5), compatibility (2.7), resource budget

@@ -1,6 +1,6 @@
 //! Every tunable of CBCA (thesis 003 chapter 4), with where it comes from. The thesis gives the
 //! radii, l_i and the per-target / per-robot table values (beta_j, gamma_i, ...); everything else
-//! is [MISSING] there (spec/hunting.md sections 6 and 12) and the value here is a documented
+//! is [MISSING] there (docs/hunting.md sections 6 and 12) and the value here is a documented
 //! choice. The struct is a `[cbca.params]` section of a scenario file; a missing key takes the
 //! default below.
 

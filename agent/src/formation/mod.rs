@@ -1,6 +1,6 @@
 //! The formation paper's algorithm kernels (Zhang et al., Control and Decision 2024, "Assignment
 //! algorithm of multi robot pattern formation based on multi parameter optimization"; spec:
-//! shared/spec/formation.md). Pure functions over plain data, no runtime I/O, so a behaviour and a
+//! docs/formation.md). Pure functions over plain data, no runtime I/O, so a behaviour and a
 //! mission can wire them later:
 //!
 //! - [`params`]: every chosen number, documented (the paper publishes almost none).

@@ -1,4 +1,4 @@
-//! Kernels of the hunting thesis (003, Sun Ao 2023, chapters 2-3; spec/hunting.md): the model
+//! Kernels of the hunting thesis (003, Sun Ao 2023, chapters 2-3; docs/hunting.md): the model
 //! and its constraints, the artificial potential field, the improved auction and the parallel
 //! baseline, hunting points and on-line re-planning. Pure functions and state machines with
 //! their unit tests; the hunt behaviour, the auctioneer process and the world mission wire them.

@@ -2,7 +2,7 @@
 //! the `[hunt.params]` section of a scenario file. Units throughout: **km** for lengths (the
 //! thesis's tables are in km on a 10 km x 10 km arena) and **minutes** for time, so speeds are
 //! km/min and turn rates rad/min. Nearly none of these values is printed in the thesis
-//! (spec/hunting.md section 6 and 12): each is marked [thesis] or [chosen] with the reason.
+//! (docs/hunting.md section 6 and 12): each is marked [thesis] or [chosen] with the reason.
 
 use serde::{Deserialize, Serialize};
 

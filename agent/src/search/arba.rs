@@ -1,5 +1,5 @@
 //! ARBA, the adaptive robotic bat algorithm baseline (search layer "A", modes BA and SA;
-//! spec/search.md 2.11, 4.1 Table 3 and 5 item 29).
+//! docs/search.md 2.11, 4.1 Table 3 and 5 item 29).
 //!
 //! The search paper cites ARBA (Tang H., Sun W., Yu H. et al., "A multirobot target searching
 //! method based on bat algorithm in unknown environments", Expert Systems with Applications

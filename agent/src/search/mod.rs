@@ -1,4 +1,4 @@
-//! Kernels of the multi-target search paper (BSOA + TPEPSO; spec/search.md) and of its
+//! Kernels of the multi-target search paper (BSOA + TPEPSO; docs/search.md) and of its
 //! baselines (SVF, EPSO, ARBA), pure functions with their unit tests. The search scenario
 //! (issue 3) wires them into a behaviour; see `NOTES.md` beside this file for every choice made
 //! where the paper is silent.

@@ -1,4 +1,4 @@
-//! The roaming behaviour's scenario section (`[roam]`): virtual-force roaming (spec/search.md
+//! The roaming behaviour's scenario section (`[roam]`): virtual-force roaming (docs/search.md
 //! eq. 5), no mission.
 
 use serde::{Deserialize, Serialize};

@@ -1,9 +1,9 @@
-//! The search paper's scenario section (`[search]`, spec/search.md) and what its world mission
+//! The search paper's scenario section (`[search]`, docs/search.md) and what its world mission
 //! and its behaviour share: the display states and the kind of entity robots sense.
 
 use serde::{Deserialize, Serialize};
 
-/// The multi-target search scenario (spec/search.md): targets, their signal, the mode.
+/// The multi-target search scenario (docs/search.md): targets, their signal, the mode.
 #[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct SearchParams {

@@ -1,4 +1,4 @@
-//! The evader's escape strategy of the hunting thesis (003, eq. 2.17, Fig. 2.1; spec/hunting.md
+//! The evader's escape strategy of the hunting thesis (003, eq. 2.17, Fig. 2.1; docs/hunting.md
 //! section 1.8 and 12 items 1-2).
 //!
 //! A target stays silent (still) until it senses a pursuer within its sensing radius. Then it

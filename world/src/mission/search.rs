@@ -1,4 +1,4 @@
-//! The search paper's mission (spec/search.md 1.1-1.4): targets, their placement, the signal of
+//! The search paper's mission (docs/search.md 1.1-1.4): targets, their placement, the signal of
 //! eq. (33) each robot measures, and "found" (a robot closer than L_0; the target then stops
 //! emitting). The run is complete when every target is found (`search.end_when_all_found`).
 
@@ -77,7 +77,7 @@ fn signal(t: u32, flags: u32, intensity: f64) -> Entity {
     }
 }
 
-/// The search scenario's measures (spec/search.md 4.3 and 5 item 30).
+/// The search scenario's measures (docs/search.md 4.3 and 5 item 30).
 #[derive(Debug, Clone, Serialize, PartialEq)]
 pub struct SearchMetrics {
     pub targets: u32,

@@ -1,4 +1,4 @@
-//! The multi-target search behaviour of spec/search.md (BSOA + TPEPSO and the SVF / EPSO / ARBA
+//! The multi-target search behaviour of docs/search.md (BSOA + TPEPSO and the SVF / EPSO / ARBA
 //! baselines): the per-robot loop of spec 2.9 for one robot, from its Sense frame and its radio
 //! inbox only.
 //!

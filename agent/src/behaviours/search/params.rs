@@ -1,7 +1,7 @@
 //! The search behaviour's parameters (`[search.kernels]` of the scenario) and the mode.
 //!
 //! Every section defaults to the paper's values (Table 4) or the spec's suggestions
-//! (spec/search.md section 5); a key that is not a field is an error.
+//! (docs/search.md section 5); a key that is not a field is an error.
 
 use crate::kernels::virtual_force;
 use crate::search::{
