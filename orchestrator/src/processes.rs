@@ -41,6 +41,13 @@ fn bin(name: &str) -> PathBuf {
     exe.parent().expect("exe dir").join(name)
 }
 
+/// One agent process of the run.
+struct Agent {
+    robot: u32,
+    /// The robot's attach count when this agent was started.
+    base: u64,
+}
+
 /// Decoded waitpid status.
 fn exit_of(status: i32) -> Result<i32, i32> {
     if libc::WIFEXITED(status) {
@@ -169,10 +176,13 @@ fn supervise(
             .map(|c| c.id())
             .map_err(|e| format!("cannot start {}: {e}", bin("agent").display()))
     };
-    let mut agents: BTreeMap<u32, u32> = BTreeMap::new(); // pid -> robot
+    // pid -> (robot, the robot's attach count when it was spawned): only one agent of a
+    // robot lives at a time (a replacement starts after its predecessor is reaped), so the
+    // next attach of its robot is this agent's, with attach number base + 1.
+    let mut agents: BTreeMap<u32, Agent> = BTreeMap::new();
     for i in 0..n {
         let pid = spawn_agent(i)?;
-        agents.insert(pid, i);
+        agents.insert(pid, Agent { robot: i, base: 0 });
         entry.agent_pids.push(pid);
     }
     registry::write(entry).map_err(|e| format!("run registry: {e}"))?;
@@ -191,9 +201,8 @@ fn supervise(
     };
     let restart = sc.faults.on_fault == FaultPolicy::Restart;
     let mut restarts = vec![0u32; n as usize];
-    // Scheduled kills, in tick order; each is sent when the world reaches its tick.
-    let kills = swarm::chaos::schedule(sc);
-    let mut next_kill = 0;
+    // The last kill order of each robot acted on (see TickBarrier::order_kill).
+    let mut kill_done = vec![0u64; n as usize];
     let mut last = WorldStatus::default();
     let mut last_registry = Instant::now();
     let mut stop_sent: Option<Instant> = None;
@@ -205,9 +214,13 @@ fn supervise(
                 world_exit = exit_of(st);
                 break 'outer;
             }
-            let Some(robot) = agents.remove(&pid) else {
+            let Some(Agent { robot, .. }) = agents.remove(&pid) else {
                 continue;
             };
+            // It can attach no more and no other agent of the robot lives: every attach so
+            // far is of a dead agent. Written before the report, which the world checks
+            // against it (a report of a replacement that never took over is no fault).
+            barrier.set_dead_upto(robot, barrier.attach_count(robot));
             if barrier.is_shutdown() || exit_of(st) == Ok(0) {
                 // Ended with the run (the world's shutdown word), not a fault.
                 continue;
@@ -221,24 +234,30 @@ fn supervise(
             if restart && stop_sent.is_none() && restarts[robot as usize] < sc.faults.max_restarts {
                 // The dead agent's ports must go before the new one attaches to its services.
                 node.try_cleanup_dead_nodes();
+                let base = barrier.attach_count(robot);
                 let pid = spawn_agent(robot)?;
                 restarts[robot as usize] += 1;
-                agents.insert(pid, robot);
+                agents.insert(pid, Agent { robot, base });
                 entry.agent_pids[robot as usize] = pid;
                 registry::write(entry).map_err(|e| format!("run registry: {e}"))?;
             }
         }
+        // The world declared these agents dead (a scheduled kill at its tick, an ack
+        // deadline): SIGKILL exactly that incarnation, never a replacement that has not taken
+        // over. A kill scheduled while the robot is already dead (its restart under way) is
+        // void: the world orders nothing.
+        for (&pid, a) in &agents {
+            let r = a.robot as usize;
+            let order = barrier.kill_order(a.robot);
+            if order > kill_done[r] {
+                kill_done[r] = order;
+                if barrier.attach_count(a.robot) > a.base && a.base + 1 == order {
+                    kill(pid);
+                }
+            }
+        }
         while let Ok(Some(s)) = status.receive() {
             last = *s;
-        }
-        // A scheduled kill's tick is reached: the world already treats the robot as dead from
-        // that tick on; now its process gets the SIGKILL.
-        while next_kill < kills.len() && kills[next_kill][0] <= last.tick {
-            let robot = kills[next_kill][1] as u32;
-            if let Some((&pid, _)) = agents.iter().find(|(_, &r)| r == robot) {
-                kill(pid);
-            }
-            next_kill += 1;
         }
         (p.on_status)(&last);
         if last_registry.elapsed() > REGISTRY_PERIOD {

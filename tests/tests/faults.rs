@@ -203,3 +203,107 @@ fn two_concurrent_runs_do_not_see_each_other() {
     assert_left_nothing(&a);
     assert_left_nothing(&b);
 }
+
+/// Restart stress (issue 14 item 1): kills land on robots whose restart is under way and
+/// right after a replacement took over, on a dense schedule plus random chaos. Every fault in
+/// the summary must be a kill that was scheduled (none reported as a crash: a kill landing on
+/// a replacement is the scheduled kill, or void if the robot was already dead at its tick),
+/// every scheduled kill of a robot alive at its tick must be there, every robot must be back
+/// at the end, and the run must leave no process and nothing in /dev/shm. Before the fix a
+/// replacement that attached before its predecessor's death was reported stayed unused (robot
+/// dead for good, its agent idling), and kills landed on replacements as crashes.
+#[test]
+fn restarts_under_dense_kills_lose_no_robot() {
+    let _g = serial();
+    let out = tmp_dir("restart-stress");
+    // Robot 3 every 3 ticks from 40 (most land while its restart is under way or just after
+    // it), robot 5 and 6 in bursts, plus chaos 2 per 100 ticks on everyone.
+    let mut kills: Vec<String> = (0..20).map(|j| format!("{}:3", 40 + 3 * j)).collect();
+    for t in [60, 61, 62, 70, 75, 90, 91, 120] {
+        kills.push(format!("{t}:5"));
+        kills.push(format!("{}:6", t + 1));
+    }
+    let kills = kills.join(",");
+    let max_ticks = 400u64;
+    let o = up(
+        &[
+            "--scenario",
+            roam(),
+            "--robots",
+            "20",
+            "--max-ticks",
+            &max_ticks.to_string(),
+            "--tick-hz",
+            "100",
+            "--chaos-at",
+            &kills,
+            "--chaos",
+            "2",
+            "--on-fault",
+            "restart",
+            "--max-restarts",
+            "100",
+        ],
+        &out,
+    );
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let s = summary(&out);
+    let resolved = swarm::Scenario::parse(
+        &std::fs::read_to_string(out.join("scenario.toml")).unwrap(),
+        "resolved",
+    )
+    .unwrap();
+    let scheduled = resolved.faults.kill_at.clone();
+    assert!(
+        scheduled.len() > 40,
+        "the resolved file lists the random kills too"
+    );
+    let faults = s["faults"].as_array().unwrap();
+    // (robot, tick, restarted_tick) of every fault.
+    let got: Vec<(u64, u64, Option<u64>)> = faults
+        .iter()
+        .map(|f| {
+            assert_eq!(
+                f["cause"].as_str(),
+                Some("scheduled SIGKILL (chaos)"),
+                "only scheduled kills happened: {f}"
+            );
+            assert_eq!(f["tick"], f["detected_tick"], "{f}");
+            (
+                f["robot"].as_u64().unwrap(),
+                f["tick"].as_u64().unwrap(),
+                f["restarted_tick"].as_u64(),
+            )
+        })
+        .collect();
+    // Replay the schedule against the restarts the summary reports: a kill takes effect iff
+    // its robot is alive at its tick (revived at an earlier tick than the kill's).
+    let mut back_at: std::collections::BTreeMap<u64, Option<u64>> = Default::default();
+    let mut expected = Vec::new();
+    for &[t, r] in &scheduled {
+        let alive = match back_at.get(&r) {
+            None => true,
+            Some(None) => false,
+            Some(Some(b)) => *b < t,
+        };
+        if alive {
+            let f = got
+                .iter()
+                .find(|f| f.0 == r && f.1 == t)
+                .unwrap_or_else(|| panic!("kill {t}:{r} of a live robot is not a fault: {got:?}"));
+            back_at.insert(r, f.2);
+            expected.push((r, t));
+        }
+    }
+    assert_eq!(
+        got.len(),
+        expected.len(),
+        "faults {got:?} vs kills {expected:?}"
+    );
+    assert!(got.len() >= 20, "enough kills took effect: {}", got.len());
+    for f in &got {
+        assert!(f.2.is_some(), "every killed robot came back: {got:?}");
+    }
+    assert_eq!(s["alive_at_end"], 20, "no robot lost: {got:?}");
+    assert_left_nothing(&out);
+}
