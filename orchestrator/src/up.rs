@@ -208,7 +208,18 @@ pub fn resolve(a: &UpArgs) -> Result<Scenario, ConfigError> {
             key: String::new(),
             message,
         })?;
+    expand_kills(&mut sc);
     Ok(sc)
+}
+
+/// Writes every kill of the run into `faults.kill_at`, the random ones of `chaos_rate` and
+/// `kill_fraction` included, and zeroes those two: the resolved scenario.toml then lists each
+/// SIGKILL the run schedules (its comment says so) and gives the same schedule when read back
+/// (`chaos::schedule` of the expanded file is the list itself).
+pub fn expand_kills(sc: &mut Scenario) {
+    sc.faults.kill_at = swarm::chaos::schedule(sc);
+    sc.faults.chaos_rate = 0.0;
+    sc.faults.kill_fraction = 0.0;
 }
 
 fn progress(sc: &Scenario, quiet: bool) -> ProgressBar {
@@ -261,6 +272,21 @@ pub fn up(a: UpArgs) -> i32 {
         .out
         .clone()
         .unwrap_or_else(|| Path::new("runs").join(&run_id));
+    // The run folder is bad input like any other (exit 2), found before anything starts.
+    if let Err(e) = std::fs::create_dir_all(&run_dir)
+        .and_then(|_| std::fs::write(run_dir.join("scenario.toml"), sc.to_toml()))
+    {
+        let what = if a.out.is_some() {
+            "--out "
+        } else {
+            "run folder "
+        };
+        eprintln!(
+            "error: {what}{}: cannot write the run folder: {e}",
+            run_dir.display()
+        );
+        return 2;
+    }
     let pb = progress(&sc, a.quiet);
     let n = sc.run.robots;
     let result: Result<(), String> = match a.executor {
@@ -396,6 +422,28 @@ fn print_summary(v: &serde_json::Value, dir: &Path) {
         "  outputs: {}/{{scenario.toml, summary.json, recording.bin, run.svg}}",
         dir.display()
     );
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn expanded_kills_list_every_kill_and_schedule_the_same() {
+        let mut sc = Scenario::default();
+        sc.run.robots = 20;
+        sc.faults.kill_at = vec![[7, 3]];
+        sc.faults.chaos_rate = 2.0;
+        sc.faults.kill_fraction = 0.25;
+        let all = swarm::chaos::schedule(&sc);
+        // 1 explicit + ~60 random (2 per 100 ticks over 3,000) + 5 of the fraction.
+        assert!(all.len() > 30, "{all:?}");
+        expand_kills(&mut sc);
+        assert_eq!(sc.faults.kill_at, all);
+        assert_eq!(swarm::chaos::schedule(&sc), all);
+        let back = Scenario::parse(&sc.to_toml(), "resolved").unwrap();
+        assert_eq!(swarm::chaos::schedule(&back), all);
+    }
 }
 
 /// Worker threads of a single in-process run: the machine's cores.

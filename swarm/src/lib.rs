@@ -19,6 +19,7 @@ pub mod mailbox;
 pub mod radio;
 pub mod recording;
 pub mod scenario;
+pub mod toml_u64;
 pub mod transport;
 
 pub use behaviour::{AgentRuntime, Behaviour, Command, Outbox, Received};

@@ -28,6 +28,7 @@ pub struct Scenario {
 pub struct RunParams {
     pub behaviour: String,
     pub robots: u32,
+    #[serde(with = "crate::toml_u64")]
     pub seed: u64,
     pub max_ticks: u64,
 }

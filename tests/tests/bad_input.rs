@@ -74,3 +74,68 @@ fn bad_scenario_files_name_the_file_and_key() {
         &["behaviour.toml", "run.behaviour", "roam"],
     );
 }
+
+/// Every u64 is a seed (issue 14 item 4: TOML integers are i64, and `--seed 2^63` panicked
+/// with `scenario serialises: OutOfRange`). u64::MAX goes through the CLI, the resolved
+/// scenario.toml the world reads, and back out in the summary.
+#[test]
+fn a_seed_above_two_to_the_63_runs() {
+    let _g = serial();
+    let out = tmp_dir("seed-max");
+    let max = u64::MAX.to_string();
+    let o = up(
+        &[
+            "--robots",
+            "2",
+            "--max-ticks",
+            "5",
+            "--scenario",
+            roam(),
+            "--seed",
+            &max,
+        ],
+        &out,
+    );
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let resolved = std::fs::read_to_string(out.join("scenario.toml")).unwrap();
+    let sc = swarm::Scenario::parse(&resolved, "resolved").unwrap();
+    assert_eq!(sc.run.seed, u64::MAX);
+    assert_eq!(summary(&out)["seed"].as_u64(), Some(u64::MAX));
+    assert_left_nothing(&out);
+    // A negative seed is bad input (exit 2), not a panic.
+    expect_rejected(&["--seed", "-1"], &["--seed"]);
+}
+
+/// A run folder that cannot be written is bad input like any other: exit 2, the error names
+/// --out, nothing started (issue 14 item 10; it exited 1).
+#[test]
+fn an_unwritable_out_folder_exits_2() {
+    let _g = serial();
+    let dir = tmp_dir("bad-out");
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("a-file");
+    std::fs::write(&file, "x").unwrap();
+    let before = run_shm_entries();
+    for out in [
+        file.join("run").display().to_string(),
+        "/proc/swarm-no-such-dir".to_string(),
+    ] {
+        let o = std::process::Command::new(orchestrator())
+            .args([
+                "up",
+                "--quiet",
+                "--robots",
+                "2",
+                "--max-ticks",
+                "3",
+                "--out",
+            ])
+            .arg(&out)
+            .output()
+            .unwrap();
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(2), "--out {out}: {err}");
+        assert!(err.contains("--out") && err.contains(&out), "{err}");
+    }
+    assert_eq!(run_shm_entries(), before, "nothing created in /dev/shm");
+}
