@@ -233,7 +233,7 @@ fn supervise(
             );
             if restart && stop_sent.is_none() && restarts[robot as usize] < sc.faults.max_restarts {
                 // The dead agent's ports must go before the new one attaches to its services.
-                node.try_cleanup_dead_nodes();
+                cleanup_dead_agents(&node, prefix);
                 let base = barrier.attach_count(robot);
                 let pid = spawn_agent(robot)?;
                 restarts[robot as usize] += 1;
@@ -300,7 +300,75 @@ fn supervise(
     })
 }
 
+/// An empty /dev/shm segment of the run older than this has lost its creator (one that lives
+/// sizes it within microseconds of creating it).
+const EMPTY_SEGMENT_AGE: Duration = Duration::from_millis(50);
+
+/// `try_cleanup_dead_nodes`, unblocked when it would wait for ever. iceoryx2 0.10's cleanup
+/// of a dead node opens each of its connection segments and, for a segment that was created
+/// but never sized (an agent SIGKILLed between `shm_open` and `ftruncate`, i.e. killed while
+/// making a link), waits without a timeout (`MappingSizeIsZero` loops in
+/// `posix_shared_memory::open_impl`): the orchestrator hung there with the whole run
+/// defunct, seen under dense kills during restarts. A watchdog thread removes the run's empty
+/// segments older than `EMPTY_SEGMENT_AGE` while the cleanup runs; the open then finds
+/// nothing and the cleanup goes on.
+fn cleanup_dead_agents(node: &iceoryx2::node::Node<iceoryx2::prelude::ipc::Service>, prefix: &str) {
+    let done = std::sync::atomic::AtomicBool::new(false);
+    std::thread::scope(|s| {
+        s.spawn(|| {
+            while !done.load(std::sync::atomic::Ordering::Acquire) {
+                std::thread::sleep(Duration::from_millis(10));
+                remove_empty_segments(prefix, EMPTY_SEGMENT_AGE);
+            }
+        });
+        node.try_cleanup_dead_nodes();
+        done.store(true, std::sync::atomic::Ordering::Release);
+    });
+}
+
+/// Removes the run's empty /dev/shm files older than `age`; returns how many.
+fn remove_empty_segments(prefix: &str, age: Duration) -> usize {
+    let mut removed = 0;
+    for name in cleanup::shm_files(prefix) {
+        let p = Path::new("/dev/shm").join(&name);
+        let Ok(m) = std::fs::metadata(&p) else {
+            continue;
+        };
+        let old = m
+            .modified()
+            .ok()
+            .and_then(|t| t.elapsed().ok())
+            .is_some_and(|e| e > age);
+        if m.is_file() && m.len() == 0 && old && std::fs::remove_file(&p).is_ok() {
+            removed += 1;
+        }
+    }
+    removed
+}
+
 /// CLOCK_MONOTONIC in microseconds (the world compares it with its own clock).
 pub fn monotonic_us() -> u64 {
     world::process::monotonic_us()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn only_old_empty_segments_of_the_run_are_removed() {
+        let prefix = format!("swtest{}_", std::process::id());
+        let shm = Path::new("/dev/shm");
+        std::fs::write(shm.join(format!("{prefix}empty-old")), b"").unwrap();
+        std::fs::write(shm.join(format!("{prefix}full")), b"x").unwrap();
+        std::thread::sleep(Duration::from_millis(60));
+        std::fs::write(shm.join(format!("{prefix}empty-new")), b"").unwrap();
+        assert_eq!(remove_empty_segments(&prefix, EMPTY_SEGMENT_AGE), 1);
+        assert_eq!(
+            cleanup::shm_files(&prefix),
+            vec![format!("{prefix}empty-new"), format!("{prefix}full")]
+        );
+        cleanup::remove_run(&prefix);
+        assert!(cleanup::shm_files(&prefix).is_empty());
+    }
 }

@@ -435,6 +435,8 @@ mod tests {
         sc.faults.kill_at = vec![[7, 3]];
         sc.faults.chaos_rate = 2.0;
         sc.faults.kill_fraction = 0.25;
+        // Under restart a robot can be killed again (under drop at most once each).
+        sc.faults.on_fault = swarm::scenario::FaultPolicy::Restart;
         let all = swarm::chaos::schedule(&sc);
         // 1 explicit + ~60 random (2 per 100 ticks over 3,000) + 5 of the fraction.
         assert!(all.len() > 30, "{all:?}");
