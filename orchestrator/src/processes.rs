@@ -15,10 +15,16 @@ use swarm::{cleanup, transport};
 
 /// How long the world gets to finish after a stop request before everything is killed.
 const STOP_GRACE: Duration = Duration::from_secs(10);
-/// How long agents get to exit after the world shut the run down.
-const AGENT_EXIT_GRACE: Duration = Duration::from_secs(3);
+/// How long agents get to exit after the world shut the run down (agents waiting for a tick
+/// exit within a few ms of the shutdown word; the rest, still starting, are killed: the
+/// run's outputs are written and its /dev/shm is removed after them anyway).
+const AGENT_EXIT_GRACE: Duration = Duration::from_millis(500);
 /// How often the orchestrator reaps children and refreshes the progress bar.
 const SUPERVISE_PERIOD: Duration = Duration::from_millis(5);
+/// How long the world may take to create the run's services.
+const READY_TIMEOUT: Duration = Duration::from_secs(60);
+/// The error of a run interrupted before its world was ready (up prints it, exit 130).
+pub const INTERRUPTED_AT_START: &str = "interrupted during start-up, before any tick";
 /// How often the run registry (read by `orchestrator status`) is refreshed.
 const REGISTRY_PERIOD: Duration = Duration::from_millis(50);
 
@@ -134,14 +140,27 @@ fn supervise(
         let _ = BufReader::new(stdout).read_line(&mut line);
         let _ = tx.send(line);
     });
-    let ready_timeout = Duration::from_secs(60);
-    match rx.recv_timeout(ready_timeout) {
-        Ok(l) if l.trim() == "READY" => {}
-        Ok(_) | Err(_) => {
-            let code = world.try_wait().ok().flatten();
-            return Err(format!(
-                "the world process did not get ready (exit: {code:?}); see its messages above"
-            ));
+    // Wait in short slices: Ctrl-C / SIGTERM while the world builds its services (a large or
+    // slow scenario) ends the run at once instead of after the world is ready (issue 14
+    // items 6, 8). Nothing has ticked yet: the world is killed, no summary is written.
+    let ready_by = Instant::now() + READY_TIMEOUT;
+    loop {
+        match rx.recv_timeout(SUPERVISE_PERIOD) {
+            Ok(l) if l.trim() == "READY" => break,
+            Err(std::sync::mpsc::RecvTimeoutError::Timeout)
+                if Instant::now() < ready_by && !signals::interrupted() => {}
+            _ if signals::interrupted() => {
+                kill(world.id());
+                let _ = world.wait();
+                return Err(INTERRUPTED_AT_START.to_string());
+            }
+            _ => {
+                kill(world.id());
+                let code = world.wait().ok().and_then(|s| s.code());
+                return Err(format!(
+                    "the world process did not get ready (exit: {code:?}); see its messages above"
+                ));
+            }
         }
     }
     let config = transport::run_config(prefix).map_err(|e| e.to_string())?;
@@ -181,6 +200,10 @@ fn supervise(
     // next attach of its robot is this agent's, with attach number base + 1.
     let mut agents: BTreeMap<u32, Agent> = BTreeMap::new();
     for i in 0..n {
+        if signals::interrupted() {
+            // Ctrl-C while the agents start: the loop below stops the world at once.
+            break;
+        }
         let pid = spawn_agent(i)?;
         agents.insert(pid, Agent { robot: i, base: 0 });
         entry.agent_pids.push(pid);

@@ -252,6 +252,8 @@ fn bar_msg(
 }
 
 pub fn up(a: UpArgs) -> i32 {
+    // First of all: a Ctrl-C at any moment is a clean stop, never the default death.
+    signals::install();
     let sc = match resolve(&a) {
         Ok(s) => s,
         Err(e) => {
@@ -259,7 +261,10 @@ pub fn up(a: UpArgs) -> i32 {
             return 2;
         }
     };
-    signals::install();
+    if signals::interrupted() {
+        eprintln!("error: {}", processes::INTERRUPTED_AT_START);
+        return 130;
+    }
     let cleaned = clean::clean_dead_runs();
     if cleaned.runs > 0 {
         eprintln!(
@@ -335,7 +340,12 @@ pub fn up(a: UpArgs) -> i32 {
     pb.finish_and_clear();
     if let Err(e) = result {
         eprintln!("error: run {run_id}: {e}");
-        return 1;
+        // Ctrl-C before the first tick: the shell's code for an interrupted command.
+        return if e == processes::INTERRUPTED_AT_START {
+            130
+        } else {
+            1
+        };
     }
     match std::fs::read_to_string(run_dir.join("summary.json")) {
         Ok(s) => {

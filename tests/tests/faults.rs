@@ -324,3 +324,94 @@ fn restarts_under_dense_kills_lose_no_robot() {
     assert_eq!(s["alive_at_end"], 20, "no robot lost: {got:?}");
     assert_left_nothing(&out);
 }
+
+/// Ctrl-C / SIGTERM at any moment of start-up (issue 14 item 8): out within about a second,
+/// the outputs of what ran (a summary with end "interrupted" and no fault once the world is
+/// up, or exit 130 before it), nothing of the run left in /dev/shm and no process of it.
+#[test]
+fn interrupting_start_up_is_clean_and_quick() {
+    let _g = serial();
+    for (i, (delay_ms, sig)) in [
+        (20, libc::SIGINT),
+        (150, libc::SIGINT),
+        (400, libc::SIGTERM),
+        (1000, libc::SIGINT),
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        let out = tmp_dir(&format!("int-start-{i}"));
+        let child = spawn_up(&["--robots", "50"], &out);
+        std::thread::sleep(Duration::from_millis(delay_ms));
+        let t = Instant::now();
+        // SAFETY: a signal to the orchestrator this test started.
+        unsafe { libc::kill(child.id() as i32, sig) };
+        let o = wait_with_timeout(child, Duration::from_secs(30));
+        let took = t.elapsed();
+        let err = stderr(&o);
+        eprintln!(
+            "signal {sig} after {delay_ms} ms: out in {took:?}, {:?}",
+            o.status.code()
+        );
+        // The target is 1 s (typically 0.1-0.6 s here); the bound leaves room for a machine
+        // shared with other builds.
+        assert!(
+            took < Duration::from_secs(3),
+            "signal {sig} after {delay_ms} ms: took {took:?}: {err}"
+        );
+        let run_id = match o.status.code() {
+            Some(0) => {
+                let s = summary(&out);
+                assert_eq!(s["end"], "interrupted", "{s}");
+                assert_eq!(
+                    s["faults"].as_array().unwrap().len(),
+                    0,
+                    "no false fault: {s}"
+                );
+                s["run_id"].as_str().unwrap().to_string()
+            }
+            Some(130) => {
+                assert!(err.contains("interrupted during start-up"), "{err}");
+                assert!(!out.join("summary.json").exists());
+                // Before the run got an id nothing was created at all.
+                err.split("run ")
+                    .nth(1)
+                    .and_then(|r| r.split(':').next())
+                    .unwrap_or("none")
+                    .to_string()
+            }
+            c => panic!("signal {sig} after {delay_ms} ms: exit {c:?}: {err}"),
+        };
+        let prefix = swarm::transport::prefix_for(&run_id);
+        let shm: Vec<String> = run_shm_entries()
+            .into_iter()
+            .filter(|n| n.starts_with(&prefix))
+            .collect();
+        assert!(shm.is_empty(), "left in /dev/shm: {shm:?}");
+        let procs = processes_mentioning(&out.display().to_string());
+        assert!(procs.is_empty(), "left processes: {procs:?}");
+    }
+}
+
+/// `--tick-hz 1e-300` (issue 14 item 6): a pace so slow that tick 1 never comes is no
+/// Duration panic; the run waits for it and a Ctrl-C ends it at once with tick 0 recorded.
+#[test]
+fn an_extremely_slow_pace_runs_and_stops_on_ctrl_c() {
+    let _g = serial();
+    let out = tmp_dir("slow-pace");
+    let child = spawn_up(
+        &["--scenario", roam(), "--robots", "3", "--tick-hz", "1e-300"],
+        &out,
+    );
+    std::thread::sleep(Duration::from_millis(1500));
+    let t = Instant::now();
+    // SAFETY: Ctrl-C to the orchestrator this test started.
+    unsafe { libc::kill(child.id() as i32, libc::SIGINT) };
+    let o = wait_with_timeout(child, Duration::from_secs(30));
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert!(t.elapsed() < Duration::from_secs(3), "{:?}", t.elapsed());
+    let s = summary(&out);
+    assert_eq!(s["end"], "interrupted");
+    assert_eq!(s["ticks"], 1, "tick 0 starts at once, tick 1 never");
+    assert_left_nothing(&out);
+}

@@ -98,6 +98,31 @@ fn drain_control(
     }
 }
 
+/// Sleeps until tick `k` may start (runtime.tick_hz), in slices of at most `poll`, asking
+/// `stopped` after each: a stop request ends a slow pace at once (a pace of `--tick-hz 1e-300`
+/// would otherwise sleep for ever). Returns false if stopped.
+fn pace(
+    rt: &swarm::scenario::RuntimeParams,
+    loop_start: Instant,
+    k: u64,
+    poll: Duration,
+    mut stopped: impl FnMut() -> bool,
+) -> bool {
+    let Some(at) = rt.tick_start(k) else {
+        return true;
+    };
+    loop {
+        let now = loop_start.elapsed();
+        if at <= now {
+            return true;
+        }
+        std::thread::sleep((at - now).min(poll));
+        if stopped() {
+            return false;
+        }
+    }
+}
+
 /// CLOCK_MONOTONIC in microseconds: comparable across processes on one machine.
 pub fn monotonic_us() -> u64 {
     let mut ts = libc::timespec {
@@ -201,10 +226,18 @@ pub fn run(args: &WorldArgs) -> Result<i32> {
     let mut tick_ns = Vec::with_capacity(sc.run.max_ticks.min(10_000_000) as usize);
     let mut actions: Vec<Option<Action>> = vec![None; n as usize];
     let deadline = Duration::from_millis(sc.runtime.ack_deadline_ms);
-    let mut end = "completed".to_string();
-    while world.tick < sc.run.max_ticks {
+    // Stopped during start-up (Ctrl-C before every agent attached): no tick runs, so no
+    // robot that was still starting is declared dead at tick 0 (issue 14 item 8).
+    let mut end = if ctl.stop { "interrupted" } else { "completed" }.to_string();
+    'ticks: while world.tick < sc.run.max_ticks && !ctl.stop {
         let k = world.tick;
-        sc.runtime.pace(t_loop, k);
+        if !pace(&sc.runtime, t_loop, k, poll, || {
+            drain_control(&control, &mut world, &mut ctl, &barrier, &drivers);
+            ctl.stop
+        }) {
+            end = "interrupted".to_string();
+            break;
+        }
         let t_tick = Instant::now();
         world.begin_tick();
         drivers.order_kills(&world, &barrier);
@@ -265,6 +298,13 @@ pub fn run(args: &WorldArgs) -> Result<i32> {
             }
             barrier.wait_acks_with(poll, bell);
             drain_control(&control, &mut world, &mut ctl, &barrier, &drivers);
+            if ctl.stop {
+                // Ctrl-C while agents are slow (the first ticks make every radio link, which
+                // takes seconds at 50 robots on 2 cores): the unfinished tick is dropped, the
+                // outputs hold the ticks that completed.
+                end = "interrupted".to_string();
+                break 'ticks;
+            }
             if waited.elapsed() > deadline {
                 let silent: Vec<u32> = world
                     .live_robots()
