@@ -261,6 +261,16 @@ pub fn up(a: UpArgs) -> i32 {
             return 2;
         }
     };
+    if a.executor == Executor::Processes {
+        // Refused before anything starts, rather than EMFILE in the world after seconds.
+        let (soft, _) = swarm::limits::raise_nofile();
+        let links = (sc.radio.max_links as u64 + sc.radio.lingering_links as u64)
+            .min(sc.run.robots.saturating_sub(1) as u64);
+        if let Err(e) = swarm::limits::check_fits(sc.run.robots, links, soft) {
+            eprintln!("error: {e}");
+            return 2;
+        }
+    }
     if signals::interrupted() {
         eprintln!("error: {}", processes::INTERRUPTED_AT_START);
         return 130;
