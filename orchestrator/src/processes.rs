@@ -255,14 +255,20 @@ fn supervise(
                 barrier.current_tick(),
             );
             if restart && stop_sent.is_none() && restarts[robot as usize] < sc.faults.max_restarts {
-                // The dead agent's ports must go before the new one attaches to its services.
-                cleanup_dead_agents(&node, prefix);
+                // The replacement starts first and the dead agent's ports are cleaned while
+                // it starts up: each service has room for one dead agent's ports beside the
+                // live one's (transport's RESTART_SLACK), and the cleanup (~0.3-0.6 s at
+                // N = 50: iceoryx2 lists /dev/shm for every port it removes) was almost all
+                // of a restart's latency (`bench restart`, issue 14 item 3). The cleanup ends
+                // before the next death is reaped, so at most one dead agent's ports per
+                // robot are ever left.
                 let base = barrier.attach_count(robot);
                 let pid = spawn_agent(robot)?;
                 restarts[robot as usize] += 1;
                 agents.insert(pid, Agent { robot, base });
                 entry.agent_pids[robot as usize] = pid;
                 registry::write(entry).map_err(|e| format!("run registry: {e}"))?;
+                cleanup_dead_agents(&node, prefix);
             }
         }
         // The world declared these agents dead (a scheduled kill at its tick, an ack
@@ -336,6 +342,7 @@ const EMPTY_SEGMENT_AGE: Duration = Duration::from_millis(50);
 /// segments older than `EMPTY_SEGMENT_AGE` while the cleanup runs; the open then finds
 /// nothing and the cleanup goes on.
 fn cleanup_dead_agents(node: &iceoryx2::node::Node<iceoryx2::prelude::ipc::Service>, prefix: &str) {
+    let t = Instant::now();
     let done = std::sync::atomic::AtomicBool::new(false);
     std::thread::scope(|s| {
         s.spawn(|| {
@@ -347,6 +354,17 @@ fn cleanup_dead_agents(node: &iceoryx2::node::Node<iceoryx2::prelude::ipc::Servi
         node.try_cleanup_dead_nodes();
         done.store(true, std::sync::atomic::Ordering::Release);
     });
+    LAST_CLEANUP_US.store(
+        t.elapsed().as_micros() as u64,
+        std::sync::atomic::Ordering::Relaxed,
+    );
+}
+
+static LAST_CLEANUP_US: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+
+/// How long the last restart's port cleanup took, in microseconds (`bench restart`).
+pub fn last_cleanup_us() -> u64 {
+    LAST_CLEANUP_US.load(std::sync::atomic::Ordering::Relaxed)
 }
 
 /// Removes the run's empty /dev/shm files older than `age`; returns how many.

@@ -17,6 +17,7 @@
 
 mod latency;
 mod memory;
+mod restart;
 mod search;
 mod throughput;
 mod tick;
@@ -84,6 +85,8 @@ enum BenchWhat {
         #[arg(long)]
         quick: bool,
     },
+    /// Restart latency: SIGKILL of an agent -> its replacement ticks again.
+    Restart(restart::Args),
     /// Robot-steps per second of the in-process executor on the search scenario.
     Search {
         /// Robots.
@@ -209,6 +212,7 @@ pub fn bench(a: BenchArgs) -> i32 {
         ..Default::default()
     };
     match a.what {
+        BenchWhat::Restart(r) => restart::bench(r),
         BenchWhat::Tick {
             robots,
             ticks,
