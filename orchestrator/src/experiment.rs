@@ -477,6 +477,7 @@ fn report(x: &Experiment, cells: &[Cell], seeds: u32, unavailable: &[(String, St
     let _ = writeln!(s, "| N | mode | runs | censored | completed | steps (ours) | mean steps, censored at cap | steps (paper) | energy (ours) | energy (paper) | energy / robot-step |");
     let _ = writeln!(s, "|---|---|---|---|---|---|---|---|---|---|---|");
     for c in cells {
+        let completed = format!("{:.0} %", 100.0 * c.completion_rate);
         let _ = writeln!(
             s,
             "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
@@ -488,7 +489,7 @@ fn report(x: &Experiment, cells: &[Cell], seeds: u32, unavailable: &[(String, St
             },
             c.runs,
             c.censored,
-            format!("{:.0} %", 100.0 * c.completion_rate),
+            completed,
             fmt3(c.steps, 0),
             fmt_at_cap(c),
             c.paper

@@ -444,6 +444,11 @@ fn print_summary(v: &serde_json::Value, dir: &Path) {
     );
 }
 
+/// Worker threads of a single in-process run: the machine's cores.
+fn cores() -> usize {
+    std::thread::available_parallelism().map_or(1, |n| n.get())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -466,9 +471,4 @@ mod tests {
         let back = Scenario::parse(&sc.to_toml(), "resolved").unwrap();
         assert_eq!(swarm::chaos::schedule(&back), all);
     }
-}
-
-/// Worker threads of a single in-process run: the machine's cores.
-fn cores() -> usize {
-    std::thread::available_parallelism().map_or(1, |n| n.get())
 }
