@@ -122,6 +122,15 @@ pub struct Cell {
     pub censored: usize,
     /// Over the completed runs.
     pub steps: Option<[f64; 3]>,
+    /// Completed runs / runs.
+    pub completion_rate: f64,
+    /// Mean steps over every run, each censored run counted at the cap (`max_ticks`): a
+    /// lower bound on the true mean when `censored > 0` (a censored run would have needed
+    /// more). The mean of the completed runs alone drops the hardest runs and flatters the
+    /// method that fails most (issue 14 item 11).
+    pub steps_mean_censored_at_cap: f64,
+    /// Whether `steps_mean_censored_at_cap` is only a lower bound (some run was censored).
+    pub steps_mean_is_lower_bound: bool,
     pub energy_e4: Option<[f64; 3]>,
     /// Mean energy / (robots x mean steps): must be <= v_max.
     pub energy_per_robot_step: Option<f64>,
@@ -369,6 +378,11 @@ fn tabulate(x: &Experiment, results: &[RunResult]) -> Vec<Cell> {
                 (Some(s), Some(e)) => Some(e[1] * 1e4 / (n as f64 * s[1])),
                 _ => None,
             };
+            let at_cap: f64 = rs
+                .iter()
+                .map(|r| r.steps.unwrap_or(x.max_ticks) as f64)
+                .sum::<f64>()
+                / rs.len() as f64;
             cells.push(Cell {
                 mode: mode.clone(),
                 variant: variant.clone(),
@@ -376,6 +390,9 @@ fn tabulate(x: &Experiment, results: &[RunResult]) -> Vec<Cell> {
                 runs: rs.len(),
                 censored: rs.len() - done.len(),
                 steps,
+                completion_rate: done.len() as f64 / rs.len() as f64,
+                steps_mean_censored_at_cap: at_cap,
+                steps_mean_is_lower_bound: done.len() < rs.len(),
                 energy_e4: energy,
                 energy_per_robot_step: eprs,
                 paper: x
@@ -423,6 +440,16 @@ fn improvement(
     Some((t - o) / t * 100.0)
 }
 
+/// The mean with censored runs at the cap; ">= m" when it is a lower bound.
+fn fmt_at_cap(c: &Cell) -> String {
+    let lb = if c.steps_mean_is_lower_bound {
+        ">= "
+    } else {
+        ""
+    };
+    format!("{lb}{:.0}", c.steps_mean_censored_at_cap)
+}
+
 fn fmt3(v: Option<[f64; 3]>, prec: usize) -> String {
     match v {
         Some([a, b, c]) => format!("{a:.prec$} / {b:.prec$} / {c:.prec$}"),
@@ -443,12 +470,14 @@ fn report(x: &Experiment, cells: &[Cell], seeds: u32, unavailable: &[(String, St
         "# Multi-target search: steps and energy (min / mean / max over {seeds} seeds)\n"
     );
     let _ = writeln!(s, "Energy is the total path length of all robots, x 10^4. Steps are counted over completed runs; censored runs (max_ticks = {} reached) are counted apart, never dropped silently.\n", x.max_ticks);
-    let _ = writeln!(s, "| N | mode | runs | censored | steps (ours) | steps (paper) | energy (ours) | energy (paper) | energy / robot-step |");
-    let _ = writeln!(s, "|---|---|---|---|---|---|---|---|---|");
+    let _ = writeln!(s, "\"mean steps, censored at cap\" counts every run, a censored one at the cap ({}): marked >= it is a lower bound on the true mean whenever a run was censored; \"completed\" is the share of runs that found every target.\n", x.max_ticks);
+    let _ = writeln!(s, "| N | mode | runs | censored | completed | steps (ours) | mean steps, censored at cap | steps (paper) | energy (ours) | energy (paper) | energy / robot-step |");
+    let _ = writeln!(s, "|---|---|---|---|---|---|---|---|---|---|---|");
     for c in cells {
+        let completed = format!("{:.0} %", 100.0 * c.completion_rate);
         let _ = writeln!(
             s,
-            "| {} | {} | {} | {} | {} | {} | {} | {} | {} |",
+            "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
             c.robots,
             if c.variant.is_empty() {
                 c.mode.clone()
@@ -457,7 +486,9 @@ fn report(x: &Experiment, cells: &[Cell], seeds: u32, unavailable: &[(String, St
             },
             c.runs,
             c.censored,
+            completed,
             fmt3(c.steps, 0),
+            fmt_at_cap(c),
             c.paper
                 .as_ref()
                 .map_or("".into(), |p| fmt3(Some(p.steps), 0)),
@@ -590,4 +621,58 @@ fn variants_report(x: &Experiment, results: &[RunResult]) -> String {
         }
     }
     s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn run(seed: u64, steps: Option<u64>) -> RunResult {
+        RunResult {
+            mode: "BA".into(),
+            variant: String::new(),
+            robots: 20,
+            seed,
+            steps,
+            found: if steps.is_some() { 10 } else { 9 },
+            targets: 10,
+            energy: 1e4,
+            ticks: steps.unwrap_or(3000),
+            faults: 0,
+            restarted: 0,
+        }
+    }
+
+    /// Issue 14 item 11's case by hand: completed runs 500 and 640 (mean 570), one censored
+    /// at the 3,000 cap: (500 + 640 + 3000) / 3 = 1380, a lower bound; 2 of 3 completed.
+    #[test]
+    fn censored_runs_count_at_the_cap_as_a_lower_bound() {
+        let x = Experiment {
+            scenario: "s.toml".into(),
+            modes: vec!["BA".into()],
+            robots: vec![20],
+            seeds: 3,
+            first_seed: 1,
+            max_ticks: 3000,
+            paper: vec![],
+            variants: vec![Variant::default()],
+        };
+        let cells = tabulate(&x, &[run(1, Some(500)), run(2, Some(640)), run(3, None)]);
+        let c = &cells[0];
+        assert_eq!(c.censored, 1);
+        assert_eq!(c.steps.unwrap()[1], 570.0);
+        assert_eq!(c.steps_mean_censored_at_cap, 1380.0);
+        assert!(c.steps_mean_is_lower_bound);
+        assert!((c.completion_rate - 2.0 / 3.0).abs() < 1e-12);
+        let md = report(&x, &cells, 3, &[]);
+        assert!(
+            md.contains("| 20 | BA | 3 | 1 | 67 % | 500 / 570 / 640 | >= 1380 |"),
+            "{md}"
+        );
+        // No censored run: the two means agree and neither is a bound.
+        let cells = tabulate(&x, &[run(1, Some(500)), run(2, Some(640))]);
+        assert_eq!(cells[0].steps_mean_censored_at_cap, 570.0);
+        assert!(!cells[0].steps_mean_is_lower_bound);
+        assert_eq!(fmt_at_cap(&cells[0]), "570");
+    }
 }

@@ -55,6 +55,8 @@ static GLOBAL: mimalloc::MiMalloc = mimalloc::MiMalloc;
 
 fn main() {
     swarm::transport::quiet_logs();
+    // Every robot costs the world descriptors; its children inherit the raised limit.
+    swarm::limits::raise_nofile();
     let cli = Cli::parse();
     if !matches!(cli.cmd, Cmd::Bench(_) | Cmd::BenchChild(_)) {
         // `orchestrator up | head`: a closed stdout ends us quietly, as for any Unix tool,

@@ -15,10 +15,16 @@ use swarm::{cleanup, transport};
 
 /// How long the world gets to finish after a stop request before everything is killed.
 const STOP_GRACE: Duration = Duration::from_secs(10);
-/// How long agents get to exit after the world shut the run down.
-const AGENT_EXIT_GRACE: Duration = Duration::from_secs(3);
+/// How long agents get to exit after the world shut the run down (agents waiting for a tick
+/// exit within a few ms of the shutdown word; the rest, still starting, are killed: the
+/// run's outputs are written and its /dev/shm is removed after them anyway).
+const AGENT_EXIT_GRACE: Duration = Duration::from_millis(500);
 /// How often the orchestrator reaps children and refreshes the progress bar.
 const SUPERVISE_PERIOD: Duration = Duration::from_millis(5);
+/// How long the world may take to create the run's services.
+const READY_TIMEOUT: Duration = Duration::from_secs(60);
+/// The error of a run interrupted before its world was ready (up prints it, exit 130).
+pub const INTERRUPTED_AT_START: &str = "interrupted during start-up, before any tick";
 /// How often the run registry (read by `orchestrator status`) is refreshed.
 const REGISTRY_PERIOD: Duration = Duration::from_millis(50);
 
@@ -39,6 +45,13 @@ pub struct ProcessOutcome {
 fn bin(name: &str) -> PathBuf {
     let exe = std::env::current_exe().expect("current exe");
     exe.parent().expect("exe dir").join(name)
+}
+
+/// One agent process of the run.
+struct Agent {
+    robot: u32,
+    /// The robot's attach count when this agent was started.
+    base: u64,
 }
 
 /// Decoded waitpid status.
@@ -127,14 +140,27 @@ fn supervise(
         let _ = BufReader::new(stdout).read_line(&mut line);
         let _ = tx.send(line);
     });
-    let ready_timeout = Duration::from_secs(60);
-    match rx.recv_timeout(ready_timeout) {
-        Ok(l) if l.trim() == "READY" => {}
-        Ok(_) | Err(_) => {
-            let code = world.try_wait().ok().flatten();
-            return Err(format!(
-                "the world process did not get ready (exit: {code:?}); see its messages above"
-            ));
+    // Wait in short slices: Ctrl-C / SIGTERM while the world builds its services (a large or
+    // slow scenario) ends the run at once instead of after the world is ready (issue 14
+    // items 6, 8). Nothing has ticked yet: the world is killed, no summary is written.
+    let ready_by = Instant::now() + READY_TIMEOUT;
+    loop {
+        match rx.recv_timeout(SUPERVISE_PERIOD) {
+            Ok(l) if l.trim() == "READY" => break,
+            Err(std::sync::mpsc::RecvTimeoutError::Timeout)
+                if Instant::now() < ready_by && !signals::interrupted() => {}
+            _ if signals::interrupted() => {
+                kill(world.id());
+                let _ = world.wait();
+                return Err(INTERRUPTED_AT_START.to_string());
+            }
+            _ => {
+                kill(world.id());
+                let code = world.wait().ok().and_then(|s| s.code());
+                return Err(format!(
+                    "the world process did not get ready (exit: {code:?}); see its messages above"
+                ));
+            }
         }
     }
     let config = transport::run_config(prefix).map_err(|e| e.to_string())?;
@@ -169,10 +195,17 @@ fn supervise(
             .map(|c| c.id())
             .map_err(|e| format!("cannot start {}: {e}", bin("agent").display()))
     };
-    let mut agents: BTreeMap<u32, u32> = BTreeMap::new(); // pid -> robot
+    // pid -> (robot, the robot's attach count when it was spawned): only one agent of a
+    // robot lives at a time (a replacement starts after its predecessor is reaped), so the
+    // next attach of its robot is this agent's, with attach number base + 1.
+    let mut agents: BTreeMap<u32, Agent> = BTreeMap::new();
     for i in 0..n {
+        if signals::interrupted() {
+            // Ctrl-C while the agents start: the loop below stops the world at once.
+            break;
+        }
         let pid = spawn_agent(i)?;
-        agents.insert(pid, i);
+        agents.insert(pid, Agent { robot: i, base: 0 });
         entry.agent_pids.push(pid);
     }
     registry::write(entry).map_err(|e| format!("run registry: {e}"))?;
@@ -191,9 +224,8 @@ fn supervise(
     };
     let restart = sc.faults.on_fault == FaultPolicy::Restart;
     let mut restarts = vec![0u32; n as usize];
-    // Scheduled kills, in tick order; each is sent when the world reaches its tick.
-    let kills = swarm::chaos::schedule(sc);
-    let mut next_kill = 0;
+    // The last kill order of each robot acted on (see TickBarrier::order_kill).
+    let mut kill_done = vec![0u64; n as usize];
     let mut last = WorldStatus::default();
     let mut last_registry = Instant::now();
     let mut stop_sent: Option<Instant> = None;
@@ -205,9 +237,13 @@ fn supervise(
                 world_exit = exit_of(st);
                 break 'outer;
             }
-            let Some(robot) = agents.remove(&pid) else {
+            let Some(Agent { robot, .. }) = agents.remove(&pid) else {
                 continue;
             };
+            // It can attach no more and no other agent of the robot lives: every attach so
+            // far is of a dead agent. Written before the report, which the world checks
+            // against it (a report of a replacement that never took over is no fault).
+            barrier.set_dead_upto(robot, barrier.attach_count(robot));
             if barrier.is_shutdown() || exit_of(st) == Ok(0) {
                 // Ended with the run (the world's shutdown word), not a fault.
                 continue;
@@ -219,26 +255,38 @@ fn supervise(
                 barrier.current_tick(),
             );
             if restart && stop_sent.is_none() && restarts[robot as usize] < sc.faults.max_restarts {
-                // The dead agent's ports must go before the new one attaches to its services.
-                node.try_cleanup_dead_nodes();
+                // The replacement starts first and the dead agent's ports are cleaned while
+                // it starts up: each service has room for one dead agent's ports beside the
+                // live one's (transport's RESTART_SLACK), and the cleanup (~0.3-0.6 s at
+                // N = 50: iceoryx2 lists /dev/shm for every port it removes) was almost all
+                // of a restart's latency (`bench restart`, issue 14 item 3). The cleanup ends
+                // before the next death is reaped, so at most one dead agent's ports per
+                // robot are ever left.
+                let base = barrier.attach_count(robot);
                 let pid = spawn_agent(robot)?;
                 restarts[robot as usize] += 1;
-                agents.insert(pid, robot);
+                agents.insert(pid, Agent { robot, base });
                 entry.agent_pids[robot as usize] = pid;
                 registry::write(entry).map_err(|e| format!("run registry: {e}"))?;
+                cleanup_dead_agents(&node, prefix);
+            }
+        }
+        // The world declared these agents dead (a scheduled kill at its tick, an ack
+        // deadline): SIGKILL exactly that incarnation, never a replacement that has not taken
+        // over. A kill scheduled while the robot is already dead (its restart under way) is
+        // void: the world orders nothing.
+        for (&pid, a) in &agents {
+            let r = a.robot as usize;
+            let order = barrier.kill_order(a.robot);
+            if order > kill_done[r] {
+                kill_done[r] = order;
+                if barrier.attach_count(a.robot) > a.base && a.base + 1 == order {
+                    kill(pid);
+                }
             }
         }
         while let Ok(Some(s)) = status.receive() {
             last = *s;
-        }
-        // A scheduled kill's tick is reached: the world already treats the robot as dead from
-        // that tick on; now its process gets the SIGKILL.
-        while next_kill < kills.len() && kills[next_kill][0] <= last.tick {
-            let robot = kills[next_kill][1] as u32;
-            if let Some((&pid, _)) = agents.iter().find(|(_, &r)| r == robot) {
-                kill(pid);
-            }
-            next_kill += 1;
         }
         (p.on_status)(&last);
         if last_registry.elapsed() > REGISTRY_PERIOD {
@@ -281,7 +329,87 @@ fn supervise(
     })
 }
 
+/// An empty /dev/shm segment of the run older than this has lost its creator (one that lives
+/// sizes it within microseconds of creating it).
+const EMPTY_SEGMENT_AGE: Duration = Duration::from_millis(50);
+
+/// `try_cleanup_dead_nodes`, unblocked when it would wait for ever. iceoryx2 0.10's cleanup
+/// of a dead node opens each of its connection segments and, for a segment that was created
+/// but never sized (an agent SIGKILLed between `shm_open` and `ftruncate`, i.e. killed while
+/// making a link), waits without a timeout (`MappingSizeIsZero` loops in
+/// `posix_shared_memory::open_impl`): the orchestrator hung there with the whole run
+/// defunct, seen under dense kills during restarts. A watchdog thread removes the run's empty
+/// segments older than `EMPTY_SEGMENT_AGE` while the cleanup runs; the open then finds
+/// nothing and the cleanup goes on.
+fn cleanup_dead_agents(node: &iceoryx2::node::Node<iceoryx2::prelude::ipc::Service>, prefix: &str) {
+    let t = Instant::now();
+    let done = std::sync::atomic::AtomicBool::new(false);
+    std::thread::scope(|s| {
+        s.spawn(|| {
+            while !done.load(std::sync::atomic::Ordering::Acquire) {
+                std::thread::sleep(Duration::from_millis(10));
+                remove_empty_segments(prefix, EMPTY_SEGMENT_AGE);
+            }
+        });
+        node.try_cleanup_dead_nodes();
+        done.store(true, std::sync::atomic::Ordering::Release);
+    });
+    LAST_CLEANUP_US.store(
+        t.elapsed().as_micros() as u64,
+        std::sync::atomic::Ordering::Relaxed,
+    );
+}
+
+static LAST_CLEANUP_US: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+
+/// How long the last restart's port cleanup took, in microseconds (`bench restart`).
+pub fn last_cleanup_us() -> u64 {
+    LAST_CLEANUP_US.load(std::sync::atomic::Ordering::Relaxed)
+}
+
+/// Removes the run's empty /dev/shm files older than `age`; returns how many.
+fn remove_empty_segments(prefix: &str, age: Duration) -> usize {
+    let mut removed = 0;
+    for name in cleanup::shm_files(prefix) {
+        let p = Path::new("/dev/shm").join(&name);
+        let Ok(m) = std::fs::metadata(&p) else {
+            continue;
+        };
+        let old = m
+            .modified()
+            .ok()
+            .and_then(|t| t.elapsed().ok())
+            .is_some_and(|e| e > age);
+        if m.is_file() && m.len() == 0 && old && std::fs::remove_file(&p).is_ok() {
+            removed += 1;
+        }
+    }
+    removed
+}
+
 /// CLOCK_MONOTONIC in microseconds (the world compares it with its own clock).
 pub fn monotonic_us() -> u64 {
     world::process::monotonic_us()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn only_old_empty_segments_of_the_run_are_removed() {
+        let prefix = format!("swtest{}_", std::process::id());
+        let shm = Path::new("/dev/shm");
+        std::fs::write(shm.join(format!("{prefix}empty-old")), b"").unwrap();
+        std::fs::write(shm.join(format!("{prefix}full")), b"x").unwrap();
+        std::thread::sleep(Duration::from_millis(60));
+        std::fs::write(shm.join(format!("{prefix}empty-new")), b"").unwrap();
+        assert_eq!(remove_empty_segments(&prefix, EMPTY_SEGMENT_AGE), 1);
+        assert_eq!(
+            cleanup::shm_files(&prefix),
+            vec![format!("{prefix}empty-new"), format!("{prefix}full")]
+        );
+        cleanup::remove_run(&prefix);
+        assert!(cleanup::shm_files(&prefix).is_empty());
+    }
 }

@@ -19,3 +19,13 @@ pub fn install() {
 pub fn interrupted() -> bool {
     INTERRUPTED.load(Ordering::SeqCst)
 }
+
+/// Asks the run to stop as a Ctrl-C would (`bench restart` ends its run so).
+pub fn request_stop() {
+    INTERRUPTED.store(true, Ordering::SeqCst);
+}
+
+/// Forgets a stop request (after the run it ended).
+pub fn clear() {
+    INTERRUPTED.store(false, Ordering::SeqCst);
+}

@@ -201,7 +201,18 @@ pub fn resolve(a: &UpArgs) -> Result<Scenario, ConfigError> {
             .map(|(_, f)| f.to_string())
             .unwrap_or_else(|| file.clone())
     })?;
+    expand_kills(&mut sc);
     Ok(sc)
+}
+
+/// Writes every kill of the run into `faults.kill_at`, the random ones of `chaos_rate` and
+/// `kill_fraction` included, and zeroes those two: the resolved scenario.toml then lists each
+/// SIGKILL the run schedules (its comment says so) and gives the same schedule when read back
+/// (`chaos::schedule` of the expanded file is the list itself).
+pub fn expand_kills(sc: &mut Scenario) {
+    sc.faults.kill_at = swarm::chaos::schedule(sc);
+    sc.faults.chaos_rate = 0.0;
+    sc.faults.kill_fraction = 0.0;
 }
 
 fn progress(sc: &Scenario, quiet: bool) -> ProgressBar {
@@ -235,6 +246,8 @@ fn bar_msg(
 }
 
 pub fn up(a: UpArgs) -> i32 {
+    // First of all: a Ctrl-C at any moment is a clean stop, never the default death.
+    signals::install();
     let sc = match resolve(&a) {
         Ok(s) => s,
         Err(e) => {
@@ -242,7 +255,20 @@ pub fn up(a: UpArgs) -> i32 {
             return 2;
         }
     };
-    signals::install();
+    if a.executor == Executor::Processes {
+        // Refused before anything starts, rather than EMFILE in the world after seconds.
+        let (soft, _) = swarm::limits::raise_nofile();
+        let links = (sc.radio.max_links as u64 + sc.radio.lingering_links as u64)
+            .min(sc.run.robots.saturating_sub(1) as u64);
+        if let Err(e) = swarm::limits::check_fits(sc.run.robots, links, soft) {
+            eprintln!("error: {e}");
+            return 2;
+        }
+    }
+    if signals::interrupted() {
+        eprintln!("error: {}", processes::INTERRUPTED_AT_START);
+        return 130;
+    }
     let cleaned = clean::clean_dead_runs();
     if cleaned.runs > 0 {
         eprintln!(
@@ -255,6 +281,21 @@ pub fn up(a: UpArgs) -> i32 {
         .out
         .clone()
         .unwrap_or_else(|| Path::new("runs").join(&run_id));
+    // The run folder is bad input like any other (exit 2), found before anything starts.
+    if let Err(e) = std::fs::create_dir_all(&run_dir)
+        .and_then(|_| std::fs::write(run_dir.join("scenario.toml"), sc.to_toml()))
+    {
+        let what = if a.out.is_some() {
+            "--out "
+        } else {
+            "run folder "
+        };
+        eprintln!(
+            "error: {what}{}: cannot write the run folder: {e}",
+            run_dir.display()
+        );
+        return 2;
+    }
     let pb = progress(&sc, a.quiet);
     let n = sc.run.robots;
     let label = world::mission::progress_label(&sc);
@@ -301,7 +342,12 @@ pub fn up(a: UpArgs) -> i32 {
     pb.finish_and_clear();
     if let Err(e) = result {
         eprintln!("error: run {run_id}: {e}");
-        return 1;
+        // Ctrl-C before the first tick: the shell's code for an interrupted command.
+        return if e == processes::INTERRUPTED_AT_START {
+            130
+        } else {
+            1
+        };
     }
     match std::fs::read_to_string(run_dir.join("summary.json")) {
         Ok(s) => {
@@ -393,4 +439,28 @@ fn print_summary(v: &serde_json::Value, dir: &Path) {
 /// Worker threads of a single in-process run: the machine's cores.
 fn cores() -> usize {
     std::thread::available_parallelism().map_or(1, |n| n.get())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn expanded_kills_list_every_kill_and_schedule_the_same() {
+        let mut sc = Scenario::default();
+        sc.run.robots = 20;
+        sc.faults.kill_at = vec![[7, 3]];
+        sc.faults.chaos_rate = 2.0;
+        sc.faults.kill_fraction = 0.25;
+        // Under restart a robot can be killed again (under drop at most once each).
+        sc.faults.on_fault = swarm::scenario::FaultPolicy::Restart;
+        let all = swarm::chaos::schedule(&sc);
+        // 1 explicit + ~60 random (2 per 100 ticks over 3,000) + 5 of the fraction.
+        assert!(all.len() > 30, "{all:?}");
+        expand_kills(&mut sc);
+        assert_eq!(sc.faults.kill_at, all);
+        assert_eq!(swarm::chaos::schedule(&sc), all);
+        let back = Scenario::parse(&sc.to_toml(), "resolved").unwrap();
+        assert_eq!(swarm::chaos::schedule(&back), all);
+    }
 }

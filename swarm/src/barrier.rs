@@ -12,10 +12,11 @@ use crate::bell::EventBell;
 use std::sync::atomic::{AtomicU32, AtomicU64, Ordering};
 use std::time::{Duration, Instant};
 
-const MAGIC: u64 = 0x5357_4152_4d54_4b32; // "SWARMTK2"
+const MAGIC: u64 = 0x5357_4152_4d54_4b33; // "SWARMTK3"
 
-/// Bytes of one robot's slot: ack word, two sent-count words, attach counter.
-const SLOT_BYTES: usize = 32;
+/// Bytes of one robot's slot: ack word, two sent-count words, attach counter, kill order,
+/// dead-up-to mark.
+const SLOT_BYTES: usize = 48;
 
 #[repr(C)]
 struct Header {
@@ -223,7 +224,11 @@ impl TickBarrier {
     }
 
     /// Word `w` of robot `robot`'s slot: 0 = acknowledged tick + 1; 1, 2 = messages sent at
-    /// even / odd ticks, as (tick + 1) << 16 | count; 3 = agent processes that attached.
+    /// even / odd ticks, as (tick + 1) << 16 | count; 3 = agent processes that attached;
+    /// 4 = the attach number (value of word 3 after its attach) of the agent the world wants
+    /// killed; 5 = the highest attach number the orchestrator knows to be dead. Words 4 and 5
+    /// name an agent *incarnation*, so a death report, a kill or an attach is never applied to
+    /// the wrong process of a robot (issue 14 item 1).
     fn word(&self, robot: u32, w: usize) -> &AtomicU64 {
         assert!(robot < self.robots, "robot {robot} out of range");
         let at = std::mem::size_of::<Header>() + SLOT_BYTES * robot as usize + 8 * w;
@@ -358,6 +363,28 @@ impl TickBarrier {
     /// How many agent processes have attached for `robot` (a restart makes it grow).
     pub fn attach_count(&self, robot: u32) -> u64 {
         self.word(robot, 3).load(Ordering::Acquire)
+    }
+
+    /// World side: the robot's agent with attach number `attach` is declared dead (a scheduled
+    /// kill, an ack deadline): the orchestrator must SIGKILL it if it still runs.
+    pub fn order_kill(&self, robot: u32, attach: u64) {
+        self.word(robot, 4).fetch_max(attach, Ordering::AcqRel);
+    }
+
+    /// The attach number of the robot's latest agent the world ordered killed (0 = none).
+    pub fn kill_order(&self, robot: u32) -> u64 {
+        self.word(robot, 4).load(Ordering::Acquire)
+    }
+
+    /// Orchestrator side: every agent of `robot` with an attach number up to `attach` is dead
+    /// (reaped). Written before the death is reported on the control channel.
+    pub fn set_dead_upto(&self, robot: u32, attach: u64) {
+        self.word(robot, 5).fetch_max(attach, Ordering::AcqRel);
+    }
+
+    /// The highest attach number of `robot` known dead (0 = none).
+    pub fn dead_upto(&self, robot: u32) -> u64 {
+        self.word(robot, 5).load(Ordering::Acquire)
     }
 
     /// The last tick this robot acknowledged plus one (0 if none): where a (re)started agent

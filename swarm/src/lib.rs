@@ -14,6 +14,7 @@ pub mod chaos;
 pub mod cleanup;
 pub mod frames;
 pub mod geometry;
+pub mod limits;
 pub mod link;
 pub mod mailbox;
 pub mod radio;
@@ -21,6 +22,7 @@ pub mod recording;
 pub mod scenario;
 pub mod sections;
 pub mod streams;
+pub mod toml_u64;
 pub mod transport;
 pub mod wire;
 

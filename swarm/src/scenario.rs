@@ -37,6 +37,7 @@ pub struct RunParams {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub mission: Option<String>,
     pub robots: u32,
+    #[serde(with = "crate::toml_u64")]
     pub seed: u64,
     pub max_ticks: u64,
 }
@@ -163,7 +164,12 @@ pub struct RuntimeParams {
 impl RuntimeParams {
     /// When tick `k` may start, counted from the start of the loop (None: unpaced).
     pub fn tick_start(&self, k: u64) -> Option<std::time::Duration> {
-        (self.tick_hz > 0.0).then(|| std::time::Duration::from_secs_f64(k as f64 / self.tick_hz))
+        // Saturating: a pace so slow that tick k lies beyond Duration's range (`--tick-hz
+        // 1e-300`) never starts it, instead of panicking.
+        (self.tick_hz > 0.0).then(|| {
+            std::time::Duration::try_from_secs_f64(k as f64 / self.tick_hz)
+                .unwrap_or(std::time::Duration::MAX)
+        })
     }
 
     /// Sleeps until tick `k` may start (a no-op when unpaced or already late).

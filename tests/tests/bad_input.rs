@@ -77,3 +77,137 @@ fn bad_scenario_files_name_the_file_and_key() {
         &["behaviour.toml", "run.behaviour", "roam"],
     );
 }
+
+/// Every u64 is a seed (issue 14 item 4: TOML integers are i64, and `--seed 2^63` panicked
+/// with `scenario serialises: OutOfRange`). u64::MAX goes through the CLI, the resolved
+/// scenario.toml the world reads, and back out in the summary.
+#[test]
+fn a_seed_above_two_to_the_63_runs() {
+    let _g = serial();
+    let out = tmp_dir("seed-max");
+    let max = u64::MAX.to_string();
+    let o = up(
+        &[
+            "--robots",
+            "2",
+            "--max-ticks",
+            "5",
+            "--scenario",
+            roam(),
+            "--seed",
+            &max,
+        ],
+        &out,
+    );
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let resolved = std::fs::read_to_string(out.join("scenario.toml")).unwrap();
+    let sc = swarm::Scenario::parse(&resolved, "resolved").unwrap();
+    assert_eq!(sc.run.seed, u64::MAX);
+    assert_eq!(summary(&out)["seed"].as_u64(), Some(u64::MAX));
+    assert_left_nothing(&out);
+    // A negative seed is bad input (exit 2), not a panic.
+    expect_rejected(&["--seed", "-1"], &["--seed"]);
+}
+
+/// A run folder that cannot be written is bad input like any other: exit 2, the error names
+/// --out, nothing started (issue 14 item 10; it exited 1).
+#[test]
+fn an_unwritable_out_folder_exits_2() {
+    let _g = serial();
+    let dir = tmp_dir("bad-out");
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("a-file");
+    std::fs::write(&file, "x").unwrap();
+    for out in [
+        file.join("run").display().to_string(),
+        "/proc/swarm-no-such-dir".to_string(),
+    ] {
+        let o = std::process::Command::new(orchestrator())
+            .args([
+                "up",
+                "--quiet",
+                "--robots",
+                "2",
+                "--max-ticks",
+                "3",
+                "--out",
+            ])
+            .arg(&out)
+            .output()
+            .unwrap();
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(2), "--out {out}: {err}");
+        assert!(err.contains("--out") && err.contains(&out), "{err}");
+    }
+}
+
+/// Runs `orchestrator up ARGS` under an open-files limit of soft / hard.
+fn up_with_nofile(soft: u64, hard: u64, args: &[&str]) -> std::process::Output {
+    use std::os::unix::process::CommandExt;
+    let mut c = std::process::Command::new(orchestrator());
+    c.arg("up").arg("--quiet").args(args);
+    // SAFETY: setrlimit only, between fork and exec.
+    unsafe {
+        c.pre_exec(move || {
+            let r = libc::rlimit {
+                rlim_cur: soft,
+                rlim_max: hard,
+            };
+            if libc::setrlimit(libc::RLIMIT_NOFILE, &r) != 0 {
+                return Err(std::io::Error::last_os_error());
+            }
+            Ok(())
+        });
+    }
+    c.output().unwrap()
+}
+
+/// Issue 14 item 5: a run that cannot fit under the hard open-files limit is refused at once
+/// (exit 2, naming the limit to raise) instead of EMFILE in the world after seconds; a low
+/// soft limit under a high hard one is raised, so the run works.
+#[test]
+fn the_open_files_limit_is_raised_or_the_run_refused() {
+    let _g = serial();
+    let hard = {
+        let mut r = libc::rlimit {
+            rlim_cur: 0,
+            rlim_max: 0,
+        };
+        // SAFETY: getrlimit with a valid pointer.
+        unsafe { libc::getrlimit(libc::RLIMIT_NOFILE, &mut r) };
+        r.rlim_max
+    };
+    let out = tmp_dir("nofile-refused");
+    let o = up_with_nofile(
+        1024,
+        1024,
+        &["--robots", "4096", "--out", out.to_str().unwrap()],
+    );
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("RLIMIT_NOFILE") && err.contains("ulimit -Hn"),
+        "{err}"
+    );
+    assert!(!out.exists(), "refused before the run folder is made");
+    // 150 robots need ~1,832 descriptors in the world: more than a soft 256, fine once raised.
+    if hard >= 4096 {
+        let out = tmp_dir("nofile-raised");
+        let o = up_with_nofile(
+            256,
+            hard,
+            &[
+                "--robots",
+                "150",
+                "--max-ticks",
+                "3",
+                "--scenario",
+                roam(),
+                "--out",
+                out.to_str().unwrap(),
+            ],
+        );
+        assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+        assert_left_nothing(&out);
+    }
+}

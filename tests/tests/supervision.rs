@@ -341,3 +341,66 @@ fn status_lists_the_run_and_kill_rejects_bad_input() {
     assert!(s["faults"][0]["detection_ms"].as_f64().unwrap() < 1000.0);
     assert_left_nothing(&out);
 }
+
+/// A hung agent (SIGSTOP) is declared dead at the ack deadline, its process is killed, and
+/// under `restart` a new agent takes the robot over (issue 14 item 2: the fault had
+/// `restarted_tick: null` and the stopped process idled to the end of the run after SIGCONT).
+#[test]
+fn a_hung_agent_is_killed_and_restarted() {
+    let _g = serial();
+    let out = tmp_dir("sigstop");
+    std::fs::create_dir_all(std::env::temp_dir()).unwrap();
+    let file = std::env::temp_dir().join(format!("swarm-e2e-{}-sigstop.toml", std::process::id()));
+    let roam_text = std::fs::read_to_string(roam()).unwrap();
+    std::fs::write(
+        &file,
+        format!("{roam_text}\n[runtime]\nack_deadline_ms = 400\n"),
+    )
+    .unwrap();
+    let child = spawn_up(
+        &[
+            "--scenario",
+            file.to_str().unwrap(),
+            "--robots",
+            "6",
+            "--max-ticks",
+            "100000000",
+            "--tick-hz",
+            "200",
+            "--on-fault",
+            "restart",
+        ],
+        &out,
+    );
+    let entry = running(&out, 6);
+    let hung = entry["agent_pids"][2].as_u64().unwrap() as i32;
+    // SAFETY: a signal to an agent of the run this test started.
+    unsafe { libc::kill(hung, libc::SIGSTOP) };
+    wait_for(
+        "the hung agent to be replaced",
+        Duration::from_secs(20),
+        || {
+            registry(&out).is_some_and(|r| {
+                r["agent_pids"][2].as_u64() != Some(hung as u64)
+                    && r["restarted"] == 1
+                    && r["alive"] == 6
+            })
+        },
+    );
+    assert!(!pid_alive(hung), "the hung agent's process was killed");
+    // SAFETY: as above (no effect on a dead pid that was not reused within this test).
+    unsafe { libc::kill(child.id() as i32, libc::SIGINT) };
+    let o = finish(child, Duration::from_secs(30));
+    assert!(o.status.success(), "{}", stderr(&o));
+    let s = summary(&out);
+    let faults = s["faults"].as_array().unwrap();
+    assert_eq!(faults.len(), 1, "{faults:?}");
+    assert_eq!(faults[0]["robot"], 2);
+    assert_eq!(
+        faults[0]["cause"].as_str(),
+        Some("no action within runtime.ack_deadline_ms")
+    );
+    assert!(faults[0]["restarted_tick"].is_u64(), "{faults:?}");
+    assert_eq!(s["alive_at_end"], 6);
+    assert_left_nothing(&out);
+}

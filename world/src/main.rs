@@ -22,6 +22,8 @@ fn main() {
         libc::prctl(libc::PR_SET_PDEATHSIG, libc::SIGKILL);
     }
     swarm::transport::quiet_logs();
+    // As the orchestrator does (for a world started by hand): one robot costs ~8 descriptors.
+    swarm::limits::raise_nofile();
     let args = Args::parse();
     let sc = match Scenario::load(&args.run_dir.join("scenario.toml")) {
         Ok(s) => s,

@@ -34,16 +34,53 @@ struct ControlState {
     stop: bool,
 }
 
+/// Which agent process drives each robot, by attach number (the barrier's per-robot attach
+/// counter after that agent's attach; 0 = the robot's first agent has not attached yet).
+///
+/// Deaths, attaches and kills all name an incarnation, never just a robot: a death report
+/// about an agent that is not the driver (a replacement killed before it attached, reported
+/// after the next one took over) is stale and ignored; an attach by an agent already known
+/// dead revives nothing. Before, both were anonymous events and a replacement that attached
+/// before the report of its predecessor's death was consumed by that report: the robot stayed
+/// dead with a live agent waiting for ever (issue 14 item 1).
+struct Drivers {
+    attached: Vec<u64>,
+    /// Faults already turned into kill orders.
+    ordered: usize,
+}
+
+impl Drivers {
+    /// Orders the SIGKILL of every agent the world declared dead since the last call (a
+    /// scheduled kill, an ack deadline): a robot the world holds dead keeps no process, and
+    /// under `restart` the orchestrator then starts its replacement (issue 14 item 2).
+    fn order_kills(&mut self, world: &World, barrier: &TickBarrier) {
+        for f in &world.faults[self.ordered..] {
+            let a = self.attached[f.robot as usize];
+            if a > 0 {
+                barrier.order_kill(f.robot, a);
+            }
+        }
+        self.ordered = world.faults.len();
+    }
+}
+
 fn drain_control(
     sub: &Subscriber<ipc::Service, Control, ()>,
     world: &mut World,
     state: &mut ControlState,
+    barrier: &TickBarrier,
+    drivers: &Drivers,
 ) {
     while let Ok(Some(c)) = sub.receive() {
         match c.kind {
             // A scheduled kill reaped before the world began its tick: begin_tick records it
             // (same tick, same cause) so the run stays reproducible.
             CONTROL_ROBOT_DIED if world.kill_scheduled_now(c.robot) => {}
+            // The agent that died is not the robot's driver (a replacement that had not taken
+            // over yet): nothing happened to the robot.
+            CONTROL_ROBOT_DIED
+                if c.robot < barrier.robots()
+                    && drivers.attached[c.robot as usize] > barrier.dead_upto(c.robot) => {}
             CONTROL_ROBOT_DIED => {
                 // value: CLOCK_MONOTONIC microseconds when the orchestrator reaped the process
                 // (the same clock here: it is system-wide).
@@ -57,6 +94,31 @@ fn drain_control(
             }
             CONTROL_STOP => state.stop = true,
             _ => {}
+        }
+    }
+}
+
+/// Sleeps until tick `k` may start (runtime.tick_hz), in slices of at most `poll`, asking
+/// `stopped` after each: a stop request ends a slow pace at once (a pace of `--tick-hz 1e-300`
+/// would otherwise sleep for ever). Returns false if stopped.
+fn pace(
+    rt: &swarm::scenario::RuntimeParams,
+    loop_start: Instant,
+    k: u64,
+    poll: Duration,
+    mut stopped: impl FnMut() -> bool,
+) -> bool {
+    let Some(at) = rt.tick_start(k) else {
+        return true;
+    };
+    loop {
+        let now = loop_start.elapsed();
+        if at <= now {
+            return true;
+        }
+        std::thread::sleep((at - now).min(poll));
+        if stopped() {
+            return false;
         }
     }
 }
@@ -127,11 +189,15 @@ pub fn run(args: &WorldArgs) -> Result<i32> {
     std::io::stdout().flush()?;
 
     let mut ctl = ControlState::default();
+    let mut drivers = Drivers {
+        attached: vec![0; n as usize],
+        ordered: 0,
+    };
     let poll = Duration::from_millis(sc.runtime.poll_ms);
     // Wait for every agent (or its death) before the first tick.
     let startup_deadline = Instant::now() + Duration::from_secs(sc.runtime.startup_timeout_s);
     while barrier.ready_count() + (n - world.alive_count()) < n {
-        drain_control(&control, &mut world, &mut ctl);
+        drain_control(&control, &mut world, &mut ctl, &barrier, &drivers);
         if ctl.stop {
             break;
         }
@@ -147,26 +213,43 @@ pub fn run(args: &WorldArgs) -> Result<i32> {
     }
     let startup_seconds = t_start.elapsed().as_secs_f64();
     let restart = sc.faults.on_fault == swarm::scenario::FaultPolicy::Restart;
-    let mut attached: Vec<u64> = (0..n).map(|i| barrier.attach_count(i)).collect();
+    for i in 0..n {
+        // A robot whose first agent died during start-up is driven by no one yet: any later
+        // attach beyond the dead ones takes it over.
+        drivers.attached[i as usize] = if world.alive[i as usize] {
+            barrier.attach_count(i)
+        } else {
+            barrier.dead_upto(i)
+        };
+    }
     let t_loop = Instant::now();
     let mut tick_ns = Vec::with_capacity(sc.run.max_ticks.min(10_000_000) as usize);
     let mut actions: Vec<Option<Action>> = vec![None; n as usize];
     let deadline = Duration::from_millis(sc.runtime.ack_deadline_ms);
-    let mut end = "completed".to_string();
-    while world.tick < sc.run.max_ticks {
+    // Stopped during start-up (Ctrl-C before every agent attached): no tick runs, so no
+    // robot that was still starting is declared dead at tick 0 (issue 14 item 8).
+    let mut end = if ctl.stop { "interrupted" } else { "completed" }.to_string();
+    'ticks: while world.tick < sc.run.max_ticks && !ctl.stop {
         let k = world.tick;
-        sc.runtime.pace(t_loop, k);
+        if !pace(&sc.runtime, t_loop, k, poll, || {
+            drain_control(&control, &mut world, &mut ctl, &barrier, &drivers);
+            ctl.stop
+        }) {
+            end = "interrupted".to_string();
+            break;
+        }
         let t_tick = Instant::now();
         world.begin_tick();
+        drivers.order_kills(&world, &barrier);
         if restart {
-            // A new agent process attached for a dead robot: it drives the robot from now on.
-            // The new process can attach before the world hears of the old one's death (the
-            // orchestrator reaps and respawns faster than its fault report is drained): the
-            // attach is then kept pending until the robot is dead, never consumed early.
+            // A new agent process attached for a dead robot: it drives the robot from now on,
+            // unless it is already known dead itself (killed after its attach). An attach while
+            // the robot is still alive (the report of the old agent's death not drained yet) is
+            // kept pending until the robot is dead, never consumed early.
             for i in 0..n {
                 let c = barrier.attach_count(i);
-                if c > attached[i as usize] && world.revive(i) {
-                    attached[i as usize] = c;
+                if c > drivers.attached[i as usize] && c > barrier.dead_upto(i) && world.revive(i) {
+                    drivers.attached[i as usize] = c;
                 }
             }
         }
@@ -203,7 +286,7 @@ pub fn run(args: &WorldArgs) -> Result<i32> {
         let mut acked = 0usize;
         // A death the orchestrator reported before this release (its nudge of the ack counter
         // was reset by the release): handled now, not after a whole poll_ms.
-        drain_control(&control, &mut world, &mut ctl);
+        drain_control(&control, &mut world, &mut ctl, &barrier, &drivers);
         loop {
             let now_acked = world.live_robots().filter(|&i| barrier.acked(i, k)).count();
             if now_acked == world.alive_count() as usize {
@@ -214,7 +297,14 @@ pub fn run(args: &WorldArgs) -> Result<i32> {
                 waited = Instant::now();
             }
             barrier.wait_acks_with(poll, bell);
-            drain_control(&control, &mut world, &mut ctl);
+            drain_control(&control, &mut world, &mut ctl, &barrier, &drivers);
+            if ctl.stop {
+                // Ctrl-C while agents are slow (the first ticks make every radio link, which
+                // takes seconds at 50 robots on 2 cores): the unfinished tick is dropped, the
+                // outputs hold the ticks that completed.
+                end = "interrupted".to_string();
+                break 'ticks;
+            }
             if waited.elapsed() > deadline {
                 let silent: Vec<u32> = world
                     .live_robots()
@@ -223,6 +313,7 @@ pub fn run(args: &WorldArgs) -> Result<i32> {
                 for i in silent {
                     world.mark_dead(i, "no action within runtime.ack_deadline_ms", None, None);
                 }
+                drivers.order_kills(&world, &barrier);
             }
         }
         for i in 0..n as usize {
@@ -240,7 +331,7 @@ pub fn run(args: &WorldArgs) -> Result<i32> {
         if let Ok(s) = status_pub.loan_uninit() {
             let _ = s.write_payload(world.status(false)).send();
         }
-        drain_control(&control, &mut world, &mut ctl);
+        drain_control(&control, &mut world, &mut ctl, &barrier, &drivers);
         if ctl.stop {
             end = "interrupted".to_string();
             break;

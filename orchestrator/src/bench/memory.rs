@@ -43,6 +43,15 @@ pub struct Row {
     pub shm_mib: f64,
     /// (shm entries + root files) / (N x links per agent).
     pub files_per_link: f64,
+    /// /dev/shm pages actually allocated (tmpfs blocks, not the apparent size).
+    pub shm_resident_mib: f64,
+    /// The whole run's memory: the anonymous pages (heap, stacks) of the world and of every
+    /// agent, plus the run's /dev/shm pages (shared, counted once); shared code left out.
+    pub run_mib: f64,
+    /// `run_mib / robots`: what each robot costs the machine (issue 14 item 5).
+    pub run_mib_per_robot: f64,
+    /// World file descriptors per robot: (world fds - WORLD_FDS_BASE) / robots.
+    pub world_fds_per_robot: f64,
 }
 
 /// The tick at which a run is measured.
@@ -90,6 +99,18 @@ pub fn print(rows: &[Row]) {
     }
     println!("links = radio subscriptions per agent (its neighbour count); RSS/PSS/private per agent process; fds = open file descriptors per agent;");
     println!("shm = /dev/shm entries of the run, iox2 dir = files in its iceoryx2 root folder; files/link = (shm + iox2 dir) / (robots x links).");
+    println!();
+    println!("whole run (world + agents + /dev/shm): anonymous pages of every process plus the run's /dev/shm pages");
+    println!(
+        "{:>6} | {:>12} {:>10} {:>12} | {:>14}",
+        "robots", "shm res MiB", "run MiB", "MiB / robot", "world fds/robot"
+    );
+    for r in rows {
+        println!(
+            "{:>6} | {:>12.1} {:>10.1} {:>12.2} | {:>14.2}",
+            r.robots, r.shm_resident_mib, r.run_mib, r.run_mib_per_robot, r.world_fds_per_robot
+        );
+    }
 }
 
 fn one(n: u32, ticks: u64) -> Result<Row, String> {
@@ -135,6 +156,8 @@ struct Proc {
     rss_kib: u64,
     pss_kib: u64,
     private_kib: u64,
+    /// Anonymous pages (heap, stacks): private memory that is not a /dev/shm mapping.
+    anon_kib: u64,
     fds: usize,
 }
 
@@ -184,6 +207,7 @@ fn children() -> Vec<Proc> {
             pss_kib: field("smaps_rollup", "Pss:"),
             private_kib: field("smaps_rollup", "Private_Clean:")
                 + field("smaps_rollup", "Private_Dirty:"),
+            anon_kib: field("smaps_rollup", "Anonymous:"),
             fds: std::fs::read_dir(base.join("fd"))
                 .map(|d| d.count())
                 .unwrap_or(0),
@@ -200,12 +224,16 @@ fn measure(sc: &Scenario, prefix: &str, tick: u64) -> Result<Row, String> {
     let n = sc.run.robots;
     // Files and links first (the run is certainly still up), then the processes.
     let shm = cleanup::shm_files(prefix);
-    let shm_bytes: u64 = shm
+    let metas: Vec<std::fs::Metadata> = shm
         .iter()
         .filter_map(|f| std::fs::metadata(Path::new("/dev/shm").join(f)).ok())
         .filter(|m| m.is_file())
-        .map(|m| m.len())
-        .sum();
+        .collect();
+    let shm_bytes: u64 = metas.iter().map(|m| m.len()).sum();
+    let shm_resident: u64 = {
+        use std::os::unix::fs::MetadataExt;
+        metas.iter().map(|m| m.blocks() * 512).sum()
+    };
     let root_files = count_files(&transport::root_for(prefix));
     let procs = children();
     let agents: Vec<&Proc> = procs.iter().filter(|p| p.comm == "agent").collect();
@@ -243,5 +271,18 @@ fn measure(sc: &Scenario, prefix: &str, tick: u64) -> Result<Row, String> {
         iox2_root_files: root_files,
         shm_mib: shm_bytes as f64 / (1024.0 * 1024.0),
         files_per_link: (shm.len() + root_files) as f64 / (n as f64 * links).max(1.0),
+        shm_resident_mib: shm_resident as f64 / (1024.0 * 1024.0),
+        run_mib: run_mib(&procs, shm_resident),
+        run_mib_per_robot: run_mib(&procs, shm_resident) / n as f64,
+        world_fds_per_robot: world.map_or(0.0, |w| {
+            w.fds.saturating_sub(swarm::limits::WORLD_FDS_BASE as usize) as f64 / n as f64
+        }),
     })
+}
+
+/// Anonymous pages (heap, stacks) of every process of the run plus its /dev/shm pages (each
+/// counted once however many processes map it), in MiB.
+fn run_mib(procs: &[Proc], shm_resident: u64) -> f64 {
+    let anon: u64 = procs.iter().map(|p| p.anon_kib).sum();
+    mib(anon as f64) + shm_resident as f64 / (1024.0 * 1024.0)
 }

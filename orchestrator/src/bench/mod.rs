@@ -20,6 +20,7 @@
 mod error;
 mod latency;
 mod memory;
+mod restart;
 mod search;
 mod throughput;
 mod tick;
@@ -89,6 +90,8 @@ enum BenchWhat {
         #[arg(long)]
         quick: bool,
     },
+    /// Restart latency: SIGKILL of an agent -> its replacement ticks again.
+    Restart(restart::Args),
     /// Robot-steps per second of the in-process executor on the search scenario.
     Search {
         /// Robots.
@@ -224,6 +227,7 @@ pub fn bench(a: BenchArgs) -> i32 {
         ..Default::default()
     };
     match a.what {
+        BenchWhat::Restart(r) => restart::bench(r),
         BenchWhat::Tick {
             robots,
             ticks,
