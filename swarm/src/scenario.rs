@@ -208,6 +208,8 @@ pub const MAX_ROBOTS: u32 = 4096;
 /// Slowest pacing, in ticks per second (one tick per 1,000 s): below it a tick's start time
 /// k / tick_hz no longer fits a `Duration` for long runs, and nobody watches a run that slow.
 pub const MIN_TICK_HZ: f64 = 1e-3;
+/// Most restarts a robot may have (`faults.max_restarts`): more than any run needs.
+pub const MAX_RESTARTS: u32 = 1_000_000;
 /// Fastest pacing (ticks per second); faster than any run goes unpaced.
 pub const MAX_TICK_HZ: f64 = 1e6;
 
@@ -386,6 +388,21 @@ impl Scenario {
                     ),
                 ));
             }
+            let (w, h) = (self.arena.width, self.arena.height);
+            if let Some((j, p)) = o
+                .points
+                .iter()
+                .enumerate()
+                .find(|(_, p)| !(0.0..=w).contains(&p[0]) || !(0.0..=h).contains(&p[1]))
+            {
+                return Err(c.err(
+                    &format!("arena.obstacles[{i}].points[{j}]"),
+                    format!(
+                        "= {p:?} (obstacle {:?}) lies outside the arena [0, {w}] x [0, {h}]",
+                        o.name
+                    ),
+                ));
+            }
         }
         c.range_f("robot.v_max", self.robot.v_max, 0.0, 1e6, true)?;
         c.range_f(
@@ -504,6 +521,12 @@ impl Scenario {
             self.runtime.startup_timeout_s,
             1,
             3600,
+        )?;
+        c.range_u(
+            "faults.max_restarts",
+            self.faults.max_restarts as u64,
+            0,
+            MAX_RESTARTS as u64,
         )?;
         self.validate_faults(&|key, message| c.err(key, message))
     }

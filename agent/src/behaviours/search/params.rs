@@ -8,7 +8,7 @@ use crate::search::{
     Params as KernelParams,
 };
 use serde::{Deserialize, Serialize};
-use swarm::scenario::Scenario;
+use swarm::scenario::{Check, ConfigError, Scenario};
 
 /// Everything the `search` behaviour uses, deserialised from `search.kernels`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
