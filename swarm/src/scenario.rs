@@ -272,11 +272,20 @@ impl Check<'_> {
             let l = if lo_open { "(" } else { "[" };
             Err(self.err(
                 key,
-                format!("= {v} is out of range: allowed {l}{lo}, {hi}]"),
+                format!("= {} is out of range: allowed {l}{lo}, {hi}]", number(v)),
             ))
         } else {
             Ok(())
         }
+    }
+}
+
+/// A number as an error shows it: plain, or in exponent form when tiny or huge (1e-300).
+fn number(v: f64) -> String {
+    if v != 0.0 && v.is_finite() && !(1e-4..1e15).contains(&v.abs()) {
+        format!("{v:e}")
+    } else {
+        format!("{v}")
     }
 }
 

@@ -180,6 +180,9 @@ fn fuzzed_scenarios_and_flags_are_run_or_refused_with_where_never_crash() {
     for k in 0..cases {
         let c = case(seed, k, &[&default, &roam]);
         let (o, err) = run_case(&c, &dir);
+        if std::env::var_os("FUZZ_SHOW").is_some() {
+            println!("case {k} {o:?} {:?}: {}", c.mutations, err.lines().next().unwrap_or(""));
+        }
         *counts.entry(o).or_default() += 1;
         let ex = if c.processes { "processes" } else { "inprocess" };
         *by_executor.entry((ex, o)).or_default() += 1;

@@ -320,6 +320,20 @@ fn check_ranges(p: &Params, c: &Check) -> Result<(), ConfigError> {
 
 const KERNELS: &str = "search.kernels";
 
+/// Whether the scenario's `search.kernels` table sets `path` (dotted, below it).
+fn kernel_is_set(sc: &Scenario, path: &str) -> bool {
+    let mut t = &sc.search.kernels;
+    let mut parts = path.split('.').peekable();
+    while let Some(k) = parts.next() {
+        match (t.get(k), parts.peek()) {
+            (Some(_), None) => return true,
+            (Some(toml::Value::Table(sub)), Some(_)) => t = sub,
+            _ => return false,
+        }
+    }
+    false
+}
+
 /// Parses `search.kernels`, an error naming the key below it (`search.kernels.tpepso.w`).
 fn parse_params_checked(sc: &Scenario, c: &Check) -> Result<Params, ConfigError> {
     serde_path_to_error::deserialize(sc.search.kernels.clone()).map_err(|e| {
@@ -358,41 +372,60 @@ pub fn validate(sc: &Scenario, c: &Check) -> Result<(), ConfigError> {
     p.arba
         .check()
         .map_err(|m| c.err(&format!("{KERNELS}.arba"), m))?;
+    // A kernel value that must agree with a scenario value: the error names the kernel key if
+    // the file sets it, else the scenario key (the kernel's value is then its code default,
+    // and what the user changed is the scenario's).
+    let disagree = |kernel: &str, mine: f64, key: &str, theirs: f64, why: &str| -> ConfigError {
+        if kernel_is_set(sc, kernel) {
+            c.err(
+                &format!("{KERNELS}.{kernel}"),
+                format!("= {mine} {why} {key} = {theirs}"),
+            )
+        } else {
+            c.err(
+                key,
+                format!(
+                    "= {theirs}: the search behaviour's {KERNELS}.{kernel} is {mine} (its default) \
+                     and {why} it; set both"
+                ),
+            )
+        }
+    };
     // Every kernel's V_max equals tpepso.v_max (check_consistency), and that equals the robot's.
     let v = sc.robot.v_max;
     if p.tpepso.v_max != v {
-        return Err(c.err(
-            &format!("{KERNELS}.tpepso.v_max"),
-            format!(
-                "= {} differs from robot.v_max = {v} (V_max, Table 4)",
-                p.tpepso.v_max
-            ),
+        return Err(disagree(
+            "tpepso.v_max",
+            p.tpepso.v_max,
+            "robot.v_max",
+            v,
+            "must equal (V_max, Table 4)",
         ));
     }
     if p.bsoa.l_b > sc.robot.sensing_radius {
-        return Err(c.err(
-            &format!("{KERNELS}.bsoa.l_b"),
-            format!(
-                "= {} exceeds robot.sensing_radius = {} (L_B)",
-                p.bsoa.l_b, sc.robot.sensing_radius
-            ),
+        return Err(disagree(
+            "bsoa.l_b",
+            p.bsoa.l_b,
+            "robot.sensing_radius",
+            sc.robot.sensing_radius,
+            "must not exceed (L_B)",
         ));
     }
     let s = &sc.search;
     let cal = &p.calibration;
-    for (key, mine, world) in [
-        ("m", cal.m, s.signal_m),
-        ("q", cal.q, s.signal_q),
-        ("noise_sigma", cal.noise_sigma, s.noise_sigma),
-        ("l_t", cal.l_t, s.l_t),
+    for (key, mine, world_key, world) in [
+        ("m", cal.m, "search.signal_m", s.signal_m),
+        ("q", cal.q, "search.signal_q", s.signal_q),
+        ("noise_sigma", cal.noise_sigma, "search.noise_sigma", s.noise_sigma),
+        ("l_t", cal.l_t, "search.l_t", s.l_t),
     ] {
         if mine != world {
-            return Err(c.err(
-                &format!("{KERNELS}.calibration.{key}"),
-                format!(
-                    "= {mine} differs from the environment's value {world} (the offline \
-                     calibration measures the real signal)"
-                ),
+            return Err(disagree(
+                &format!("calibration.{key}"),
+                mine,
+                world_key,
+                world,
+                "must equal (the offline calibration measures the real signal)",
             ));
         }
     }
@@ -502,5 +535,15 @@ mod validation_tests {
         assert_eq!(e.key, "search.kernels.svf.v_max", "{e}");
         let e = refused("[calibration]\nm = 0.2\n");
         assert_eq!(e.key, "search.kernels.calibration.m", "{e}");
+        // The scenario's value changed, the kernel's copy left at its default: the scenario's
+        // key is named.
+        let mut sc = Scenario::default();
+        sc.search.noise_sigma = 0.0;
+        let e = check(&sc).unwrap_err();
+        assert_eq!(e.key, "search.noise_sigma", "{e}");
+        assert!(e.message.contains("calibration.noise_sigma"), "{e}");
+        let mut sc = Scenario::default();
+        sc.robot.sensing_radius = 50.0;
+        assert_eq!(check(&sc).unwrap_err().key, "robot.sensing_radius");
     }
 }
