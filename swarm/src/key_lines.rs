@@ -218,7 +218,10 @@ kernels.bsoa.l_b = 50.0
             .unwrap()
             .parse()
             .unwrap();
-        let text_line = crate::scenario::DEFAULT_SCENARIO.lines().nth(line - 1).unwrap();
+        let text_line = crate::scenario::DEFAULT_SCENARIO
+            .lines()
+            .nth(line - 1)
+            .unwrap();
         assert!(text_line.trim_start().starts_with("loss "), "{text_line}");
         assert_eq!(locate("--robots", "run.robots"), "--robots");
         assert_eq!(locate("a bench", "run.robots"), "a bench");

@@ -318,10 +318,7 @@ impl Scenario {
             // A syntax error: no key yet, but the parser knows where.
             let at = e.span().map(|s| s.start).unwrap_or(0);
             ConfigError {
-                source: format!(
-                    "{source}:{}",
-                    crate::key_lines::line_of_offset(text, at)
-                ),
+                source: format!("{source}:{}", crate::key_lines::line_of_offset(text, at)),
                 key: String::new(),
                 message: format!("not valid TOML: {}", e.message().trim()),
             }
@@ -655,9 +652,15 @@ mod tests {
         assert_eq!(e.source, "t.toml:5");
         assert!(e.message.contains("missing field `name`"), "{e}");
         let e = Scenario::parse("[arena]\nwidth = \"wide\"\n", "t.toml").unwrap_err();
-        assert_eq!((e.key.as_str(), e.source.as_str()), ("arena.width", "t.toml:2"));
+        assert_eq!(
+            (e.key.as_str(), e.source.as_str()),
+            ("arena.width", "t.toml:2")
+        );
         let e = Scenario::parse("[radio]\n\ncomm_radiuss = 3\n", "t.toml").unwrap_err();
-        assert_eq!((e.key.as_str(), e.source.as_str()), ("radio.comm_radiuss", "t.toml:3"));
+        assert_eq!(
+            (e.key.as_str(), e.source.as_str()),
+            ("radio.comm_radiuss", "t.toml:3")
+        );
         // Syntax errors: the line, no key.
         let e = Scenario::parse("[run]\nrobots = = 3\n", "t.toml").unwrap_err();
         assert_eq!(e.source, "t.toml:2", "{e}");

@@ -152,7 +152,10 @@ fn show(path: &[Step]) -> String {
 fn partial(full: &Table, touched: &[String]) -> Table {
     let mut t = Table::new();
     for (k, v) in full {
-        if touched.iter().any(|p| p == k || p.starts_with(&format!("{k}."))) {
+        if touched
+            .iter()
+            .any(|p| p == k || p.starts_with(&format!("{k}.")))
+        {
             t.insert(k.clone(), v.clone());
         }
     }
@@ -183,17 +186,74 @@ fn flags(rng: &mut ChaCha8Rng, mild: bool, out: &mut Vec<String>, notes: &mut Ve
     push("--max-ticks", ticks, notes);
     for _ in 0..if mild { 0 } else { rng.gen_range(0..3) } {
         let (f, v): (&str, String) = match rng.gen_range(0..14) {
-            0 => ("--seed", ["18446744073709551615", "9223372036854775808", "0", "-1"].choose(rng).unwrap().to_string()),
-            1 => ("--comm-radius", ["nan", "-3", "1e300", "0", "50"].choose(rng).unwrap().to_string()),
-            2 => ("--loss", ["1.5", "nan", "-0.1", "0.3", "1"].choose(rng).unwrap().to_string()),
-            3 => ("--delay", ["0", "2", "1001", "-1", "4294967296"].choose(rng).unwrap().to_string()),
-            4 => ("--tick-hz", ["1e-300", "0", "1e9", "-5", "nan", "200"].choose(rng).unwrap().to_string()),
-            5 => ("--chaos", ["-3", "nan", "1000", "50"].choose(rng).unwrap().to_string()),
-            6 => ("--chaos-at", ["1:0", "2:99", "x", "1:0,2:1", ":"].choose(rng).unwrap().to_string()),
-            7 => ("--kill-fraction", ["2", "nan", "0.5", "-0.1"].choose(rng).unwrap().to_string()),
-            8 => ("--mode", ["XT", "BA", "SE", "bt"].choose(rng).unwrap().to_string()),
-            9 => ("--on-fault", ["restart", "drop", "ignore"].choose(rng).unwrap().to_string()),
-            10 => ("--max-restarts", ["0", "5", "-1", "99999999999"].choose(rng).unwrap().to_string()),
+            0 => (
+                "--seed",
+                ["18446744073709551615", "9223372036854775808", "0", "-1"]
+                    .choose(rng)
+                    .unwrap()
+                    .to_string(),
+            ),
+            1 => (
+                "--comm-radius",
+                ["nan", "-3", "1e300", "0", "50"]
+                    .choose(rng)
+                    .unwrap()
+                    .to_string(),
+            ),
+            2 => (
+                "--loss",
+                ["1.5", "nan", "-0.1", "0.3", "1"]
+                    .choose(rng)
+                    .unwrap()
+                    .to_string(),
+            ),
+            3 => (
+                "--delay",
+                ["0", "2", "1001", "-1", "4294967296"]
+                    .choose(rng)
+                    .unwrap()
+                    .to_string(),
+            ),
+            4 => (
+                "--tick-hz",
+                ["1e-300", "0", "1e9", "-5", "nan", "200"]
+                    .choose(rng)
+                    .unwrap()
+                    .to_string(),
+            ),
+            5 => (
+                "--chaos",
+                ["-3", "nan", "1000", "50"].choose(rng).unwrap().to_string(),
+            ),
+            6 => (
+                "--chaos-at",
+                ["1:0", "2:99", "x", "1:0,2:1", ":"]
+                    .choose(rng)
+                    .unwrap()
+                    .to_string(),
+            ),
+            7 => (
+                "--kill-fraction",
+                ["2", "nan", "0.5", "-0.1"].choose(rng).unwrap().to_string(),
+            ),
+            8 => (
+                "--mode",
+                ["XT", "BA", "SE", "bt"].choose(rng).unwrap().to_string(),
+            ),
+            9 => (
+                "--on-fault",
+                ["restart", "drop", "ignore"]
+                    .choose(rng)
+                    .unwrap()
+                    .to_string(),
+            ),
+            10 => (
+                "--max-restarts",
+                ["0", "5", "-1", "99999999999"]
+                    .choose(rng)
+                    .unwrap()
+                    .to_string(),
+            ),
             11 => ("--executor", ["threads"].choose(rng).unwrap().to_string()),
             12 => ("--robots", ["0", "3"].choose(rng).unwrap().to_string()),
             _ => ("--bogus-flag", "1".to_string()),
@@ -223,8 +283,7 @@ pub fn case(seed: u64, index: u64, bases: &[&str]) -> Case {
             match if mild { 9 } else { rng.gen_range(0..10) } {
                 // Unknown key, in a random table.
                 0 => {
-                    let tables: Vec<&Vec<Step>> =
-                        all.iter().filter(|p| p.len() >= 2).collect();
+                    let tables: Vec<&Vec<Step>> = all.iter().filter(|p| p.len() >= 2).collect();
                     if let Some(p) = tables.choose(&mut rng) {
                         let parent = &p[..p.len() - 1];
                         if let Some(Value::Table(t)) = at(&mut doc, parent) {

@@ -63,7 +63,10 @@ fn names_where(err: &str, file: Option<&Path>) -> bool {
     (backquoted_key && (has_line(err) || flag))
         || (err.contains("not valid TOML") && has_line(err))
         || (err.contains("cannot read scenario file"))
-        || (flag && (err.contains("invalid value") || err.contains("unexpected argument") || err.contains("cannot be used multiple times")))
+        || (flag
+            && (err.contains("invalid value")
+                || err.contains("unexpected argument")
+                || err.contains("cannot be used multiple times")))
 }
 
 fn run_case(c: &Case, dir: &Path) -> (Outcome, String) {
@@ -80,7 +83,11 @@ fn run_case(c: &Case, dir: &Path) -> (Outcome, String) {
         cmd.arg("--scenario").arg(p);
     }
     cmd.arg("--executor")
-        .arg(if c.processes { "processes" } else { "inprocess" })
+        .arg(if c.processes {
+            "processes"
+        } else {
+            "inprocess"
+        })
         .args(&c.flags)
         .stdout(Stdio::null())
         .stderr(Stdio::piped());
@@ -181,10 +188,18 @@ fn fuzzed_scenarios_and_flags_are_run_or_refused_with_where_never_crash() {
         let c = case(seed, k, &[&default, &roam]);
         let (o, err) = run_case(&c, &dir);
         if std::env::var_os("FUZZ_SHOW").is_some() {
-            println!("case {k} {o:?} {:?}: {}", c.mutations, err.lines().next().unwrap_or(""));
+            println!(
+                "case {k} {o:?} {:?}: {}",
+                c.mutations,
+                err.lines().next().unwrap_or("")
+            );
         }
         *counts.entry(o).or_default() += 1;
-        let ex = if c.processes { "processes" } else { "inprocess" };
+        let ex = if c.processes {
+            "processes"
+        } else {
+            "inprocess"
+        };
         *by_executor.entry((ex, o)).or_default() += 1;
         if !matches!(o, Outcome::Accepted | Outcome::Refused) {
             failures.push(format!(

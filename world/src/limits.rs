@@ -125,7 +125,10 @@ pub fn validate(sc: &Scenario, c: &Check) -> Result<(), ConfigError> {
                 sc.arena.start_region,
                 sc.run.robots,
                 if sc.robot.radius > 0.0 {
-                    format!(", the walls and each other (robot.radius = {})", sc.robot.radius)
+                    format!(
+                        ", the walls and each other (robot.radius = {})",
+                        sc.robot.radius
+                    )
                 } else {
                     String::new()
                 }
@@ -144,12 +147,7 @@ mod tests {
     }
 
     fn check(sc: &Scenario) -> Result<(), ConfigError> {
-        validate(
-            sc,
-            &Check {
-                key_source: &file,
-            },
-        )
+        validate(sc, &Check { key_source: &file })
     }
 
     #[test]
@@ -197,7 +195,12 @@ mod tests {
         let mut sc = Scenario::roam();
         sc.arena.obstacles.push(swarm::scenario::Obstacle {
             name: "block".into(),
-            points: vec![[100.0, 100.0], [200.0, 100.0], [200.0, 200.0], [100.0, 200.0]],
+            points: vec![
+                [100.0, 100.0],
+                [200.0, 100.0],
+                [200.0, 200.0],
+                [100.0, 200.0],
+            ],
         });
         sc.arena.start_region = [120.0, 120.0, 180.0, 180.0];
         let e = check(&sc).unwrap_err();

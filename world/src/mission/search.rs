@@ -412,7 +412,10 @@ mod tests {
             key_of(|sc| sc.search.target_clearance = -1.0),
             "search.target_clearance"
         );
-        assert_eq!(key_of(|sc| sc.search.signal_m = f64::NAN), "search.signal_m");
+        assert_eq!(
+            key_of(|sc| sc.search.signal_m = f64::NAN),
+            "search.signal_m"
+        );
         assert_eq!(key_of(|sc| sc.search.l_t = -5.0), "search.l_t");
     }
 
@@ -421,7 +424,12 @@ mod tests {
         let mut sc = Scenario::default();
         sc.arena.obstacles.push(swarm::scenario::Obstacle {
             name: "slab".into(),
-            points: vec![[400.0, 400.0], [600.0, 400.0], [600.0, 600.0], [400.0, 600.0]],
+            points: vec![
+                [400.0, 400.0],
+                [600.0, 400.0],
+                [600.0, 600.0],
+                [400.0, 600.0],
+            ],
         });
         // Inside the slab: no free point at all.
         sc.search.target_region = [450.0, 450.0, 550.0, 550.0];

@@ -294,7 +294,10 @@ fn check_ranges(p: &Params, c: &Check) -> Result<(), ConfigError> {
     rel(
         "calibration.d_min",
         cal.d_min < cal.l_t,
-        format!("= {} must be below calibration.l_t = {}", cal.d_min, cal.l_t),
+        format!(
+            "= {} must be below calibration.l_t = {}",
+            cal.d_min, cal.l_t
+        ),
     )?;
     rel(
         "calibration.repeats",
@@ -416,7 +419,12 @@ pub fn validate(sc: &Scenario, c: &Check) -> Result<(), ConfigError> {
     for (key, mine, world_key, world) in [
         ("m", cal.m, "search.signal_m", s.signal_m),
         ("q", cal.q, "search.signal_q", s.signal_q),
-        ("noise_sigma", cal.noise_sigma, "search.noise_sigma", s.noise_sigma),
+        (
+            "noise_sigma",
+            cal.noise_sigma,
+            "search.noise_sigma",
+            s.noise_sigma,
+        ),
         ("l_t", cal.l_t, "search.l_t", s.l_t),
     ] {
         if mine != world {
@@ -503,13 +511,31 @@ mod validation_tests {
             ("[tpepso]\nw = nan\n", "search.kernels.tpepso.w"),
             ("[tpepso]\nc3 = inf\n", "search.kernels.tpepso.c3"),
             ("[tpepso]\nalpha = -0.5\n", "search.kernels.tpepso.alpha"),
-            ("[arba]\nloudness_decay = 1.5\n", "search.kernels.arba.loudness_decay"),
-            ("[arba]\nf_min = 0.5\nf_max = 0.2\n", "search.kernels.arba.f_max"),
-            ("[bsoa.boundary]\nsample_spacing = 0.0\n", "search.kernels.bsoa.boundary.sample_spacing"),
-            ("[estimator]\ntolerance = -1.0\n", "search.kernels.estimator.tolerance"),
-            ("[calibration]\nrepeats = 0\n", "search.kernels.calibration.repeats"),
+            (
+                "[arba]\nloudness_decay = 1.5\n",
+                "search.kernels.arba.loudness_decay",
+            ),
+            (
+                "[arba]\nf_min = 0.5\nf_max = 0.2\n",
+                "search.kernels.arba.f_max",
+            ),
+            (
+                "[bsoa.boundary]\nsample_spacing = 0.0\n",
+                "search.kernels.bsoa.boundary.sample_spacing",
+            ),
+            (
+                "[estimator]\ntolerance = -1.0\n",
+                "search.kernels.estimator.tolerance",
+            ),
+            (
+                "[calibration]\nrepeats = 0\n",
+                "search.kernels.calibration.repeats",
+            ),
             ("[subgroup]\ng_max = 0\n", "search.kernels.subgroup.g_max"),
-            ("goal_horizon_margin = -inf\n", "search.kernels.goal_horizon_margin"),
+            (
+                "goal_horizon_margin = -inf\n",
+                "search.kernels.goal_horizon_margin",
+            ),
             ("declare_ticks = 10000000\n", "search.kernels.declare_ticks"),
         ] {
             let e = refused(text);
