@@ -875,7 +875,7 @@ mod tests {
         // The distance to the slanted edge is the horizontal gap times cos of its slope.
         let clearance = w.statics.clearance([w.poses[0][0], w.poses[0][1]]);
         assert!(
-            clearance >= 2.0 - 1e-9 && clearance < 2.0 + 1e-6,
+            (2.0 - 1e-9..2.0 + 1e-6).contains(&clearance),
             "{clearance} (gap {gap})"
         );
         assert_eq!(w.blocked_moves, 1);
