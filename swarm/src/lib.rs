@@ -14,6 +14,7 @@ pub mod chaos;
 pub mod cleanup;
 pub mod frames;
 pub mod geometry;
+pub mod key_lines;
 pub mod limits;
 pub mod link;
 pub mod mailbox;

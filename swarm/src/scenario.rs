@@ -211,6 +211,14 @@ pub struct FaultParams {
 /// Hard limits that come from the fixed-size frames.
 pub const MAX_ROBOTS: u32 = 4096;
 
+/// Slowest pacing, in ticks per second (one tick per 1,000 s): below it a tick's start time
+/// k / tick_hz no longer fits a `Duration` for long runs, and nobody watches a run that slow.
+pub const MIN_TICK_HZ: f64 = 1e-3;
+/// Most restarts a robot may have (`faults.max_restarts`): more than any run needs.
+pub const MAX_RESTARTS: u32 = 1_000_000;
+/// Fastest pacing (ticks per second); faster than any run goes unpaced.
+pub const MAX_TICK_HZ: f64 = 1e6;
+
 /// A bad scenario: which file (or flag), which key, what is allowed.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ConfigError {
@@ -239,9 +247,11 @@ pub struct Check<'a> {
 }
 
 impl Check<'_> {
+    /// An error for `key`; its source names where the key is written (`file:LINE`, or the
+    /// default's line when the file does not hold it; a flag as it is).
     pub fn err(&self, key: &str, message: String) -> ConfigError {
         ConfigError {
-            source: (self.key_source)(key),
+            source: crate::key_lines::locate(&(self.key_source)(key), key),
             key: key.to_string(),
             message,
         }
@@ -268,7 +278,7 @@ impl Check<'_> {
             let l = if lo_open { "(" } else { "[" };
             Err(self.err(
                 key,
-                format!("= {v} is out of range: allowed {l}{lo}, {hi}]"),
+                format!("= {} is out of range: allowed {l}{lo}, {hi}]", number(v)),
             ))
         } else {
             Ok(())
@@ -276,9 +286,18 @@ impl Check<'_> {
     }
 }
 
+/// A number as an error shows it: plain, or in exponent form when tiny or huge (1e-300).
+fn number(v: f64) -> String {
+    if v != 0.0 && v.is_finite() && !(1e-4..1e15).contains(&v.abs()) {
+        format!("{v:e}")
+    } else {
+        format!("{v}")
+    }
+}
+
 impl Default for Scenario {
     fn default() -> Self {
-        Scenario::parse(DEFAULT_SCENARIO, "embedded default scenario")
+        Scenario::parse(DEFAULT_SCENARIO, crate::key_lines::DEFAULT_SOURCE)
             .expect("the embedded default scenario parses")
     }
 }
@@ -292,21 +311,36 @@ impl Scenario {
 
     /// Parses a scenario. Keys missing from `text` take the embedded default's values, so a
     /// file needs to hold only what it changes; unknown keys are errors.
+    ///
+    /// Errors name the file and line (`file.toml:12`) and the key path
+    /// (`arena.obstacles[3].points`); a key the file does not hold names the default's line.
     pub fn parse(text: &str, source: &str) -> Result<Scenario, ConfigError> {
-        let err = |message: String| ConfigError {
-            source: source.to_string(),
+        let mut base: toml::Table = DEFAULT_SCENARIO.parse().map_err(|e| ConfigError {
+            source: crate::key_lines::DEFAULT_SOURCE.into(),
             key: String::new(),
-            message,
-        };
-        let mut base: toml::Table = DEFAULT_SCENARIO
-            .parse()
-            .map_err(|e| err(format!("embedded default: {e}")))?;
-        let user: toml::Table = text.parse().map_err(|e| err(format!("{e}")))?;
+            message: format!("{e}"),
+        })?;
+        let user: toml::Table = text.parse().map_err(|e: toml::de::Error| {
+            // A syntax error: no key yet, but the parser knows where.
+            let at = e.span().map(|s| s.start).unwrap_or(0);
+            ConfigError {
+                source: format!("{source}:{}", crate::key_lines::line_of_offset(text, at)),
+                key: String::new(),
+                message: format!("not valid TOML: {}", e.message().trim()),
+            }
+        })?;
         merge(&mut base, user);
-        let sc: Scenario = toml::Value::Table(base)
-            .try_into()
-            .map_err(|e: toml::de::Error| err(e.message().to_string()))?;
-        Ok(sc)
+        serde_path_to_error::deserialize(toml::Value::Table(base)).map_err(
+            |e: serde_path_to_error::Error<toml::de::Error>| {
+                let path = e.path().to_string();
+                let key = if path == "." { String::new() } else { path };
+                ConfigError {
+                    source: crate::key_lines::locate_in(source, text, &key),
+                    message: e.inner().message().to_string(),
+                    key,
+                }
+            },
+        )
     }
 
     pub fn load(path: &Path) -> Result<Scenario, ConfigError> {
@@ -362,6 +396,21 @@ impl Scenario {
                     &format!("arena.obstacles[{i}].points"),
                     format!(
                         "(obstacle {:?}) must hold at least 3 finite [x, y] points",
+                        o.name
+                    ),
+                ));
+            }
+            let (w, h) = (self.arena.width, self.arena.height);
+            if let Some((j, p)) = o
+                .points
+                .iter()
+                .enumerate()
+                .find(|(_, p)| !(0.0..=w).contains(&p[0]) || !(0.0..=h).contains(&p[1]))
+            {
+                return Err(c.err(
+                    &format!("arena.obstacles[{i}].points[{j}]"),
+                    format!(
+                        "= {p:?} (obstacle {:?}) lies outside the arena [0, {w}] x [0, {h}]",
                         o.name
                     ),
                 ));
@@ -464,12 +513,32 @@ impl Scenario {
             600_000,
         )?;
         c.range_u("runtime.poll_ms", self.runtime.poll_ms, 1, 10_000)?;
-        c.range_f("runtime.tick_hz", self.runtime.tick_hz, 0.0, 1e6, false)?;
+        // 0 is unpaced; otherwise the period 1 / tick_hz (and k / tick_hz for every tick k)
+        // must fit a Duration: below MIN_TICK_HZ a tick would last over a quarter of an hour.
+        if self.runtime.tick_hz != 0.0 {
+            c.range_f(
+                "runtime.tick_hz",
+                self.runtime.tick_hz,
+                MIN_TICK_HZ,
+                MAX_TICK_HZ,
+                false,
+            )
+            .map_err(|mut e| {
+                e.message += " (or 0: unpaced)";
+                e
+            })?;
+        }
         c.range_u(
             "runtime.startup_timeout_s",
             self.runtime.startup_timeout_s,
             1,
             3600,
+        )?;
+        c.range_u(
+            "faults.max_restarts",
+            self.faults.max_restarts as u64,
+            0,
+            MAX_RESTARTS as u64,
         )?;
         self.validate_faults(&|key, message| c.err(key, message))
     }
@@ -572,6 +641,79 @@ mod tests {
         let mut sc = Scenario::default();
         sc.radio.link_margin = 5.0;
         assert_eq!(sc.validate(&file).unwrap_err().key, "radio.link_margin");
+    }
+
+    #[test]
+    fn deserialisation_errors_name_the_key_path_and_the_line() {
+        let e = Scenario::parse("[run]\nseed = 3\nrobots = -1\n", "t.toml").unwrap_err();
+        assert_eq!(e.key, "run.robots");
+        assert_eq!(e.source, "t.toml:3");
+        assert!(e.to_string().contains("expected u32"), "{e}");
+        let e = Scenario::parse(
+            "[[arena.obstacles]]\nname = \"a\"\npoints = [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0]]\n\n[[arena.obstacles]]\npoints = [[0.0, 0.0]]\n",
+            "t.toml",
+        )
+        .unwrap_err();
+        assert_eq!(e.key, "arena.obstacles[1]");
+        assert_eq!(e.source, "t.toml:5");
+        assert!(e.message.contains("missing field `name`"), "{e}");
+        let e = Scenario::parse("[arena]\nwidth = \"wide\"\n", "t.toml").unwrap_err();
+        assert_eq!(
+            (e.key.as_str(), e.source.as_str()),
+            ("arena.width", "t.toml:2")
+        );
+        let e = Scenario::parse("[radio]\n\ncomm_radiuss = 3\n", "t.toml").unwrap_err();
+        assert_eq!(
+            (e.key.as_str(), e.source.as_str()),
+            ("radio.comm_radiuss", "t.toml:3")
+        );
+        // Syntax errors: the line, no key.
+        let e = Scenario::parse("[run]\nrobots = = 3\n", "t.toml").unwrap_err();
+        assert_eq!(e.source, "t.toml:2", "{e}");
+        assert!(e.message.contains("not valid TOML"), "{e}");
+    }
+
+    #[test]
+    fn validation_errors_name_the_line_in_the_file_or_in_the_default() {
+        let dir = std::env::temp_dir().join(format!("swarm-keylines-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("loss.toml");
+        std::fs::write(&path, "[run]\nrobots = 5\n\n[radio]\nloss = 1.5\n").unwrap();
+        let sc = Scenario::load(&path).unwrap();
+        let name = path.display().to_string();
+        let e = sc.validate(&|_| name.clone()).unwrap_err();
+        assert_eq!(e.key, "radio.loss");
+        assert_eq!(e.source, format!("{name}:5"));
+        // A key the file does not hold: its value came from the default, which is named.
+        let mut sc = sc;
+        sc.radio.loss = 0.0;
+        sc.robot.v_max = -1.0;
+        let e = sc.validate(&|_| name.clone()).unwrap_err();
+        assert_eq!(e.key, "robot.v_max");
+        assert!(
+            e.source.starts_with("embedded default scenario:")
+                && e.source.ends_with(&format!("(not set in {name})")),
+            "{e}"
+        );
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn tick_hz_is_zero_or_a_period_that_fits_a_duration() {
+        for hz in [1e-300, 1e-4, -1.0, f64::NAN, f64::INFINITY, 1e7] {
+            let mut sc = Scenario::default();
+            sc.runtime.tick_hz = hz;
+            let e = sc.validate(&file).unwrap_err();
+            assert_eq!(e.key, "runtime.tick_hz", "{hz}");
+            assert!(e.to_string().contains("or 0: unpaced"), "{e}");
+        }
+        for hz in [0.0, MIN_TICK_HZ, 100.0, MAX_TICK_HZ] {
+            let mut sc = Scenario::default();
+            sc.runtime.tick_hz = hz;
+            sc.validate(&file).unwrap();
+            // The start of the last tick is a Duration.
+            let _ = sc.runtime.tick_start(sc.run.max_ticks);
+        }
     }
 
     #[test]

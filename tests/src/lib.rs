@@ -1,6 +1,8 @@
 //! Helpers for the end-to-end tests: find the built binaries, run them, check that a run left
 //! nothing behind (no process, nothing in /dev/shm).
 
+pub mod fuzz;
+
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Output, Stdio};
 use std::sync::{Mutex, MutexGuard};

@@ -5,6 +5,7 @@
 
 pub mod body;
 pub mod kinematics;
+pub mod limits;
 pub mod medium;
 pub mod metrics;
 pub mod mission;

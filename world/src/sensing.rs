@@ -130,6 +130,12 @@ fn keep_nearest(near: &mut Vec<(f64, u32)>, cap: usize) {
     }
 }
 
+/// Cell size of the world's sensing grid of static points: a quarter of the sensing radius,
+/// at least 2.5 units (so the grid stays a few cells per sensing disc).
+pub fn grid_cell(sc: &Scenario) -> f64 {
+    (sc.robot.sensing_radius / 4.0).max(2.5)
+}
+
 /// The static boundary points the robots can sense: obstacles, and the arena walls if sensed.
 pub fn static_points(sc: &Scenario) -> Vec<[f64; 2]> {
     let mut pts = Vec::new();

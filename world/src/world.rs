@@ -6,7 +6,7 @@ use crate::metrics::Coverage;
 use crate::mission::{self, Mission, MissionError};
 use crate::placement::{place_robots, PlacementError};
 use crate::sensing::{
-    fill_nearby, fill_neighbours, fill_obstacles, static_points, PointGrid, SenseScratch,
+    fill_nearby, fill_neighbours, fill_obstacles, grid_cell, static_points, PointGrid, SenseScratch,
 };
 use std::collections::VecDeque;
 use swarm::frames::{
@@ -137,7 +137,7 @@ impl World {
             static_points(sc),
             sc.arena.width,
             sc.arena.height,
-            (sc.robot.sensing_radius / 4.0).max(2.5),
+            grid_cell(sc),
         );
         let traj_every = (sc.run.max_ticks / 2000).max(1);
         Ok(World {

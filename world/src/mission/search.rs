@@ -55,7 +55,21 @@ fn validate(sc: &Scenario, c: &Check) -> Result<(), ConfigError> {
     c.range_f("search.signal_q", s.signal_q, 0.0, 1e12, true)?;
     c.range_f("search.noise_sigma", s.noise_sigma, 0.0, 1e12, false)?;
     c.range_f("search.l_t", s.l_t, 0.0, 1e7, true)?;
-    c.range_f("search.found_distance", s.found_distance, 0.0, 1e7, true)
+    c.range_f("search.found_distance", s.found_distance, 0.0, 1e7, true)?;
+    // The placement the mission does at start, with the same seeded stream: a region with no
+    // room clear of the obstacles is refused now, naming the keys that decide it.
+    Targets::new(sc).map_err(|e| {
+        let MissionError::Setup { message, .. } = e;
+        c.err(
+            "search.target_region",
+            format!(
+                "= {:?}: {message}: the region must leave room for search.targets = {} \
+                 outside the obstacles and search.target_clearance = {} from them",
+                s.target_region, s.targets, s.target_clearance
+            ),
+        )
+    })?;
+    Ok(())
 }
 
 fn new(sc: &Scenario) -> Result<Box<dyn Mission>, MissionError> {
@@ -338,5 +352,97 @@ impl Targets {
             }
         }
         self.just_found.clone()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn check(sc: &Scenario) -> Result<(), ConfigError> {
+        validate(
+            sc,
+            &Check {
+                key_source: &|_| "t.toml".to_string(),
+            },
+        )
+    }
+
+    fn key_of(edit: impl Fn(&mut Scenario)) -> String {
+        let mut sc = Scenario::default();
+        edit(&mut sc);
+        check(&sc).expect_err("refused").key
+    }
+
+    #[test]
+    fn the_default_section_is_valid() {
+        check(&Scenario::default()).unwrap();
+    }
+
+    #[test]
+    fn empty_inverted_or_outside_target_regions_are_refused() {
+        for r in [
+            [0.0, 0.0, 0.0, 0.0],
+            [500.0, 500.0, 400.0, 600.0],
+            [500.0, 600.0, 600.0, 500.0],
+            [900.0, 900.0, 1100.0, 950.0],
+            [-10.0, 0.0, 100.0, 100.0],
+            [f64::NAN, 0.0, 100.0, 100.0],
+            [0.0, 0.0, f64::INFINITY, 100.0],
+        ] {
+            assert_eq!(
+                key_of(|sc| sc.search.target_region = r),
+                "search.target_region",
+                "{r:?}"
+            );
+        }
+    }
+
+    #[test]
+    fn values_that_make_the_mission_impossible_are_refused() {
+        assert_eq!(key_of(|sc| sc.search.targets = 0), "search.targets");
+        for v in [f64::NAN, -1.0, 0.0, f64::INFINITY] {
+            assert_eq!(
+                key_of(|sc| sc.search.found_distance = v),
+                "search.found_distance",
+                "{v}"
+            );
+        }
+        assert_eq!(
+            key_of(|sc| sc.search.target_clearance = -1.0),
+            "search.target_clearance"
+        );
+        assert_eq!(
+            key_of(|sc| sc.search.signal_m = f64::NAN),
+            "search.signal_m"
+        );
+        assert_eq!(key_of(|sc| sc.search.l_t = -5.0), "search.l_t");
+    }
+
+    #[test]
+    fn a_target_region_with_no_room_clear_of_obstacles_is_refused() {
+        let mut sc = Scenario::default();
+        sc.arena.obstacles.push(swarm::scenario::Obstacle {
+            name: "slab".into(),
+            points: vec![
+                [400.0, 400.0],
+                [600.0, 400.0],
+                [600.0, 600.0],
+                [400.0, 600.0],
+            ],
+        });
+        // Inside the slab: no free point at all.
+        sc.search.target_region = [450.0, 450.0, 550.0, 550.0];
+        let e = check(&sc).unwrap_err();
+        assert_eq!(e.key, "search.target_region");
+        assert!(e.to_string().contains("no free position"), "{e}");
+        // A free strip beside it, but a clearance wider than the strip's distance to it.
+        sc.search.target_region = [600.5, 450.0, 601.0, 550.0];
+        sc.search.target_clearance = 5.0;
+        assert_eq!(check(&sc).unwrap_err().key, "search.target_region");
+        sc.search.target_clearance = 0.1;
+        check(&sc).unwrap();
+        // What validation accepted, the mission sets up.
+        Targets::new(&sc).unwrap();
     }
 }

@@ -81,14 +81,7 @@ pub const NAME: &str = "search";
 /// the scenario.
 pub fn validate(sc: &Scenario, c: &Check) -> Result<(), ConfigError> {
     crate::behaviours::require_holonomic(sc, c, NAME)?;
-    validate_search(sc).map_err(|message| {
-        let key = if message.starts_with("search.kernels") {
-            "search.kernels"
-        } else {
-            "search.mode"
-        };
-        c.err(key, message)
-    })
+    params::validate(sc, c)
 }
 
 /// Writes every kernel parameter into `search.kernels`, defaults included, so the run's

@@ -8,7 +8,7 @@ use crate::search::{
     arba, bsoa, calibration, estimator, subgroup, svf, tpepso, Params as KernelParams,
 };
 use serde::{Deserialize, Serialize};
-use swarm::scenario::Scenario;
+use swarm::scenario::{Check, ConfigError, Scenario};
 
 /// Everything the `search` behaviour uses, deserialised from `search.kernels`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -150,10 +150,213 @@ pub fn status_size_bound(targets: u32) -> usize {
     8 + 5 + 9 * swarm::sections::search::MAX_SIGNALS + 40 + 5 + 5 * targets as usize + 8
 }
 
-/// Checks the search behaviour's parameters and mode against the scenario.
-pub fn validate_search(sc: &Scenario) -> Result<(), String> {
-    parse_mode(&sc.search.mode)?;
-    let p = parse_params(sc)?;
+/// The allowed range of one numeric key of `search.kernels` (path below it).
+struct Range {
+    key: &'static str,
+    lo: f64,
+    hi: f64,
+    /// (lo, hi] rather than [lo, hi].
+    lo_open: bool,
+}
+
+const fn r(key: &'static str, lo: f64, hi: f64, lo_open: bool) -> Range {
+    Range {
+        key,
+        lo,
+        hi,
+        lo_open,
+    }
+}
+
+/// Largest distance any kernel works with (the arena's own bound, `Scenario::validate`).
+const DIST: f64 = 1e7;
+/// Largest signal value (Q, thresholds).
+const SIGNAL: f64 = 1e12;
+/// Largest count of ticks a kernel waits or repeats.
+const TICKS: f64 = 1e6;
+const PI: f64 = std::f64::consts::PI;
+
+/// Every float and integer of `search.kernels` with the range that makes sense for it (a unit
+/// test checks that every numeric key of the defaults is listed). Cross-field rules (V_max,
+/// L_B, L_T agree; d_min < L_T; f_min <= f_max; w_min <= w_max) are checked after.
+const RANGES: &[Range] = &[
+    r("virtual_force.c", 0.0, DIST, true),
+    r("virtual_force.l1", 0.0, DIST, true),
+    r("virtual_force.l_r", 0.0, DIST, true),
+    r("virtual_force.l_b", 0.0, DIST, true),
+    r("virtual_force.v_max", 0.0, 1e6, true),
+    r("calibration.m", 0.0, SIGNAL, true),
+    r("calibration.q", 0.0, SIGNAL, true),
+    r("calibration.noise_sigma", 0.0, SIGNAL, false),
+    r("calibration.l_t", 0.0, DIST, true),
+    r("calibration.d_min", 0.0, DIST, true),
+    // Each robot measures n_distances x repeats signals at start (paper 3.2): bounded so that
+    // start-up stays within seconds.
+    r("calibration.n_distances", 2.0, 10_000.0, false),
+    r("calibration.repeats", 1.0, 10_000.0, false),
+    r("estimator.min_detectors", 1.0, 4096.0, false),
+    r("estimator.max_detectors", 0.0, 4096.0, false),
+    r("estimator.n_starts", 0.0, 1000.0, false),
+    r("estimator.initial_step", 0.0, DIST, true),
+    r("estimator.max_iterations", 1.0, 100_000.0, false),
+    r("estimator.tolerance", 0.0, 1e6, true),
+    r("estimator.start_tolerance", 0.0, 1e6, true),
+    r("estimator.restarts", 0.0, 100.0, false),
+    // PSO weights (eq. 11): an inertia above 2 or coefficients above 10 only diverge (the
+    // velocity is clamped to V_max anyway); alpha is a share.
+    r("tpepso.w", 0.0, 2.0, false),
+    r("tpepso.c1", 0.0, 10.0, false),
+    r("tpepso.c2", 0.0, 10.0, false),
+    r("tpepso.c3", 0.0, 10.0, false),
+    r("tpepso.alpha", 0.0, 1.0, false),
+    r("tpepso.v_max", 0.0, 1e6, true),
+    r("arba.f_min", 0.0, 1e3, false),
+    r("arba.f_max", 0.0, 1e3, false),
+    r("arba.loudness_initial", 0.0, 1e3, true),
+    r("arba.loudness_decay", 0.0, 1.0, false),
+    r("arba.pulse_rate_initial", 0.0, 1.0, false),
+    r("arba.pulse_rate_growth", 0.0, 1e3, false),
+    r("arba.w_max", 0.0, 2.0, false),
+    r("arba.w_min", 0.0, 2.0, false),
+    r("arba.local_walk", 0.0, 1e3, false),
+    r("arba.stall_ticks", 0.0, TICKS, false),
+    r("arba.escape_ticks", 0.0, TICKS, false),
+    r("arba.v_max", 0.0, 1e6, true),
+    r("bsoa.v_max", 0.0, 1e6, true),
+    r("bsoa.l_b", 0.0, DIST, true),
+    r("bsoa.l_t", 0.0, DIST, true),
+    r("bsoa.l_2", 0.0, DIST, true),
+    r("bsoa.heading_tolerance", 0.0, PI, true),
+    r("bsoa.corridor_half_width", 0.0, DIST, false),
+    r("bsoa.c", 0.0, DIST, true),
+    r("bsoa.l_1", 0.0, DIST, true),
+    r("bsoa.boundary.sample_spacing", 0.0, 1e3, true),
+    r("bsoa.boundary.gap_factor", 0.0, 1e3, true),
+    r("bsoa.boundary.min_gap_angle", 0.0, PI, false),
+    r("svf.v_max", 0.0, 1e6, true),
+    r("svf.l_b", 0.0, DIST, true),
+    r("svf.engage_distance", 0.0, DIST, false),
+    r("svf.follow_distance", 0.0, DIST, false),
+    r("svf.max_correction", 0.0, PI, false),
+    r("svf.heading_tolerance", 0.0, PI, true),
+    r("svf.corridor_half_width", 0.0, DIST, false),
+    r("subgroup.i_min", 0.0, SIGNAL, false),
+    r("subgroup.g_max", 1.0, 4096.0, false),
+    r("subgroup.r_cm", 0.0, DIST, true),
+    r("declare_ticks", 0.0, TICKS, false),
+    r("type2_initial_fitness", -SIGNAL, SIGNAL, false),
+    // Negative turns the horizon off.
+    r("goal_horizon_margin", -DIST, DIST, false),
+    r("subgroup_separation", 0.0, DIST, false),
+];
+
+/// Every numeric leaf of `t` as (dotted path, value).
+fn numeric_leaves(t: &toml::Table, prefix: &str, out: &mut Vec<(String, f64)>) {
+    for (k, v) in t {
+        let path = if prefix.is_empty() {
+            k.clone()
+        } else {
+            format!("{prefix}.{k}")
+        };
+        match v {
+            toml::Value::Table(sub) => numeric_leaves(sub, &path, out),
+            toml::Value::Float(x) => out.push((path, *x)),
+            toml::Value::Integer(i) => out.push((path, *i as f64)),
+            _ => {}
+        }
+    }
+}
+
+/// Checks every number of `p` against [`RANGES`] (keys named `search.kernels.<path>`).
+fn check_ranges(p: &Params, c: &Check) -> Result<(), ConfigError> {
+    let table = toml::Table::try_from(p)
+        .map_err(|e| c.err(KERNELS, format!("cannot be written back: {e}")))?;
+    let mut leaves = Vec::new();
+    numeric_leaves(&table, "", &mut leaves);
+    for (path, v) in leaves {
+        let key = format!("{KERNELS}.{path}");
+        match RANGES.iter().find(|r| r.key == path) {
+            Some(r) => c.range_f(&key, v, r.lo, r.hi, r.lo_open)?,
+            None if !v.is_finite() => {
+                return Err(c.err(&key, format!("= {v} must be a finite number")))
+            }
+            None => {}
+        }
+    }
+    let rel = |key: &str, ok: bool, need: String| -> Result<(), ConfigError> {
+        if ok {
+            Ok(())
+        } else {
+            Err(c.err(&format!("{KERNELS}.{key}"), need))
+        }
+    };
+    let cal = &p.calibration;
+    rel(
+        "calibration.d_min",
+        cal.d_min < cal.l_t,
+        format!(
+            "= {} must be below calibration.l_t = {}",
+            cal.d_min, cal.l_t
+        ),
+    )?;
+    rel(
+        "calibration.repeats",
+        cal.n_distances * cal.repeats <= 1_000_000,
+        format!(
+            "= {} times calibration.n_distances = {} is over 1,000,000 measurements a robot makes at start",
+            cal.repeats, cal.n_distances
+        ),
+    )?;
+    let a = &p.arba;
+    rel(
+        "arba.f_max",
+        a.f_max >= a.f_min,
+        format!("= {} must be at least arba.f_min = {}", a.f_max, a.f_min),
+    )?;
+    rel(
+        "arba.w_max",
+        a.w_max >= a.w_min,
+        format!("= {} must be at least arba.w_min = {}", a.w_max, a.w_min),
+    )?;
+    Ok(())
+}
+
+const KERNELS: &str = "search.kernels";
+
+/// Whether the scenario's `search.kernels` table sets `path` (dotted, below it).
+fn kernel_is_set(sc: &Scenario, path: &str) -> bool {
+    let mut t = &sc.search.kernels;
+    let mut parts = path.split('.').peekable();
+    while let Some(k) = parts.next() {
+        match (t.get(k), parts.peek()) {
+            (Some(_), None) => return true,
+            (Some(toml::Value::Table(sub)), Some(_)) => t = sub,
+            _ => return false,
+        }
+    }
+    false
+}
+
+/// Parses `search.kernels`, an error naming the key below it (`search.kernels.tpepso.w`).
+fn parse_params_checked(sc: &Scenario, c: &Check) -> Result<Params, ConfigError> {
+    serde_path_to_error::deserialize(sc.search.kernels.clone()).map_err(|e| {
+        let path = e.path().to_string();
+        let key = if path.is_empty() || path == "." {
+            KERNELS.to_string()
+        } else {
+            format!("{KERNELS}.{path}")
+        };
+        c.err(&key, e.into_inner().to_string())
+    })
+}
+
+/// Checks the search behaviour's section: the mode, every kernel parameter in its range, and
+/// the kernels against the scenario (the mission's `[search]` values are checked before, by
+/// the mission). Errors name the exact key.
+pub fn validate(sc: &Scenario, c: &Check) -> Result<(), ConfigError> {
+    parse_mode(&sc.search.mode).map_err(|m| c.err("search.mode", m))?;
+    let p = parse_params_checked(sc, c)?;
+    check_ranges(&p, c)?;
     let kernels = KernelParams {
         virtual_force: p.virtual_force.clone(),
         calibration: p.calibration.clone(),
@@ -164,61 +367,209 @@ pub fn validate_search(sc: &Scenario) -> Result<(), String> {
         svf: p.svf.clone(),
         subgroup: p.subgroup.clone(),
     };
-    kernels
-        .check_consistency()
-        .map_err(|e| format!("search.kernels: {e}"))?;
-    p.arba.check().map_err(|e| format!("search.kernels: {e}"))?;
+    kernels.check_consistency().map_err(|m| {
+        // "<path> = <v> but <path0> = <v0>": the first path is the key that disagrees.
+        let path = m.split(" = ").next().unwrap_or("");
+        c.err(&format!("{KERNELS}.{path}"), format!("disagrees: {m}"))
+    })?;
+    p.arba
+        .check()
+        .map_err(|m| c.err(&format!("{KERNELS}.arba"), m))?;
+    // A kernel value that must agree with a scenario value: the error names the kernel key if
+    // the file sets it, else the scenario key (the kernel's value is then its code default,
+    // and what the user changed is the scenario's).
+    let disagree = |kernel: &str, mine: f64, key: &str, theirs: f64, why: &str| -> ConfigError {
+        if kernel_is_set(sc, kernel) {
+            c.err(
+                &format!("{KERNELS}.{kernel}"),
+                format!("= {mine} {why} {key} = {theirs}"),
+            )
+        } else {
+            c.err(
+                key,
+                format!(
+                    "= {theirs}: the search behaviour's {KERNELS}.{kernel} is {mine} (its default) \
+                     and {why} it; set both"
+                ),
+            )
+        }
+    };
     // Every kernel's V_max equals tpepso.v_max (check_consistency), and that equals the robot's.
     let v = sc.robot.v_max;
     if p.tpepso.v_max != v {
-        return Err(format!(
-            "search.kernels: tpepso.v_max = {} differs from robot.v_max = {v} (V_max, Table 4)",
-            p.tpepso.v_max
+        return Err(disagree(
+            "tpepso.v_max",
+            p.tpepso.v_max,
+            "robot.v_max",
+            v,
+            "must equal (V_max, Table 4)",
         ));
     }
     if p.bsoa.l_b > sc.robot.sensing_radius {
-        return Err(format!(
-            "search.kernels: bsoa.l_b = {} exceeds robot.sensing_radius = {} (L_B)",
-            p.bsoa.l_b, sc.robot.sensing_radius
+        return Err(disagree(
+            "bsoa.l_b",
+            p.bsoa.l_b,
+            "robot.sensing_radius",
+            sc.robot.sensing_radius,
+            "must not exceed (L_B)",
         ));
     }
     let s = &sc.search;
-    let c = &p.calibration;
-    for (key, mine, world) in [
-        ("m", c.m, s.signal_m),
-        ("q", c.q, s.signal_q),
-        ("noise_sigma", c.noise_sigma, s.noise_sigma),
-        ("l_t", c.l_t, s.l_t),
+    let cal = &p.calibration;
+    for (key, mine, world_key, world) in [
+        ("m", cal.m, "search.signal_m", s.signal_m),
+        ("q", cal.q, "search.signal_q", s.signal_q),
+        (
+            "noise_sigma",
+            cal.noise_sigma,
+            "search.noise_sigma",
+            s.noise_sigma,
+        ),
+        ("l_t", cal.l_t, "search.l_t", s.l_t),
     ] {
         if mine != world {
-            return Err(format!(
-                "search.kernels: calibration.{key} = {mine} differs from the environment's value {world} \
-                 (the offline calibration measures the real signal)"
+            return Err(disagree(
+                &format!("calibration.{key}"),
+                mine,
+                world_key,
+                world,
+                "must equal (the offline calibration measures the real signal)",
             ));
         }
     }
-    if c.n_distances < 2 || c.repeats < 1 || !(c.d_min > 0.0 && c.d_min < c.l_t) {
-        return Err(
-            "search.kernels: calibration needs n_distances >= 2, repeats >= 1, 0 < d_min < l_t"
-                .into(),
-        );
-    }
-    if p.subgroup.g_max < 1 {
-        return Err("search.kernels: subgroup.g_max must be >= 1".into());
-    }
-    if p.estimator.min_detectors < 1 {
-        return Err("search.kernels: estimator.min_detectors must be >= 1".into());
-    }
-    if sc.radio.max_messages_per_tick < 1 {
-        return Err("radio.max_messages_per_tick must be >= 1 for the search behaviour".into());
-    }
     let need = status_size_bound(s.targets);
     if (sc.radio.max_message_bytes as usize) < need {
-        return Err(format!(
-            "radio.max_message_bytes = {} is too small for the search behaviour's status message \
-             with {} targets (needs up to {need} bytes)",
-            sc.radio.max_message_bytes, s.targets
+        return Err(c.err(
+            "radio.max_message_bytes",
+            format!(
+                "= {} is too small for the search behaviour's status message with {} targets \
+                 (needs up to {need} bytes)",
+                sc.radio.max_message_bytes, s.targets
+            ),
         ));
     }
     Ok(())
+}
+
+/// [`validate`] with the error as text ("<key> <message>"), every key from one file.
+pub fn validate_search(sc: &Scenario) -> Result<(), String> {
+    validate(
+        sc,
+        &Check {
+            key_source: &|_| "scenario".to_string(),
+        },
+    )
+    .map_err(|e| format!("{} {}", e.key, e.message))
+}
+
+#[cfg(test)]
+mod validation_tests {
+    use super::*;
+
+    fn check(sc: &Scenario) -> Result<(), ConfigError> {
+        validate(
+            sc,
+            &Check {
+                key_source: &|_| "t.toml".to_string(),
+            },
+        )
+    }
+
+    #[test]
+    fn every_number_of_the_kernels_has_a_range() {
+        let table = toml::Table::try_from(Params::default()).unwrap();
+        let mut leaves = Vec::new();
+        numeric_leaves(&table, "", &mut leaves);
+        assert!(leaves.len() > 50, "{}", leaves.len());
+        for (path, v) in &leaves {
+            let r = RANGES
+                .iter()
+                .find(|r| r.key == path)
+                .unwrap_or_else(|| panic!("search.kernels.{path} has no range"));
+            // The default lies in it.
+            assert!(
+                v.is_finite() && *v <= r.hi && (*v > r.lo || (!r.lo_open && *v == r.lo)),
+                "{path} = {v}"
+            );
+        }
+        // And every listed range names a real key.
+        for r in RANGES {
+            assert!(leaves.iter().any(|(p, _)| p == r.key), "{}", r.key);
+        }
+    }
+
+    fn refused(kernels: &str) -> ConfigError {
+        let mut sc = Scenario::default();
+        sc.search.kernels = kernels.parse().unwrap();
+        check(&sc).expect_err(kernels)
+    }
+
+    #[test]
+    fn a_non_finite_or_out_of_range_kernel_value_names_its_key() {
+        check(&Scenario::default()).unwrap();
+        for (text, key) in [
+            ("[tpepso]\nw = nan\n", "search.kernels.tpepso.w"),
+            ("[tpepso]\nc3 = inf\n", "search.kernels.tpepso.c3"),
+            ("[tpepso]\nalpha = -0.5\n", "search.kernels.tpepso.alpha"),
+            (
+                "[arba]\nloudness_decay = 1.5\n",
+                "search.kernels.arba.loudness_decay",
+            ),
+            (
+                "[arba]\nf_min = 0.5\nf_max = 0.2\n",
+                "search.kernels.arba.f_max",
+            ),
+            (
+                "[bsoa.boundary]\nsample_spacing = 0.0\n",
+                "search.kernels.bsoa.boundary.sample_spacing",
+            ),
+            (
+                "[estimator]\ntolerance = -1.0\n",
+                "search.kernels.estimator.tolerance",
+            ),
+            (
+                "[calibration]\nrepeats = 0\n",
+                "search.kernels.calibration.repeats",
+            ),
+            ("[subgroup]\ng_max = 0\n", "search.kernels.subgroup.g_max"),
+            (
+                "goal_horizon_margin = -inf\n",
+                "search.kernels.goal_horizon_margin",
+            ),
+            ("declare_ticks = 10000000\n", "search.kernels.declare_ticks"),
+        ] {
+            let e = refused(text);
+            assert_eq!(e.key, key, "{text}: {e}");
+            assert_eq!(e.source, "t.toml");
+        }
+    }
+
+    #[test]
+    fn deserialisation_errors_name_the_key_below_kernels() {
+        let e = refused("[subgroup]\ng_max = -1\n");
+        assert_eq!(e.key, "search.kernels.subgroup.g_max", "{e}");
+        let e = refused("[tpepso]\nomega = 0.4\n");
+        assert_eq!(e.key, "search.kernels.tpepso.omega", "{e}");
+        assert!(e.message.contains("omega"), "{e}");
+        let e = refused("[tpepso]\nw = \"fast\"\n");
+        assert_eq!(e.key, "search.kernels.tpepso.w", "{e}");
+    }
+
+    #[test]
+    fn mismatches_name_the_key_that_disagrees() {
+        let e = refused("[svf]\nv_max = 5.0\n");
+        assert_eq!(e.key, "search.kernels.svf.v_max", "{e}");
+        let e = refused("[calibration]\nm = 0.2\n");
+        assert_eq!(e.key, "search.kernels.calibration.m", "{e}");
+        // The scenario's value changed, the kernel's copy left at its default: the scenario's
+        // key is named.
+        let mut sc = Scenario::default();
+        sc.search.noise_sigma = 0.0;
+        let e = check(&sc).unwrap_err();
+        assert_eq!(e.key, "search.noise_sigma", "{e}");
+        assert!(e.message.contains("calibration.noise_sigma"), "{e}");
+        let mut sc = Scenario::default();
+        sc.robot.sensing_radius = 50.0;
+        assert_eq!(check(&sc).unwrap_err().key, "robot.sensing_radius");
+    }
 }

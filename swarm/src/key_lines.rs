@@ -1,0 +1,229 @@
+//! Where a scenario key is written: the line of `arena.obstacles[3].points` in a TOML text, and
+//! the `file:line` an error names for it.
+//!
+//! A scenario is the user's file merged over the embedded default, so a key the user's file
+//! does not hold came from the default: its error names the default and the default's line.
+//! Lines come from the TOML parser's spans (toml_edit, the parser of the `toml` crate).
+
+use std::ops::Range;
+use toml_edit::{ImDocument, Item, Value};
+
+/// How errors name the embedded default scenario.
+pub const DEFAULT_SOURCE: &str = "embedded default scenario";
+
+/// One step of a key path: a table key or an array index.
+#[derive(Debug, Clone, PartialEq)]
+enum Seg {
+    Key(String),
+    Index(usize),
+}
+
+/// `arena.obstacles[3].points` -> [arena, obstacles, 3, points].
+fn segments(key: &str) -> Vec<Seg> {
+    let mut out = Vec::new();
+    for part in key.split('.') {
+        let (name, mut rest) = match part.find('[') {
+            Some(i) => (&part[..i], &part[i..]),
+            None => (part, ""),
+        };
+        if !name.is_empty() {
+            out.push(Seg::Key(name.to_string()));
+        }
+        while let Some(end) = rest.find(']') {
+            if let Ok(i) = rest[1..end].parse() {
+                out.push(Seg::Index(i));
+            }
+            rest = &rest[end + 1..];
+        }
+    }
+    out
+}
+
+/// The span of the key `segs` below `item` (the key's own span where the text has one, else
+/// its value's, else the nearest enclosing one's, `outer`), None when the text does not hold
+/// the whole path (a table that merely contains it does not count).
+fn span_of(item: &Item, segs: &[Seg], outer: Option<Range<usize>>) -> Option<Range<usize>> {
+    let Some((first, rest)) = segs.split_first() else {
+        return item.span().or(outer);
+    };
+    match first {
+        Seg::Key(k) => {
+            let (key, child) = item.as_table_like()?.get_key_value(k)?;
+            let here = key.span().or_else(|| child.span()).or(outer);
+            if rest.is_empty() {
+                here
+            } else {
+                span_of(child, rest, here)
+            }
+        }
+        Seg::Index(i) => {
+            let child = match item {
+                Item::ArrayOfTables(a) => Item::Table(a.get(*i)?.clone()),
+                Item::Value(Value::Array(a)) => Item::Value(a.get(*i)?.clone()),
+                _ => return None,
+            };
+            let here = child.span().or(outer);
+            if rest.is_empty() {
+                here
+            } else {
+                span_of(&child, rest, here)
+            }
+        }
+    }
+}
+
+/// 1-based line of byte `at` in `text`.
+fn line_at(text: &str, at: usize) -> usize {
+    text[..at.min(text.len())].matches('\n').count() + 1
+}
+
+/// The line of `key` (a dotted path with `[i]` indices) in the TOML `text`, if the text holds
+/// that key (the whole path: a table that merely contains it does not count).
+pub fn line_of(text: &str, key: &str) -> Option<usize> {
+    let doc = ImDocument::parse(text).ok()?;
+    let root = Item::Table(doc.as_table().clone());
+    let segs = segments(key);
+    if segs.is_empty() {
+        return None;
+    }
+    span_of(&root, &segs, None).map(|s| line_at(text, s.start))
+}
+
+/// The line of the default's key, if it has it.
+fn default_line(key: &str) -> Option<usize> {
+    line_of(crate::scenario::DEFAULT_SCENARIO, key)
+}
+
+/// Names where `key` of a scenario read from `source` (whose text is `text`) is written:
+/// `source:LINE` when the text holds it, else the default's line (`embedded default
+/// scenario:LINE (not set in SOURCE)`), else `source` alone.
+pub fn locate_in(source: &str, text: &str, key: &str) -> String {
+    if key.is_empty() {
+        return source.to_string();
+    }
+    if let Some(line) = line_of(text, key) {
+        return format!("{source}:{line}");
+    }
+    match default_line(key) {
+        Some(line) if source != DEFAULT_SOURCE => {
+            format!("{DEFAULT_SOURCE}:{line} (not set in {source})")
+        }
+        Some(line) => format!("{DEFAULT_SOURCE}:{line}"),
+        None => source.to_string(),
+    }
+}
+
+/// [`locate_in`] for a source named by validation: a flag (`--robots`) stays as it is, the
+/// default is looked up in the embedded text, a file is read again (a source that is neither
+/// a flag nor a readable file is returned as it is).
+pub fn locate(source: &str, key: &str) -> String {
+    if source.starts_with("--") || key.is_empty() {
+        return source.to_string();
+    }
+    if source == DEFAULT_SOURCE {
+        return locate_in(source, crate::scenario::DEFAULT_SCENARIO, key);
+    }
+    let path = std::path::Path::new(source);
+    if path.extension().is_some_and(|e| e == "toml") {
+        if let Ok(text) = std::fs::read_to_string(path) {
+            return locate_in(source, &text, key);
+        }
+    }
+    source.to_string()
+}
+
+/// The line of byte offset `at` in `text`, for parser errors that carry a span.
+pub fn line_of_offset(text: &str, at: usize) -> usize {
+    line_at(text, at)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const TEXT: &str = "\
+[run]
+robots = 7
+
+[arena]
+width = 10.0
+
+[[arena.obstacles]]
+name = \"a\"
+points = [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0]]
+
+[[arena.obstacles]]
+name = \"b\"
+points = [
+  [5.0, 5.0],
+  [6.0, 5.0],
+]
+
+[search.kernels.tpepso]
+w = 0.5
+
+[search]
+kernels.bsoa.l_b = 50.0
+";
+
+    #[test]
+    fn key_paths_split_into_keys_and_indices() {
+        assert_eq!(
+            segments("arena.obstacles[3].points"),
+            vec![
+                Seg::Key("arena".into()),
+                Seg::Key("obstacles".into()),
+                Seg::Index(3),
+                Seg::Key("points".into())
+            ]
+        );
+        assert_eq!(
+            segments("faults.kill_at[1][0]"),
+            vec![
+                Seg::Key("faults".into()),
+                Seg::Key("kill_at".into()),
+                Seg::Index(1),
+                Seg::Index(0)
+            ]
+        );
+    }
+
+    #[test]
+    fn lines_of_keys_tables_arrays_and_dotted_keys() {
+        assert_eq!(line_of(TEXT, "run.robots"), Some(2));
+        assert_eq!(line_of(TEXT, "arena.width"), Some(5));
+        assert_eq!(line_of(TEXT, "arena.obstacles[0].points"), Some(9));
+        assert_eq!(line_of(TEXT, "arena.obstacles[1].name"), Some(12));
+        assert_eq!(line_of(TEXT, "arena.obstacles[1].points[1]"), Some(15));
+        assert_eq!(line_of(TEXT, "search.kernels.tpepso.w"), Some(19));
+        assert_eq!(line_of(TEXT, "search.kernels.bsoa.l_b"), Some(22));
+        // Not in the text (a table that contains it is not enough).
+        assert_eq!(line_of(TEXT, "arena.height"), None);
+        assert_eq!(line_of(TEXT, "arena.obstacles[2].points"), None);
+        assert_eq!(line_of(TEXT, "radio.loss"), None);
+    }
+
+    #[test]
+    fn a_key_the_file_does_not_hold_names_the_default() {
+        assert_eq!(locate_in("x.toml", TEXT, "run.robots"), "x.toml:2");
+        let d = locate_in("x.toml", TEXT, "radio.loss");
+        assert!(
+            d.starts_with("embedded default scenario:") && d.ends_with("(not set in x.toml)"),
+            "{d}"
+        );
+        let line: usize = d
+            .trim_start_matches("embedded default scenario:")
+            .split(' ')
+            .next()
+            .unwrap()
+            .parse()
+            .unwrap();
+        let text_line = crate::scenario::DEFAULT_SCENARIO
+            .lines()
+            .nth(line - 1)
+            .unwrap();
+        assert!(text_line.trim_start().starts_with("loss "), "{text_line}");
+        assert_eq!(locate("--robots", "run.robots"), "--robots");
+        assert_eq!(locate("a bench", "run.robots"), "a bench");
+    }
+}
