@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
 # The reference runs of the "missions as plug-ins" refactor: runs a fixed set of scenarios with
 # the binaries in BIN (default target/release) into OUT, both executors. Compare two such folders
-# with `cmp` on each recording.bin (scripts/reference-runs.sh compare A B).
+# with `cmp` on each recording.bin (scripts/reference-runs.sh compare A B); where headers may
+# differ (the resolved scenario lists more), `python3 scripts/recording-ticks-cmp.py A B RUN...`
+# compares the tick records alone.
 set -euo pipefail
 if [ "${1:-}" = compare ]; then
   a=$2; b=$3; bad=0; n=0
