@@ -344,7 +344,14 @@ fn interrupting_start_up_is_clean_and_quick() {
         // A run that cannot end by itself before the signal (a search run can finish in
         // well under a second on a quiet machine).
         let child = spawn_up(
-            &["--scenario", roam(), "--robots", "50", "--max-ticks", "1000000"],
+            &[
+                "--scenario",
+                roam(),
+                "--robots",
+                "50",
+                "--max-ticks",
+                "1000000",
+            ],
             &out,
         );
         std::thread::sleep(Duration::from_millis(delay_ms));

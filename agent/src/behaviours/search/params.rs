@@ -138,9 +138,51 @@ pub fn parse_mode(mode: &str) -> Result<(ObstacleLayer, SearchLayer), String> {
     Ok((obstacle, search))
 }
 
-/// Parses `search.kernels` into [`Params`] (unknown keys are errors).
+/// The kernel parameters that are physical constants of the scenario, each with its one
+/// source: (path below `search.kernels`, the scenario key, its value). The kernels take these
+/// from the scenario; a copy written in `search.kernels` must agree with its source.
+fn derived(sc: &Scenario) -> [(&'static str, &'static str, f64); 10] {
+    let (v, s) = (sc.robot.v_max, &sc.search);
+    [
+        ("virtual_force.v_max", "robot.v_max", v),
+        ("tpepso.v_max", "robot.v_max", v),
+        ("arba.v_max", "robot.v_max", v),
+        ("bsoa.v_max", "robot.v_max", v),
+        ("svf.v_max", "robot.v_max", v),
+        ("calibration.m", "search.signal_m", s.signal_m),
+        ("calibration.q", "search.signal_q", s.signal_q),
+        (
+            "calibration.noise_sigma",
+            "search.noise_sigma",
+            s.noise_sigma,
+        ),
+        ("calibration.l_t", "search.l_t", s.l_t),
+        ("bsoa.l_t", "search.l_t", s.l_t),
+    ]
+}
+
+/// `search.kernels` with every derived constant the file leaves out filled in from its source.
+fn kernels_with_derived(sc: &Scenario) -> toml::Table {
+    let mut t = sc.search.kernels.clone();
+    for (path, _, value) in derived(sc) {
+        if kernel_is_set(sc, path) {
+            continue;
+        }
+        let (section, key) = path.split_once('.').expect("dotted path");
+        let sub = t
+            .entry(section)
+            .or_insert_with(|| toml::Value::Table(toml::Table::new()));
+        if let toml::Value::Table(sub) = sub {
+            sub.insert(key.to_string(), toml::Value::Float(value));
+        }
+    }
+    t
+}
+
+/// Parses `search.kernels` into [`Params`] (unknown keys are errors), the derived constants
+/// from their sources.
 pub fn parse_params(sc: &Scenario) -> Result<Params, String> {
-    Params::deserialize(sc.search.kernels.clone()).map_err(|e| format!("search.kernels: {e}"))
+    Params::deserialize(kernels_with_derived(sc)).map_err(|e| format!("search.kernels: {e}"))
 }
 
 /// An upper bound of the encoded size of one status message (bincode, varint integers):
@@ -339,7 +381,7 @@ fn kernel_is_set(sc: &Scenario, path: &str) -> bool {
 
 /// Parses `search.kernels`, an error naming the key below it (`search.kernels.tpepso.w`).
 fn parse_params_checked(sc: &Scenario, c: &Check) -> Result<Params, ConfigError> {
-    serde_path_to_error::deserialize(sc.search.kernels.clone()).map_err(|e| {
+    serde_path_to_error::deserialize(kernels_with_derived(sc)).map_err(|e| {
         let path = e.path().to_string();
         let key = if path.is_empty() || path == "." {
             KERNELS.to_string()
@@ -356,6 +398,29 @@ fn parse_params_checked(sc: &Scenario, c: &Check) -> Result<Params, ConfigError>
 pub fn validate(sc: &Scenario, c: &Check) -> Result<(), ConfigError> {
     parse_mode(&sc.search.mode).map_err(|m| c.err("search.mode", m))?;
     let p = parse_params_checked(sc, c)?;
+    // A derived constant written in the file must agree with its one source.
+    for (path, source, value) in derived(sc) {
+        if !kernel_is_set(sc, path) {
+            continue;
+        }
+        let mut t = &sc.search.kernels;
+        let (section, key) = path.split_once('.').expect("dotted path");
+        if let Some(toml::Value::Table(sub)) = t.get(section) {
+            t = sub;
+        }
+        let written = t
+            .get(key)
+            .and_then(|x| x.as_float().or(x.as_integer().map(|i| i as f64)));
+        if written != Some(value) {
+            return Err(c.err(
+                &format!("{KERNELS}.{path}"),
+                format!(
+                    "= {}: this kernel takes {source} = {value}; leave it out, or set it equal",
+                    written.map_or("?".to_string(), |w| w.to_string())
+                ),
+            ));
+        }
+    }
     check_ranges(&p, c)?;
     let kernels = KernelParams {
         virtual_force: p.virtual_force.clone(),
@@ -394,17 +459,6 @@ pub fn validate(sc: &Scenario, c: &Check) -> Result<(), ConfigError> {
             )
         }
     };
-    // Every kernel's V_max equals tpepso.v_max (check_consistency), and that equals the robot's.
-    let v = sc.robot.v_max;
-    if p.tpepso.v_max != v {
-        return Err(disagree(
-            "tpepso.v_max",
-            p.tpepso.v_max,
-            "robot.v_max",
-            v,
-            "must equal (V_max, Table 4)",
-        ));
-    }
     if p.bsoa.l_b > sc.robot.sensing_radius {
         return Err(disagree(
             "bsoa.l_b",
@@ -415,28 +469,6 @@ pub fn validate(sc: &Scenario, c: &Check) -> Result<(), ConfigError> {
         ));
     }
     let s = &sc.search;
-    let cal = &p.calibration;
-    for (key, mine, world_key, world) in [
-        ("m", cal.m, "search.signal_m", s.signal_m),
-        ("q", cal.q, "search.signal_q", s.signal_q),
-        (
-            "noise_sigma",
-            cal.noise_sigma,
-            "search.noise_sigma",
-            s.noise_sigma,
-        ),
-        ("l_t", cal.l_t, "search.l_t", s.l_t),
-    ] {
-        if mine != world {
-            return Err(disagree(
-                &format!("calibration.{key}"),
-                mine,
-                world_key,
-                world,
-                "must equal (the offline calibration measures the real signal)",
-            ));
-        }
-    }
     let need = status_size_bound(s.targets);
     if (sc.radio.max_message_bytes as usize) < need {
         return Err(c.err(
@@ -561,13 +593,22 @@ mod validation_tests {
         assert_eq!(e.key, "search.kernels.svf.v_max", "{e}");
         let e = refused("[calibration]\nm = 0.2\n");
         assert_eq!(e.key, "search.kernels.calibration.m", "{e}");
-        // The scenario's value changed, the kernel's copy left at its default: the scenario's
-        // key is named.
+        // One source: a scenario value changed alone reaches every kernel that uses it.
         let mut sc = Scenario::default();
-        sc.search.noise_sigma = 0.0;
-        let e = check(&sc).unwrap_err();
-        assert_eq!(e.key, "search.noise_sigma", "{e}");
-        assert!(e.message.contains("calibration.noise_sigma"), "{e}");
+        sc.search.noise_sigma = 0.5;
+        sc.robot.v_max = 6.0;
+        check(&sc).unwrap();
+        let p = parse_params(&sc).unwrap();
+        assert_eq!(p.calibration.noise_sigma, 0.5);
+        for v in [
+            p.virtual_force.v_max,
+            p.tpepso.v_max,
+            p.arba.v_max,
+            p.bsoa.v_max,
+            p.svf.v_max,
+        ] {
+            assert_eq!(v, 6.0);
+        }
         let mut sc = Scenario::default();
         sc.robot.sensing_radius = 50.0;
         assert_eq!(check(&sc).unwrap_err().key, "robot.sensing_radius");
