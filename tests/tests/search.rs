@@ -141,7 +141,11 @@ fn the_experiment_grid_gives_the_same_runs_with_either_executor() {
 fn the_mission_survives_twenty_percent_of_agents_killed() {
     let _g = serial();
     let out = tmp_dir("search-faults");
+    // The experiment's id is fixed, so the test knows every run's shared-memory prefix
+    // (`<id>-<mode>-<robots>-<seed>-<job>`) and judges only its own runs' files.
+    let id = own_run_id("faults");
     let o = Command::new(orchestrator())
+        .env("SWARM_RUN_ID", &id)
         .args([
             "experiment",
             configs().join("search-faults.toml").to_str().unwrap(),
@@ -183,5 +187,23 @@ fn the_mission_survives_twenty_percent_of_agents_killed() {
             }
         }
     }
-    assert!(run_shm_entries().is_empty(), "{:?}", run_shm_entries());
+    let prefixes: std::collections::BTreeSet<String> = runs
+        .iter()
+        .flat_map(|r| {
+            let (mode, n, seed) = (
+                r["mode"].as_str().unwrap().to_string(),
+                r["robots"].as_u64().unwrap(),
+                r["seed"].as_u64().unwrap(),
+            );
+            let id = id.clone();
+            (0..runs.len()).map(move |job| {
+                swarm::transport::prefix_for(&format!("{id}-{mode}-{n}-{seed}-{job}"))
+            })
+        })
+        .collect();
+    let left: Vec<String> = run_shm_entries()
+        .into_iter()
+        .filter(|e| prefixes.iter().any(|p| e.starts_with(p)))
+        .collect();
+    assert!(left.is_empty(), "this experiment's runs left {left:?}");
 }
