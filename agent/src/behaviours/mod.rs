@@ -3,11 +3,7 @@
 //! A behaviour is a folder or file here with a `NAME`, a `validate` of its scenario section, a
 //! `resolve` that writes its defaults into the scenario (a no-op for most) and a `dispatch`
 //! that calls a [`BehaviourVisitor`] with its constructor; adding one is adding its file and
-//! its line in `registry!` below.
-
-pub mod faulty;
-pub mod roam;
-pub mod search;
+//! its name in `registry!` below (which also declares its module).
 
 use swarm::scenario::{Check, ConfigError, Scenario};
 use swarm::Behaviour;
@@ -24,6 +20,8 @@ pub trait BehaviourVisitor {
 /// `validate` / `resolve_defaults` / `dispatch` by name.
 macro_rules! registry {
     ($($m:ident),* $(,)?) => {
+        $(pub mod $m;)*
+
         /// Every behaviour an agent can run.
         pub const BEHAVIOURS: &[&str] = &[$($m::NAME),*];
 

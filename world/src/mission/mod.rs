@@ -4,11 +4,12 @@
 //! A mission owns its entities (targets, evaders, pattern slots), how they move, what robots
 //! sense of them (Sense `entities`), when it is complete, its metrics for `summary.json`, its
 //! layer of `run.svg` and its events in `recording.bin`. Adding one is adding its file and its
-//! line in [`MISSIONS`].
+//! name in `missions!` below (which declares its module and lists its `ENTRY` in
+//! [`MISSIONS`]); a mission with a scenario section of its own also gives the section's type
+//! a field in `swarm::scenario::Scenario` (its file in `swarm/src/sections/`).
 
+/// The evaders' escape strategy of the hunting thesis (eq. 2.17), for the hunt mission to come.
 pub mod hunt_escape;
-pub mod roam;
-pub mod search;
 
 use serde::Serialize;
 use swarm::frames::Sense;
@@ -129,8 +130,17 @@ pub struct MissionEntry {
     pub new: fn(&Scenario) -> Result<Box<dyn Mission>, MissionError>,
 }
 
-/// Every mission. The first is the default (roam: no entities, never complete).
-pub const MISSIONS: &[MissionEntry] = &[roam::ENTRY, search::ENTRY];
+/// The registry: one name per mission module (each has an `ENTRY`). The first is the default
+/// (roam: no entities, never complete).
+macro_rules! missions {
+    ($($m:ident),* $(,)?) => {
+        $(pub mod $m;)*
+        /// Every mission, in registry order.
+        pub const MISSIONS: &[MissionEntry] = &[$($m::ENTRY),*];
+    };
+}
+
+missions!(roam, search);
 
 /// The scenario's mission: `run.mission`, or the one its behaviour implies, or roam.
 pub fn entry_for(sc: &Scenario) -> Option<&'static MissionEntry> {
