@@ -19,6 +19,9 @@ const STOP_GRACE: Duration = Duration::from_secs(10);
 /// exit within a few ms of the shutdown word; the rest, still starting, are killed: the
 /// run's outputs are written and its /dev/shm is removed after them anyway).
 const AGENT_EXIT_GRACE: Duration = Duration::from_millis(500);
+/// How long the end of a run waits for its SIGKILLed processes to be gone before it removes
+/// their files.
+const PROCESS_GONE_WAIT: Duration = Duration::from_secs(5);
 /// How often the orchestrator reaps children and refreshes the progress bar.
 const SUPERVISE_PERIOD: Duration = Duration::from_millis(5);
 /// How long the world may take to create the run's services.
@@ -103,6 +106,20 @@ pub fn run(mut p: ProcessRun) -> Result<ProcessOutcome, String> {
     for &pid in std::iter::once(&entry.world_pid).chain(entry.agent_pids.iter()) {
         if pid != 0 && registry::pid_alive(pid) {
             kill(pid);
+        }
+    }
+    // Wait until every process of the run is gone (a SIGKILLed agent can still be finishing a
+    // system call that makes a link's files), then remove what they left.
+    let deadline = Instant::now() + PROCESS_GONE_WAIT;
+    for &pid in std::iter::once(&entry.world_pid).chain(entry.agent_pids.iter()) {
+        while pid != 0 && registry::pid_alive(pid) && Instant::now() < deadline {
+            let mut status = 0;
+            // SAFETY: waitpid on a child of ours (or a pid already reaped: ECHILD).
+            let r = unsafe { libc::waitpid(pid as i32, &mut status, libc::WNOHANG) };
+            if r != 0 {
+                break;
+            }
+            std::thread::sleep(Duration::from_millis(1));
         }
     }
     while reap().is_some() {}
