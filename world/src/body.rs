@@ -40,17 +40,21 @@ fn box_distance(p: [f64; 2], b: &[f64; 4]) -> f64 {
     (dx * dx + dy * dy).sqrt()
 }
 
+/// The scenario's obstacles with their bounding boxes.
+pub fn boxed_obstacles(sc: &Scenario) -> Vec<(Vec<[f64; 2]>, [f64; 4])> {
+    sc.arena
+        .obstacles
+        .iter()
+        .map(|o| (o.points.clone(), bounding_box(&o.points)))
+        .collect()
+}
+
 impl Statics {
     pub fn new(sc: &Scenario) -> Statics {
         Statics {
             width: sc.arena.width,
             height: sc.arena.height,
-            obstacles: sc
-                .arena
-                .obstacles
-                .iter()
-                .map(|o| (o.points.clone(), bounding_box(&o.points)))
-                .collect(),
+            obstacles: boxed_obstacles(sc),
         }
     }
 

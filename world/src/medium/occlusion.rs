@@ -1,7 +1,7 @@
 //! Line-of-sight occlusion: an obstacle between sender and receiver blocks the message (as
 //! ARGoS's range-and-bearing medium checks it).
 
-use crate::body::bounding_box;
+use crate::body::boxed_obstacles;
 use swarm::geometry::{polygon_hit, Vec2};
 use swarm::scenario::Scenario;
 
@@ -13,12 +13,7 @@ pub struct Occluders {
 impl Occluders {
     pub fn new(sc: &Scenario) -> Occluders {
         Occluders {
-            obstacles: sc
-                .arena
-                .obstacles
-                .iter()
-                .map(|o| (o.points.clone(), bounding_box(&o.points)))
-                .collect(),
+            obstacles: boxed_obstacles(sc),
         }
     }
 

@@ -147,14 +147,7 @@ pub fn flee_step(
     }
 }
 
-fn wrap(a: f64) -> f64 {
-    let r = a.rem_euclid(TAU);
-    if r > PI {
-        r - TAU
-    } else {
-        r
-    }
-}
+use crate::kinematics::wrap;
 
 #[cfg(test)]
 mod tests {
