@@ -18,7 +18,7 @@
 use super::super::model::{Robot, TaskBook, TaskId};
 use super::super::params::CbcaParams;
 use super::super::score::path_score;
-use super::{append_contribution, coverage_gain, reduce, Allocation};
+use super::{append_contribution, coverage_gain, recruit, Allocation};
 
 pub fn allocate(robots: &[Robot], book: &TaskBook, params: &CbcaParams) -> Allocation {
     let mut alloc = Allocation::empty(robots.len());
@@ -47,26 +47,14 @@ pub fn allocate(robots: &[Robot], book: &TaskBook, params: &CbcaParams) -> Alloc
         }
         alloc.messages += bids.len() as u64;
         bids.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
-        let mut need = task.required;
-        let mut members = Vec::new();
-        for (_, i) in bids {
-            if members.len() == task.robots_needed {
-                break;
-            }
-            let c = append_contribution(&robots[i], &alloc.paths[i], j, book, params)
-                .expect("screened above");
-            if coverage_gain(&need, &c, &task.required) <= 0.0 {
-                continue;
-            }
-            reduce(&mut need, &c);
-            members.push(i);
-        }
-        if members.len() == task.robots_needed {
-            for &i in &members {
-                alloc.paths[i].push(j);
-            }
-            alloc.messages += members.len() as u64;
-        }
+        recruit(
+            &mut alloc,
+            robots,
+            book,
+            params,
+            j,
+            bids.into_iter().map(|(_, i)| i),
+        );
     }
     alloc
 }

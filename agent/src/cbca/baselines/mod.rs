@@ -76,6 +76,43 @@ pub fn reduce(need: &mut Resources, contribution: &Resources) {
     }
 }
 
+/// Recruits robots for task `j` in the `ranked` order (best first): a robot joins when its
+/// contribution still covers some of the task's remaining need, until L_j have joined; if L_j
+/// do, they take the task (each appends it to its path, one award message each). Returns
+/// whether the task was taken. The contract net and Sujit et al. differ only in the ranking.
+pub fn recruit(
+    alloc: &mut Allocation,
+    robots: &[Robot],
+    book: &TaskBook,
+    params: &CbcaParams,
+    j: TaskId,
+    ranked: impl IntoIterator<Item = usize>,
+) -> bool {
+    let task = &book[&j];
+    let mut need = task.required;
+    let mut members = Vec::new();
+    for i in ranked {
+        if members.len() == task.robots_needed {
+            break;
+        }
+        let c = append_contribution(&robots[i], &alloc.paths[i], j, book, params)
+            .expect("ranked robots were screened for a contribution");
+        if coverage_gain(&need, &c, &task.required) <= 0.0 {
+            continue;
+        }
+        reduce(&mut need, &c);
+        members.push(i);
+    }
+    if members.len() < task.robots_needed {
+        return false;
+    }
+    for &i in &members {
+        alloc.paths[i].push(j);
+    }
+    alloc.messages += members.len() as u64;
+    true
+}
+
 /// An allocation: each robot's path, and the messages the method would exchange.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Allocation {

@@ -23,7 +23,7 @@ use swarm::geometry::Vec2;
 use super::super::grouping::temporary_groups;
 use super::super::model::{Robot, TaskBook};
 use super::super::params::CbcaParams;
-use super::{append_contribution, coverage_gain, eta, reduce, Allocation};
+use super::{append_contribution, eta, recruit, Allocation};
 
 pub fn allocate(robots: &[Robot], book: &TaskBook, params: &CbcaParams) -> Allocation {
     let mut alloc = Allocation::empty(robots.len());
@@ -50,26 +50,14 @@ pub fn allocate(robots: &[Robot], book: &TaskBook, params: &CbcaParams) -> Alloc
             .map(|&i| (eta(&robots[i], &alloc.paths[i], j, book), i))
             .collect();
         candidates.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-        let mut need = task.required;
-        let mut members = Vec::new();
-        for (_, i) in candidates {
-            if members.len() == task.robots_needed {
-                break;
-            }
-            let c = append_contribution(&robots[i], &alloc.paths[i], j, book, params)
-                .expect("filtered above");
-            if coverage_gain(&need, &c, &task.required) <= 0.0 {
-                continue;
-            }
-            reduce(&mut need, &c);
-            members.push(i);
-        }
-        if members.len() == task.robots_needed {
-            for &i in &members {
-                alloc.paths[i].push(j);
-            }
-            alloc.messages += members.len() as u64;
-        }
+        recruit(
+            &mut alloc,
+            robots,
+            book,
+            params,
+            j,
+            candidates.into_iter().map(|(_, i)| i),
+        );
     }
     alloc
 }
