@@ -57,16 +57,23 @@ pub fn pid_alive(pid: i32) -> bool {
 /// Starts `orchestrator up --quiet --out OUT ARGS` in the background; stopped with Ctrl-C if
 /// the test fails before it ends.
 pub fn spawn_up(args: &[&str], out: &Path) -> Child {
-    let c = Command::new(orchestrator())
-        .arg("up")
+    spawn_up_as(args, out, None)
+}
+
+/// [`spawn_up`] with the run id fixed (`SWARM_RUN_ID`).
+pub fn spawn_up_as(args: &[&str], out: &Path, run_id: Option<&str>) -> Child {
+    let mut cmd = Command::new(orchestrator());
+    cmd.arg("up")
         .arg("--quiet")
         .arg("--out")
         .arg(out)
         .args(args)
         .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("spawn orchestrator");
+        .stderr(Stdio::piped());
+    if let Some(id) = run_id {
+        cmd.env("SWARM_RUN_ID", id);
+    }
+    let c = cmd.spawn().expect("spawn orchestrator");
     SPAWNED
         .lock()
         .unwrap_or_else(|e| e.into_inner())
