@@ -5,6 +5,7 @@ use std::fmt;
 use std::path::Path;
 
 pub use crate::sections::roam::{RoamParams, ROAM_BEACON_OVERHEAD};
+pub use crate::sections::formation::FormationSection;
 pub use crate::sections::search::{SearchParams, SEARCH_MODES};
 
 /// The default scenario, embedded so that `orchestrator up` needs no file.
@@ -24,6 +25,10 @@ pub struct Scenario {
     pub roam: RoamParams,
     pub faults: FaultParams,
     pub search: SearchParams,
+    /// The formation paper's section (`[formation]`, docs/formation.md); only formation
+    /// scenarios have one, so other scenarios' resolved files (and recordings) are unchanged.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub formation: Option<FormationSection>,
 }
 
 #[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
@@ -52,6 +57,47 @@ pub struct Arena {
     pub walls_sensed: bool,
     #[serde(default)]
     pub obstacles: Vec<Obstacle>,
+    /// Disc obstacles (the formation paper's round obstacles, docs/formation.md 1.1): exact
+    /// circles for the bodies' clearances, sampled into boundary points for sensing. Left out
+    /// of a resolved scenario when empty, so polygon-only maps read as they always did.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub discs: Vec<DiscObstacle>,
+}
+
+/// A round obstacle: a disc of `radius` around `centre`.
+#[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct DiscObstacle {
+    pub name: String,
+    pub centre: [f64; 2],
+    pub radius: f64,
+}
+
+impl DiscObstacle {
+    /// Points on the circle at most `spacing` apart (at least 8): what robots sense of it.
+    pub fn boundary(&self, spacing: f64) -> Vec<[f64; 2]> {
+        self.outline(self.boundary_count(spacing) as usize)
+    }
+    /// How many points [`DiscObstacle::boundary`] gives (saturating).
+    pub fn boundary_count(&self, spacing: f64) -> u64 {
+        ((std::f64::consts::TAU * self.radius / spacing).ceil() as u64).max(8)
+    }
+    /// Signed distance from `p` to the circle: positive outside, negative inside.
+    pub fn distance(&self, p: [f64; 2]) -> f64 {
+        ((p[0] - self.centre[0]).powi(2) + (p[1] - self.centre[1]).powi(2)).sqrt() - self.radius
+    }
+    /// `n` points on the circle, counter-clockwise from angle 0 (a polygon inscribed in it).
+    pub fn outline(&self, n: usize) -> Vec<[f64; 2]> {
+        (0..n.max(3))
+            .map(|k| {
+                let a = std::f64::consts::TAU * k as f64 / n.max(3) as f64;
+                [
+                    self.centre[0] + self.radius * a.cos(),
+                    self.centre[1] + self.radius * a.sin(),
+                ]
+            })
+            .collect()
+    }
 }
 
 #[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
@@ -415,6 +461,21 @@ impl Scenario {
                     ),
                 ));
             }
+        }
+        for (i, d) in self.arena.discs.iter().enumerate() {
+            let (w, h) = (self.arena.width, self.arena.height);
+            let [x, y] = d.centre;
+            if !(x.is_finite() && y.is_finite() && (0.0..=w).contains(&x) && (0.0..=h).contains(&y))
+            {
+                return Err(c.err(
+                    &format!("arena.discs[{i}].centre"),
+                    format!(
+                        "= {:?} (disc {:?}) must be finite and inside the arena [0, {w}] x [0, {h}]",
+                        d.centre, d.name
+                    ),
+                ));
+            }
+            c.range_f(&format!("arena.discs[{i}].radius"), d.radius, 0.0, 1e6, true)?;
         }
         c.range_f("robot.v_max", self.robot.v_max, 0.0, 1e6, true)?;
         c.range_f(

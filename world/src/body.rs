@@ -11,6 +11,8 @@ pub struct Statics {
     width: f64,
     height: f64,
     obstacles: Vec<(Vec<[f64; 2]>, [f64; 4])>,
+    /// Disc obstacles (`arena.discs`): exact circles.
+    discs: Vec<swarm::scenario::DiscObstacle>,
 }
 
 /// (min x, min y, max x, max y) of a polygon.
@@ -55,6 +57,7 @@ impl Statics {
             width: sc.arena.width,
             height: sc.arena.height,
             obstacles: boxed_obstacles(sc),
+            discs: sc.arena.discs.clone(),
         }
     }
 
@@ -66,6 +69,9 @@ impl Statics {
             .min(self.width - p[0])
             .min(self.height - p[1]);
         let mut best = walls;
+        for d in &self.discs {
+            best = best.min(d.distance(p));
+        }
         for (poly, b) in &self.obstacles {
             if box_distance(p, b) >= best {
                 continue;

@@ -49,6 +49,9 @@ pub fn boundary_points(sc: &Scenario) -> u64 {
         .iter()
         .map(|o| boundary_point_count(&o.points, spacing))
         .fold(0, u64::saturating_add);
+    for d in &sc.arena.discs {
+        total = total.saturating_add(d.boundary_count(spacing));
+    }
     if sc.arena.walls_sensed {
         let (w, h) = (sc.arena.width, sc.arena.height);
         total = total.saturating_add(boundary_point_count(

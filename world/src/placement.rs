@@ -29,10 +29,16 @@ pub fn place_robots(sc: &Scenario, rng: &mut ChaCha8Rng) -> Result<Vec<[f64; 2]>
         for _ in 0..TRIES {
             let p = Vec2::new(rng.gen_range(x0..x1), rng.gen_range(y0..y1));
             let blocked = match &statics {
-                None => sc.arena.obstacles.iter().any(|o| {
-                    point_in_polygon(p, &o.points)
-                        || polygon_distance(p, &o.points) < START_CLEARANCE
-                }),
+                None => {
+                    sc.arena.obstacles.iter().any(|o| {
+                        point_in_polygon(p, &o.points)
+                            || polygon_distance(p, &o.points) < START_CLEARANCE
+                    }) || sc
+                        .arena
+                        .discs
+                        .iter()
+                        .any(|d| d.distance([p.x, p.y]) < START_CLEARANCE)
+                }
                 Some(st) => {
                     st.clearance([p.x, p.y]) < r.max(START_CLEARANCE)
                         || out

@@ -142,6 +142,9 @@ pub fn static_points(sc: &Scenario) -> Vec<[f64; 2]> {
     for o in &sc.arena.obstacles {
         pts.extend(sample_boundary(&o.points, sc.arena.boundary_spacing));
     }
+    for d in &sc.arena.discs {
+        pts.extend(d.boundary(sc.arena.boundary_spacing));
+    }
     if sc.arena.walls_sensed {
         let (w, h) = (sc.arena.width, sc.arena.height);
         pts.extend(sample_boundary(

@@ -178,6 +178,12 @@ pub fn write_svg(world: &World, path: &Path) -> Result<(), String> {
             .draw_series(std::iter::once(Polygon::new(pts, BLACK.mix(0.85).filled())))
             .map_err(e)?;
     }
+    for d in &sc.arena.discs {
+        let pts: Vec<(f64, f64)> = d.outline(96).iter().map(|p| (p[0], p[1])).collect();
+        chart
+            .draw_series(std::iter::once(Polygon::new(pts, BLACK.mix(0.85).filled())))
+            .map_err(e)?;
+    }
     let n = world.n;
     let states = world.mission.display_states();
     let by_state = !states.is_empty();

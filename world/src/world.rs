@@ -124,6 +124,22 @@ const MOVE_BOX_MARGIN: f64 = 1e-3;
 /// step within ~1e-9 / len of its line as touched, 1e-6 units at this length.
 const MIN_CULLED_MOVE: f64 = 1e-3;
 
+/// Smallest t in [0, 1] at which the segment p -> p + v enters the disc `d` (a point robot's
+/// step), None if it does not.
+fn disc_hit(p: Vec2, v: Vec2, d: &swarm::scenario::DiscObstacle) -> Option<f64> {
+    let f = p - Vec2::new(d.centre[0], d.centre[1]);
+    let (a, b, c) = (v.dot(&v), 2.0 * f.dot(&v), f.dot(&f) - d.radius * d.radius);
+    if c <= 0.0 {
+        return Some(0.0);
+    }
+    let disc = b * b - 4.0 * a * c;
+    if a == 0.0 || disc < 0.0 {
+        return None;
+    }
+    let t = (-b - disc.sqrt()) / (2.0 * a);
+    (0.0..=1.0).contains(&t).then_some(t)
+}
+
 impl World {
     pub fn new(sc: &Scenario) -> Result<World, WorldError> {
         let mut rng = swarm::streams::rng(
@@ -468,6 +484,11 @@ impl World {
                 continue;
             }
             if let Some(x) = polygon_hit(p, v, &o.points) {
+                t = Some(t.map_or(x, |y: f64| y.min(x)));
+            }
+        }
+        for d in &self.sc.arena.discs {
+            if let Some(x) = disc_hit(p, v, d) {
                 t = Some(t.map_or(x, |y: f64| y.min(x)));
             }
         }

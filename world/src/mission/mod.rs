@@ -140,7 +140,7 @@ macro_rules! missions {
     };
 }
 
-missions!(roam, search);
+missions!(roam, search, formation);
 
 /// The scenario's mission: `run.mission`, or the one its behaviour implies, or roam.
 pub fn entry_for(sc: &Scenario) -> Option<&'static MissionEntry> {
