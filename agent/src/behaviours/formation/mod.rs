@@ -1,0 +1,631 @@
+//! The formation behaviour of docs/formation.md (Zhang et al. 2024): one robot's share of the
+//! paper's pipeline, from its Sense frame and its radio inbox only.
+//!
+//! Per tick k:
+//! 1. `listen`: statuses (position, velocity, slot) of the robots heard; a plan of a newer
+//!    epoch (or of the same epoch from a lower coordinator) replaces the robot's; an
+//!    assignment of its plan's epoch newer than the last replaces its slot.
+//! 2. `coordinate` (spec 5 option (a)): the robot is the coordinator when its id is the lowest
+//!    of those it heard within `formation.lost_after_ticks` ticks. The coordinator gathers
+//!    the start positions (until it heard every live robot, Sense `alive_robots`, or
+//!    `gather_ticks` passed), solves eq. (14) by branch-and-bound and broadcasts the plan
+//!    (alpha, d, theta, the template points, members, sigma, lost robots) with an epoch, every
+//!    tick. It re-plans with epoch + 1 when a member falls silent for `lost_after_ticks` (the
+//!    pattern for the robots left: the lost robot's template point is dropped, its last
+//!    position becomes an obstacle), when it hears a robot that is not a member, or when it
+//!    takes over from a lost coordinator. Per step (`formation.reassignment = "per-step"`)
+//!    it solves eq. (15) by the Hungarian method on the positions heard, extrapolated by
+//!    their velocities over their age, and broadcasts the assignment with the plan's epoch
+//!    and the tick.
+//!    With `reassignment = "swaps"` there is no coordinator: the pattern is the fixed
+//!    `formation.transform` every robot computes alike, robot i starts on slot i, and
+//!    neighbours swap slots pairwise with a handshake (agent/src/formation/swaps.rs).
+//! 3. `motion`: eq. (16) towards its slot, then ORCA (eqs. 17-26) against the robots its own
+//!    sensors list (Sense `nearby`, within robot.neighbour_sensing_radius: positions and
+//!    velocities), the arena's discs, the lost robots of the plan, and robots that vanished
+//!    from `nearby` while well inside the sensing radius (dead: static discs until seen again).
+//! 4. `broadcast` its status; report its slot to the mission (Action `report`).
+//!
+//! Units: robot.v_max is per tick, so V_p = v_max / tau and the command is v tau.
+
+pub mod messages;
+pub mod params;
+#[cfg(test)]
+mod tests;
+
+pub use messages::{Assign, Msg, Plan, Status};
+pub use params::{parse_params, Params};
+
+use crate::formation::hungarian::{assign_targets, Hungarian};
+use crate::formation::optimise::{optimise, optimise_without_rotation};
+use crate::formation::orca::{orca_velocity, Disc};
+use crate::formation::preferred::preferred_velocity;
+use crate::formation::swaps::{Message as SwapMessage, NeighbourView, SwapAgent};
+use crate::formation::{Template, Transform};
+use std::collections::BTreeMap;
+use swarm::geometry::Vec2;
+use swarm::scenario::{Check, ConfigError, Scenario};
+use swarm::sections::formation::{
+    FormationSection, PatternChoice, Reassignment, REPORT_NO_SLOT, REPORT_PLAN,
+    STATE_COORDINATOR, STATE_IN_PLACE,
+};
+use swarm::{Behaviour, Command, Outbox, Received, Sense};
+
+/// The registry's name of this behaviour.
+pub const NAME: &str = "formation";
+
+/// Checks the formation behaviour's kernels against the scenario.
+pub fn validate(sc: &Scenario, c: &Check) -> Result<(), ConfigError> {
+    crate::behaviours::require_holonomic(sc, c, NAME)?;
+    params::validate(sc, c)
+}
+
+/// Writes every kernel parameter into `formation.kernels`, derived ones and defaults included.
+pub fn resolve(sc: &mut Scenario) -> Result<(), ConfigError> {
+    let bad = |message: String| ConfigError {
+        source: "formation behaviour".into(),
+        key: "formation.kernels".into(),
+        message,
+    };
+    let p = parse_params(sc).map_err(bad)?;
+    let mut f = params::section(sc);
+    f.kernels = toml::Table::try_from(&p).map_err(|e| bad(e.to_string()))?;
+    sc.formation = Some(f);
+    Ok(())
+}
+
+/// Calls `v` with the formation robot's constructor.
+pub fn dispatch<V: crate::BehaviourVisitor>(sc: &Scenario, v: V) -> V::Out {
+    v.visit(&|i| Formation::new(sc, i))
+}
+
+/// What a robot last heard of another.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Heard {
+    pos: Vec2,
+    vel: Vec2,
+    slot: i32,
+    epoch: u32,
+    /// Tick the status was sent at.
+    tick: u64,
+}
+
+/// One robot of the formation.
+pub struct Formation {
+    robot: u32,
+    p: Params,
+    f: FormationSection,
+    template: Vec<[f64; 2]>,
+    discs: Vec<Disc>,
+    heard: BTreeMap<u32, Heard>,
+    plan: Option<Plan>,
+    /// The slots of the plan (eq. 5 on its template points).
+    targets: Vec<Vec2>,
+    slot: Option<usize>,
+    assign_seq: u64,
+    /// Robots seen in `nearby` last tick, and those that vanished inside the sensing radius.
+    last_nearby: BTreeMap<u32, Vec2>,
+    ghosts: BTreeMap<u32, Vec2>,
+    swap: Option<SwapAgent>,
+    hungarian: Hungarian,
+    first_tick: Option<u64>,
+    sensing_radius: f64,
+    v_max_tick: f64,
+}
+
+impl Formation {
+    pub fn new(sc: &Scenario, robot: u32) -> Formation {
+        let p = parse_params(sc).unwrap_or_else(|e| panic!("{e} (the scenario was not validated)"));
+        let f = params::section(sc);
+        let template = f
+            .template_points(sc.run.robots as usize)
+            .unwrap_or_else(|e| panic!("{e} (the scenario was not validated)"));
+        let discs = sc
+            .arena
+            .discs
+            .iter()
+            .map(|d| Disc {
+                position: Vec2::new(d.centre[0], d.centre[1]),
+                velocity: Vec2::zeros(),
+                radius: d.radius,
+            })
+            .collect();
+        Formation {
+            robot,
+            p,
+            f,
+            template,
+            discs,
+            heard: BTreeMap::new(),
+            plan: None,
+            targets: Vec::new(),
+            slot: None,
+            assign_seq: 0,
+            last_nearby: BTreeMap::new(),
+            ghosts: BTreeMap::new(),
+            swap: None,
+            hungarian: Hungarian::new(),
+            first_tick: None,
+            sensing_radius: sc.robot.neighbour_sensing_radius,
+            v_max_tick: sc.robot.v_max,
+        }
+    }
+
+    pub fn plan(&self) -> Option<&Plan> {
+        self.plan.as_ref()
+    }
+    pub fn slot(&self) -> Option<usize> {
+        self.slot
+    }
+    pub fn targets(&self) -> &[Vec2] {
+        &self.targets
+    }
+
+    fn tau(&self) -> f64 {
+        self.p.kernels.time_step
+    }
+
+    /// The robots heard within the lost window at tick k, by id.
+    fn live_heard(&self, k: u64) -> BTreeMap<u32, Heard> {
+        let window = self.f.lost_after_ticks as u64;
+        self.heard
+            .iter()
+            .filter(|(_, h)| h.tick + window >= k)
+            .map(|(i, h)| (*i, *h))
+            .collect()
+    }
+
+    /// Adopts `plan`: the slots from eq. (5), this robot's slot from sigma.
+    fn install(&mut self, plan: Plan) {
+        let sub = self.sub_template(&plan.points);
+        let t = transform_of(plan.transform);
+        self.targets = t.targets(self.p.kernels.transform_reading, &sub);
+        self.slot = plan
+            .members
+            .iter()
+            .position(|m| *m == self.robot)
+            .and_then(|i| plan.slots.get(i))
+            .map(|s| *s as usize)
+            .filter(|s| *s < self.targets.len());
+        self.assign_seq = 0;
+        self.plan = Some(plan);
+    }
+
+    fn sub_template(&self, points: &[u16]) -> Template {
+        Template {
+            name: self.f.template_name.clone(),
+            points: points
+                .iter()
+                .map(|j| self.template[*j as usize])
+                .collect(),
+        }
+    }
+
+    /// Whether `plan` should replace the robot's.
+    fn better(&self, plan: &Plan) -> bool {
+        match &self.plan {
+            None => true,
+            Some(mine) => {
+                plan.epoch > mine.epoch
+                    || (plan.epoch == mine.epoch && plan.coordinator < mine.coordinator)
+            }
+        }
+    }
+
+    /// Step 1.
+    fn listen(&mut self, inbox: &[&Received<Msg>], swaps: &mut Vec<SwapMessage>) {
+        let mut plans = Vec::new();
+        let mut assigns = Vec::new();
+        for r in inbox {
+            match &r.msg {
+                Msg::Status(s) => {
+                    self.heard.insert(
+                        r.from,
+                        Heard {
+                            pos: Vec2::new(s.pos[0], s.pos[1]),
+                            vel: Vec2::new(s.vel[0], s.vel[1]),
+                            slot: s.slot,
+                            epoch: s.epoch,
+                            tick: r.tick,
+                        },
+                    );
+                    self.ghosts.remove(&r.from);
+                }
+                Msg::Plan(p) => plans.push(p.clone()),
+                Msg::Assign(a) => assigns.push((r.from, a.clone())),
+                Msg::Propose {
+                    to,
+                    seq,
+                    from_target,
+                    to_target,
+                    from_position,
+                } if *to == self.robot => swaps.push(SwapMessage::Propose {
+                    from: r.from as usize,
+                    to: *to as usize,
+                    seq: *seq,
+                    from_target: *from_target as usize,
+                    to_target: *to_target as usize,
+                    from_position: *from_position,
+                }),
+                Msg::Reply { to, seq, accepted } if *to == self.robot => {
+                    swaps.push(SwapMessage::Reply {
+                        from: r.from as usize,
+                        to: *to as usize,
+                        seq: *seq,
+                        accepted: *accepted,
+                    })
+                }
+                _ => {}
+            }
+        }
+        for p in plans {
+            if self.better(&p) {
+                self.install(p);
+            }
+        }
+        for (from, a) in assigns {
+            let Some(plan) = &self.plan else { continue };
+            if a.epoch != plan.epoch || from != plan.coordinator || a.seq <= self.assign_seq {
+                continue;
+            }
+            if let Some(i) = plan.members.iter().position(|m| *m == self.robot) {
+                if let Some(s) = a.slots.get(i) {
+                    if (*s as usize) < self.targets.len() {
+                        self.slot = Some(*s as usize);
+                        self.assign_seq = a.seq;
+                    }
+                }
+            }
+        }
+    }
+
+    /// Robots that vanished from `nearby` well inside the sensing radius are dead (static).
+    fn track_ghosts(&mut self, sense: &Sense, me: Vec2) {
+        let now: BTreeMap<u32, Vec2> = sense.nearby[..sense.n_nearby as usize]
+            .iter()
+            .map(|n| (n.robot, Vec2::new(n.pos[0], n.pos[1])))
+            .collect();
+        // A live robot leaves the list only across its edge: at most one step of each apart
+        // from it, plus a margin.
+        let inside = self.sensing_radius - 2.0 * self.v_max_tick - 2.0 * self.p.kernels.robot_radius;
+        for (id, pos) in &self.last_nearby {
+            if !now.contains_key(id) && (pos - me).norm() < inside {
+                self.ghosts.insert(*id, *pos);
+            }
+        }
+        for id in now.keys() {
+            self.ghosts.remove(id);
+        }
+        self.last_nearby = now;
+    }
+
+    /// The position of a heard robot extrapolated to tick k.
+    fn estimate(&self, h: &Heard, k: u64) -> Vec2 {
+        h.pos + h.vel * (self.tau() * k.saturating_sub(h.tick) as f64)
+    }
+
+    /// Step 2 for the coordinator: returns the plan report when it solved this tick.
+    fn coordinate(&mut self, k: u64, me: Vec2, alive: u32, out: &mut Outbox<Msg>) -> Option<[f64; 4]> {
+        let live = self.live_heard(k);
+        if live.keys().next().is_some_and(|low| *low < self.robot) {
+            return None;
+        }
+        let first = *self.first_tick.get_or_insert(k);
+        let mut report = None;
+        let replan = match &self.plan {
+            None => {
+                live.len() as u32 + 1 >= alive || k >= first + self.p.gather_ticks as u64
+            }
+            Some(plan) => {
+                plan.coordinator != self.robot
+                    || plan
+                        .members
+                        .iter()
+                        .any(|m| *m != self.robot && !live.contains_key(m))
+                    || live.keys().any(|id| !plan.members.contains(id))
+            }
+        };
+        if replan {
+            let started = std::time::Instant::now();
+            let (plan, gap, nodes) = self.solve(k, me, &live);
+            let seconds = started.elapsed().as_secs_f64();
+            eprintln!(
+                "formation: robot {} plans epoch {} at tick {k} for {} robots: gap {gap:.4}, {nodes} nodes, {seconds:.3} s",
+                self.robot,
+                plan.epoch,
+                plan.members.len()
+            );
+            self.install(plan);
+            report = Some([gap, seconds, REPORT_PLAN, nodes as f64]);
+        }
+        let Some(plan) = self.plan.clone() else {
+            return report;
+        };
+        if self.f.reassignment == Reassignment::PerStep && !replan {
+            // Eq. (15) on the positions heard, extrapolated over their age.
+            let positions: Vec<Vec2> = plan
+                .members
+                .iter()
+                .map(|m| {
+                    if *m == self.robot {
+                        me
+                    } else {
+                        self.estimate(&live[m], k)
+                    }
+                })
+                .collect();
+            let mut sigma = Vec::new();
+            if assign_targets(&positions, &self.targets, &mut self.hungarian, &mut sigma).is_ok() {
+                let slots: Vec<u16> = sigma.iter().map(|s| *s as u16).collect();
+                if let Some(i) = plan.members.iter().position(|m| *m == self.robot) {
+                    self.slot = Some(sigma[i]);
+                }
+                self.assign_seq = k;
+                out.broadcast(Msg::Assign(Assign {
+                    epoch: plan.epoch,
+                    seq: k,
+                    slots,
+                }));
+            }
+        }
+        out.broadcast(Msg::Plan(plan));
+        report
+    }
+
+    /// Solves the pattern for this robot and the live robots heard: (plan, gap, nodes).
+    fn solve(&self, k: u64, me: Vec2, live: &BTreeMap<u32, Heard>) -> (Plan, f64, usize) {
+        let mut members: Vec<u32> = live.keys().copied().collect();
+        members.push(self.robot);
+        members.sort_unstable();
+        let positions: Vec<Vec2> = members
+            .iter()
+            .map(|m| {
+                if *m == self.robot {
+                    me
+                } else {
+                    self.estimate(&live[m], k)
+                }
+            })
+            .collect();
+        let mut dead = Vec::new();
+        let mut points: Vec<u16> = Vec::new();
+        let mut epoch = 1;
+        if let Some(old) = &self.plan {
+            epoch = old.epoch + 1;
+            dead = old.dead.clone();
+            // The slots the lost members held (their last status of this epoch, else sigma)
+            // leave the pattern; every other template point stays.
+            let mut lost_slots = Vec::new();
+            for (i, m) in old.members.iter().enumerate() {
+                if members.contains(m) {
+                    continue;
+                }
+                let h = self.heard.get(m);
+                if let Some(h) = h {
+                    // Its last status was sent before its last move.
+                    let at = h.pos + h.vel * self.tau();
+                    dead.push([at.x, at.y]);
+                }
+                let held = h
+                    .filter(|h| h.epoch == old.epoch && h.slot >= 0)
+                    .map(|h| h.slot as usize)
+                    .or_else(|| old.slots.get(i).map(|s| *s as usize));
+                lost_slots.extend(held);
+            }
+            points = old
+                .points
+                .iter()
+                .enumerate()
+                .filter(|(j, _)| !lost_slots.contains(j))
+                .map(|(_, p)| *p)
+                .collect();
+        }
+        for j in 0..self.template.len() as u16 {
+            if points.len() >= members.len() {
+                break;
+            }
+            if !points.contains(&j) {
+                points.push(j);
+            }
+        }
+        points.truncate(members.len());
+        points.sort_unstable();
+        let sub = self.sub_template(&points);
+        let mut params = self.p.kernels.clone();
+        params.obstacle_centres.extend(dead.iter().copied());
+        let solution = match self.f.pattern {
+            PatternChoice::Optimise => optimise(&positions, &sub, &params).ok(),
+            PatternChoice::NoRotation => optimise_without_rotation(&positions, &sub, &params).ok(),
+            PatternChoice::Fixed => None,
+        };
+        let (transform, sigma, gap, nodes) = match solution {
+            Some(s) => (
+                [s.transform.alpha, s.transform.d[0], s.transform.d[1], s.transform.theta],
+                s.assignment,
+                s.gap,
+                s.nodes,
+            ),
+            None => {
+                // Fixed, or no feasible placement: formation.transform, assigned by Hungarian.
+                let t = transform_of(self.f.transform);
+                let targets = t.targets(params.transform_reading, &sub);
+                let mut sigma = Vec::new();
+                let mut h = Hungarian::new();
+                if assign_targets(&positions, &targets, &mut h, &mut sigma).is_err() {
+                    sigma = (0..members.len()).collect();
+                }
+                (self.f.transform, sigma, 0.0, 0)
+            }
+        };
+        (
+            Plan {
+                epoch,
+                coordinator: self.robot,
+                transform,
+                points,
+                members,
+                slots: sigma.iter().map(|s| *s as u16).collect(),
+                dead,
+            },
+            gap,
+            nodes,
+        )
+    }
+
+    /// Step 2 for decentralised swaps: the fixed pattern, then one step of the handshake.
+    fn swap_step(&mut self, k: u64, me: Vec2, inbox: &[SwapMessage], out: &mut Outbox<Msg>) {
+        if self.plan.is_none() {
+            let n = self.template.len();
+            self.install(Plan {
+                epoch: 0,
+                coordinator: u32::MAX,
+                transform: self.f.transform,
+                points: (0..n as u16).collect(),
+                members: (0..n as u32).collect(),
+                slots: (0..n as u16).collect(),
+                dead: Vec::new(),
+            });
+            self.swap = Some(SwapAgent::new(self.robot as usize, self.robot as usize));
+        }
+        let neighbours: Vec<NeighbourView> = self
+            .live_heard(k)
+            .iter()
+            .filter(|(_, h)| h.slot >= 0)
+            .map(|(id, h)| NeighbourView {
+                id: *id as usize,
+                position: self.estimate(h, k),
+                target: h.slot as usize,
+            })
+            .collect();
+        let Some(agent) = &mut self.swap else { return };
+        let msgs = agent.step(me, &self.targets, &neighbours, inbox, self.p.swap_min_gain);
+        self.slot = Some(agent.target);
+        for m in msgs {
+            let _ = match m {
+                SwapMessage::Propose {
+                    to,
+                    seq,
+                    from_target,
+                    to_target,
+                    from_position,
+                    ..
+                } => out.send(
+                    to as u32,
+                    Msg::Propose {
+                        to: to as u32,
+                        seq,
+                        from_target: from_target as u32,
+                        to_target: to_target as u32,
+                        from_position,
+                    },
+                ),
+                SwapMessage::Reply {
+                    to, seq, accepted, ..
+                } => out.send(
+                    to as u32,
+                    Msg::Reply {
+                        to: to as u32,
+                        seq,
+                        accepted,
+                    },
+                ),
+            };
+        }
+    }
+
+    /// Step 3: eq. (16) then ORCA; the velocity in units per second.
+    fn motion(&self, sense: &Sense, me: Vec2) -> Vec2 {
+        let k = &self.p.kernels;
+        let tau = k.time_step;
+        let preferred = match self.slot {
+            Some(s) => preferred_velocity(me, self.targets[s], k.max_speed, k.k_a),
+            None => Vec2::zeros(),
+        };
+        let r = k.robot_radius;
+        let mine = Disc {
+            position: me,
+            velocity: Vec2::new(sense.vel[0], sense.vel[1]) / tau,
+            radius: r,
+        };
+        let robots: Vec<Disc> = sense.nearby[..sense.n_nearby as usize]
+            .iter()
+            .filter(|n| n.robot != self.robot)
+            .map(|n| Disc {
+                position: Vec2::new(n.pos[0], n.pos[1]),
+                velocity: Vec2::new(n.vel[0], n.vel[1]) / tau,
+                radius: r,
+            })
+            .collect();
+        let mut obstacles = self.discs.clone();
+        let dead = self.plan.iter().flat_map(|p| p.dead.iter()).map(|d| Vec2::new(d[0], d[1]));
+        for pos in dead.chain(self.ghosts.values().copied()) {
+            obstacles.push(Disc {
+                position: pos,
+                velocity: Vec2::zeros(),
+                radius: r,
+            });
+        }
+        orca_velocity(&mine, preferred, &robots, &obstacles, k).velocity
+    }
+}
+
+fn transform_of(t: [f64; 4]) -> Transform {
+    Transform {
+        alpha: t[0],
+        d: [t[1], t[2]],
+        theta: t[3],
+    }
+}
+
+impl Behaviour for Formation {
+    type Msg = Msg;
+
+    fn step_refs(&mut self, sense: &Sense, inbox: &[&Received<Msg>], out: &mut Outbox<Msg>) -> Command {
+        let k = sense.tick;
+        let me = Vec2::new(sense.pos[0], sense.pos[1]);
+        let mut swaps = Vec::new();
+        self.listen(inbox, &mut swaps);
+        self.track_ghosts(sense, me);
+        let mut report = None;
+        let mut coordinator = false;
+        if self.f.reassignment == Reassignment::Swaps {
+            self.swap_step(k, me, &swaps, out);
+        } else {
+            report = self.coordinate(k, me, sense.alive_robots, out);
+            coordinator = self.plan.as_ref().is_some_and(|p| p.coordinator == self.robot);
+        }
+        let v = self.motion(sense, me);
+        let tau = self.tau();
+        let mut cmd = v * tau;
+        // The world refuses commands above v_max: keep rounding from crossing it.
+        if cmd.norm() > self.v_max_tick {
+            cmd *= self.v_max_tick / cmd.norm() * (1.0 - 1e-12);
+        }
+        let epoch = self.plan.as_ref().map_or(0, |p| p.epoch);
+        out.broadcast(Msg::Status(Status {
+            pos: sense.pos,
+            vel: [cmd.x / tau, cmd.y / tau],
+            slot: self.slot.map_or(-1, |s| s as i32),
+            epoch,
+        }));
+        let in_place = self
+            .slot
+            .is_some_and(|s| (self.targets[s] - me).norm() <= self.p.kernels.epsilon);
+        let report = report.unwrap_or(match self.slot {
+            Some(s) => [self.targets[s].x, self.targets[s].y, s as f64, epoch as f64],
+            None => [0.0, 0.0, REPORT_NO_SLOT, 0.0],
+        });
+        let state = if coordinator {
+            STATE_COORDINATOR
+        } else if in_place {
+            STATE_IN_PLACE
+        } else {
+            0
+        };
+        Command {
+            cmd: [cmd.x, cmd.y],
+            events: state,
+            report,
+        }
+    }
+}

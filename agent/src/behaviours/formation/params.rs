@@ -1,0 +1,110 @@
+//! The formation behaviour's parameters: the kernels' [`FormationParams`] (controller, ORCA,
+//! optimiser) and the behaviour's own choices, read from `formation.kernels`; the numbers the
+//! scenario already holds elsewhere (box, radius, obstacles, V_p, epsilon) are derived from it,
+//! so each has one source.
+
+use crate::formation::FormationParams;
+use serde::{Deserialize, Serialize};
+use swarm::scenario::{Check, ConfigError, Scenario};
+use swarm::sections::formation::FormationSection;
+
+/// `formation.kernels`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct Params {
+    /// The kernels' numbers (agent/src/formation/params.rs documents each).
+    #[serde(flatten)]
+    pub kernels: FormationParams,
+    /// The coordinator waits at most this many ticks to hear every live robot's start
+    /// position before it solves with those it heard. [chosen] 20 (5 s at tau = 0.25); with
+    /// no loss it hears everyone at tick 1.
+    pub gather_ticks: u32,
+    /// Decentralised swaps: least gain (squared units) for a swap, against chattering.
+    /// [chosen] 0.5.
+    pub swap_min_gain: f64,
+}
+
+impl Default for Params {
+    fn default() -> Self {
+        Params {
+            kernels: FormationParams::default(),
+            gather_ticks: 20,
+            swap_min_gain: 0.5,
+        }
+    }
+}
+
+/// The scenario's section (the default when it has none).
+pub fn section(sc: &Scenario) -> FormationSection {
+    sc.formation.clone().unwrap_or_default()
+}
+
+/// The parameters with the derived numbers filled in from the scenario.
+pub fn parse_params(sc: &Scenario) -> Result<Params, String> {
+    let f = section(sc);
+    let mut p: Params = toml::Value::Table(f.kernels.clone())
+        .try_into()
+        .map_err(|e: toml::de::Error| e.message().to_string())?;
+    let k = &mut p.kernels;
+    k.box_min = [0.0, 0.0];
+    k.box_max = [sc.arena.width, sc.arena.height];
+    k.robot_radius = sc.robot.radius;
+    k.obstacle_centres = sc.arena.discs.iter().map(|d| d.centre).collect();
+    // The optimiser's C2 takes one radius: the largest disc's (conservative for the others;
+    // ORCA uses each disc's own radius).
+    k.obstacle_radius = sc
+        .arena
+        .discs
+        .iter()
+        .map(|d| d.radius)
+        .fold(sc.robot.radius, f64::max);
+    // robot.v_max is per tick: V_p = v_max / tau.
+    k.max_speed = sc.robot.v_max / k.time_step;
+    k.epsilon = f.epsilon;
+    Ok(p)
+}
+
+/// Checks the behaviour's side of `[formation]`.
+pub fn validate(sc: &Scenario, c: &Check) -> Result<(), ConfigError> {
+    let p = parse_params(sc).map_err(|m| c.err("formation.kernels", m))?;
+    let k = &p.kernels;
+    c.range_f("formation.kernels.time_step", k.time_step, 0.0, 1e6, true)?;
+    c.range_f("formation.kernels.time_horizon", k.time_horizon, 0.0, 1e6, true)?;
+    c.range_f(
+        "formation.kernels.obstacle_time_horizon",
+        k.obstacle_time_horizon,
+        0.0,
+        1e6,
+        true,
+    )?;
+    c.range_f("formation.kernels.k_a", k.k_a, 0.0, 1e6, true)?;
+    c.range_f("formation.kernels.neighbour_dist", k.neighbour_dist, 0.0, 1e9, false)?;
+    c.range_f("formation.kernels.separation_margin", k.separation_margin, 0.0, 1e6, false)?;
+    c.range_f("formation.kernels.obstacle_margin", k.obstacle_margin, 0.0, 1e6, false)?;
+    c.range_u(
+        "formation.kernels.accel_polygon_sides",
+        k.accel_polygon_sides as u64,
+        3,
+        1024,
+    )?;
+    if let Some(a) = k.max_accel {
+        c.range_f("formation.kernels.max_accel", a, 0.0, 1e9, true)?;
+    }
+    c.range_f("formation.kernels.swap_min_gain", p.swap_min_gain, 0.0, 1e9, false)?;
+    let o = &k.optimiser;
+    for (key, r) in [
+        ("formation.kernels.optimiser.alpha_range", o.alpha_range),
+        ("formation.kernels.optimiser.theta_range", o.theta_range),
+    ] {
+        if !(r[0].is_finite() && r[1].is_finite() && r[0] <= r[1]) {
+            return Err(c.err(key, format!("= {r:?} must be finite [lo, hi] with lo <= hi")));
+        }
+    }
+    c.range_u(
+        "formation.kernels.optimiser.max_nodes",
+        o.max_nodes as u64,
+        1,
+        100_000_000,
+    )?;
+    Ok(())
+}

@@ -1,0 +1,121 @@
+use super::*;
+use swarm::frames::Sense;
+
+fn scenario() -> Scenario {
+    Scenario::load(std::path::Path::new(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../configs/formation.toml"
+    )))
+    .unwrap()
+}
+
+fn sense(robot: u32, tick: u64, pos: [f64; 2], alive: u32) -> Box<Sense> {
+    let mut s = Sense::zeroed();
+    s.robot = robot;
+    s.tick = tick;
+    s.pos = pos;
+    s.alive_robots = alive;
+    s
+}
+
+fn status_from(from: u32, tick: u64, pos: [f64; 2]) -> Received<Msg> {
+    Received {
+        from,
+        tick,
+        seq: 0,
+        sender_pos: pos,
+        unicast: false,
+        msg: Msg::Status(Status {
+            pos,
+            vel: [0.0, 0.0],
+            slot: -1,
+            epoch: 0,
+        }),
+    }
+}
+
+#[test]
+fn the_lowest_id_heard_plans_once_it_heard_every_live_robot_and_the_others_follow() {
+    let sc = scenario();
+    let starts: Vec<[f64; 2]> = (0..9).map(|i| [2.0 + 2.5 * i as f64, 2.0]).collect();
+    let mut robots: Vec<Formation> = (0..9).map(|i| Formation::new(&sc, i)).collect();
+    // Tick 0: nobody heard anyone: no plan.
+    let mut out = Outbox::new_for_tests(8);
+    robots[0].step(&sense(0, 0, starts[0], 9), &[], &mut out);
+    assert!(robots[0].plan().is_none());
+    // Tick 1: robot 0 hears 1..8, robot 3 hears 0..8 but 3: 0 plans, 3 does not.
+    let heard: Vec<Received<Msg>> = (1..9).map(|j| status_from(j, 0, starts[j as usize])).collect();
+    let mut out = Outbox::new_for_tests(8);
+    let c = robots[0].step(&sense(0, 1, starts[0], 9), &heard, &mut out);
+    assert_eq!(c.report[2], REPORT_PLAN);
+    let plan = robots[0].plan().unwrap().clone();
+    assert_eq!((plan.epoch, plan.coordinator), (1, 0));
+    assert_eq!(plan.members, (0..9).collect::<Vec<u32>>());
+    // sigma is a permutation.
+    let mut s = plan.slots.clone();
+    s.sort_unstable();
+    assert_eq!(s, (0..9).collect::<Vec<u16>>());
+    let sent: Vec<&Msg> = out.queued().iter().map(|(_, m)| m).collect();
+    assert!(sent.iter().any(|m| matches!(m, Msg::Plan(_))));
+    let heard3: Vec<Received<Msg>> = (0..9)
+        .filter(|j| *j != 3)
+        .map(|j| status_from(j, 0, starts[j as usize]))
+        .collect();
+    let mut out3 = Outbox::new_for_tests(8);
+    robots[3].step(&sense(3, 1, starts[3], 9), &heard3, &mut out3);
+    assert!(robots[3].plan().is_none());
+    // Tick 2: robot 3 hears the plan and takes sigma's slot; the slots are eq. (5)'s.
+    let mut inbox = vec![Received {
+        from: 0,
+        tick: 1,
+        seq: 1,
+        sender_pos: starts[0],
+        unicast: false,
+        msg: Msg::Plan(plan.clone()),
+    }];
+    inbox.extend((0..9).filter(|j| *j != 3).map(|j| status_from(j, 1, starts[j as usize])));
+    let mut out3 = Outbox::new_for_tests(8);
+    let c3 = robots[3].step(&sense(3, 2, starts[3], 9), &inbox, &mut out3);
+    assert_eq!(robots[3].slot(), Some(plan.slots[3] as usize));
+    assert_eq!(robots[3].targets(), robots[0].targets());
+    let q = robots[3].targets()[plan.slots[3] as usize];
+    assert_eq!(c3.report, [q.x, q.y, plan.slots[3] as f64, 1.0]);
+    // It moves towards its slot at no more than v_max per tick.
+    let step = Vec2::new(c3.cmd[0], c3.cmd[1]);
+    assert!(step.norm() <= sc.robot.v_max);
+    assert!(step.dot(&(q - Vec2::new(starts[3][0], starts[3][1]))) > 0.0);
+}
+
+#[test]
+fn a_silent_member_is_replanned_away_by_the_lowest_robot_left() {
+    let sc = scenario();
+    let starts: Vec<[f64; 2]> = (0..9).map(|i| [2.0 + 2.5 * i as f64, 2.0]).collect();
+    let mut r1 = Formation::new(&sc, 1);
+    // Robot 1 hears everyone at tick 0 and robot 0's plan... here robot 1 plans itself once
+    // robot 0 is silent: first it hears all (0 included) and is not the coordinator.
+    let all: Vec<Received<Msg>> = (0..9)
+        .filter(|j| *j != 1)
+        .map(|j| status_from(j, 0, starts[j as usize]))
+        .collect();
+    let mut out = Outbox::new_for_tests(8);
+    r1.step(&sense(1, 1, starts[1], 9), &all, &mut out);
+    assert!(r1.plan().is_none());
+    // From tick 1 on robot 0 is silent; past lost_after_ticks robot 1 is the lowest heard.
+    let lost = sc.formation.as_ref().unwrap().lost_after_ticks as u64;
+    let mut planned_at = None;
+    for k in 2..lost + 4 {
+        let others: Vec<Received<Msg>> = (2..9)
+            .map(|j| status_from(j, k - 1, starts[j as usize]))
+            .collect();
+        let mut out = Outbox::new_for_tests(8);
+        let c = r1.step(&sense(1, k, starts[1], 8), &others, &mut out);
+        if c.report[2] == REPORT_PLAN {
+            planned_at.get_or_insert(k);
+        }
+    }
+    assert_eq!(planned_at, Some(lost + 1));
+    let plan = r1.plan().unwrap();
+    assert_eq!(plan.members, (1..9).collect::<Vec<u32>>());
+    assert_eq!(plan.points.len(), 8);
+    assert_eq!(plan.coordinator, 1);
+}
