@@ -183,6 +183,9 @@ pub fn experiment(a: ExperimentArgs) -> i32 {
 }
 
 fn run(a: ExperimentArgs) -> Result<i32, String> {
+    if crate::experiment_formation::is_formation(&a.file) {
+        return crate::experiment_formation::run(&a.file, a.quiet);
+    }
     let x = load(&a.file)?;
     let base = Scenario::load(&x.scenario).map_err(|e| e.to_string())?;
     let seeds = a.runs.unwrap_or(x.seeds);

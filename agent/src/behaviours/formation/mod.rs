@@ -330,10 +330,14 @@ impl Formation {
             let (plan, gap, nodes) = self.solve(k, me, &live);
             let seconds = started.elapsed().as_secs_f64();
             eprintln!(
-                "formation: robot {} plans epoch {} at tick {k} for {} robots: gap {gap:.4}, {nodes} nodes, {seconds:.3} s",
+                "formation: robot {} plans epoch {} at tick {k} for {} robots: alpha {:.4} d [{:.4}, {:.4}] theta {:.4}, gap {gap:.4}, {nodes} nodes, {seconds:.3} s",
                 self.robot,
                 plan.epoch,
-                plan.members.len()
+                plan.members.len(),
+                plan.transform[0],
+                plan.transform[1],
+                plan.transform[2],
+                plan.transform[3],
             );
             self.install(plan);
             report = Some([gap, seconds, REPORT_PLAN, nodes as f64]);
@@ -541,7 +545,7 @@ impl Formation {
             Some(s) => preferred_velocity(me, self.targets[s], k.max_speed, k.k_a),
             None => Vec2::zeros(),
         };
-        let r = k.robot_radius;
+        let r = k.robot_radius + self.p.orca_margin;
         let mine = Disc {
             position: me,
             velocity: Vec2::new(sense.vel[0], sense.vel[1]) / tau,
@@ -557,6 +561,9 @@ impl Formation {
             })
             .collect();
         let mut obstacles = self.discs.clone();
+        for o in &mut obstacles {
+            o.radius += self.p.orca_margin;
+        }
         let dead = self.plan.iter().flat_map(|p| p.dead.iter()).map(|d| Vec2::new(d[0], d[1]));
         for pos in dead.chain(self.ghosts.values().copied()) {
             obstacles.push(Disc {

@@ -1,0 +1,94 @@
+//! The formation scenario end to end: 9 robots, one process each, form the letter C over the
+//! radio, with 0 overlapping pairs and the in-process executor's recording; a coordinator
+//! killed mid-run (a real SIGKILL) is replaced and the pattern re-planned for the 8 left.
+
+use e2e::*;
+use std::path::PathBuf;
+
+fn scenario() -> String {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../configs/formation.toml")
+        .to_str()
+        .unwrap()
+        .to_string()
+}
+
+fn formation(out: &std::path::Path) -> serde_json::Value {
+    summary(out)["mission"]["formation"].clone()
+}
+
+#[test]
+fn nine_robots_in_processes_form_the_c_with_the_in_process_recording() {
+    let _g = serial();
+    let sc = scenario();
+    let p = tmp_dir("formation-p");
+    let i = tmp_dir("formation-i");
+    for (dir, exec) in [(&p, "processes"), (&i, "inprocess")] {
+        let o = up(&["--scenario", &sc, "--executor", exec], dir);
+        assert!(o.status.success(), "{exec}: {}", stderr(&o));
+        let f = formation(dir);
+        assert_eq!(f["formed"], true, "{exec}: {f}");
+        assert_eq!(f["overlapping_pairs"], 0, "{exec}: {f}");
+        assert_eq!(f["obstacle_overlaps"], 0, "{exec}: {f}");
+        assert!(f["min_robot_clearance"].as_f64().unwrap() >= 0.0, "{f}");
+        assert_eq!(f["plans"].as_array().unwrap().len(), 1, "{f}");
+        assert_eq!(summary(dir)["end"], "the formation is complete");
+    }
+    let rec = |d: &std::path::Path| std::fs::read(d.join("recording.bin")).unwrap();
+    assert!(rec(&p) == rec(&i), "the executors differ");
+    // Every robot on its own slot of the one plan.
+    let f = formation(&p);
+    let mut idx: Vec<u64> = f["slots"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|s| s["index"].as_u64().unwrap())
+        .collect();
+    idx.sort_unstable();
+    assert_eq!(idx, (0..9).collect::<Vec<u64>>());
+    assert!(std::fs::read_to_string(p.join("run.svg"))
+        .unwrap()
+        .contains("<svg"));
+    assert_left_nothing(&p);
+}
+
+#[test]
+fn a_coordinator_killed_mid_run_is_replaced_and_the_pattern_replanned_for_eight() {
+    let _g = serial();
+    let out = tmp_dir("formation-kill");
+    let o = up(
+        &[
+            "--scenario",
+            &scenario(),
+            "--executor",
+            "processes",
+            "--chaos-at",
+            "15:0",
+        ],
+        &out,
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let s = summary(&out);
+    let f = formation(&out);
+    assert_eq!(f["formed"], true, "{f}");
+    assert_eq!(f["overlapping_pairs"], 0, "{f}");
+    let plans = f["plans"].as_array().unwrap();
+    assert_eq!(plans.len(), 2, "{f}");
+    // Robot 0 coordinated; robot 1, the lowest id left, re-planned once 0 fell silent.
+    assert_eq!(plans[0]["robot"], 0);
+    assert_eq!(plans[1]["robot"], 1);
+    assert!(plans[1]["tick"].as_u64().unwrap() > 15);
+    // The 8 survivors hold 8 distinct slots of the second plan.
+    let slots = f["slots"].as_array().unwrap();
+    let mut idx: Vec<u64> = slots[1..]
+        .iter()
+        .map(|s| {
+            assert_eq!(s["epoch"], 2, "{s}");
+            s["index"].as_u64().unwrap()
+        })
+        .collect();
+    idx.sort_unstable();
+    assert_eq!(idx, (0..8).collect::<Vec<u64>>());
+    assert_eq!(s["alive_at_end"], 8, "{s}");
+    assert_left_nothing(&out);
+}
