@@ -139,6 +139,8 @@ pub struct PlanReport {
 #[derive(Debug, Clone, Serialize, PartialEq)]
 pub struct FormationMetrics {
     pub robots: u32,
+    /// Live robots within epsilon of their slot at the end (the progress bar's count).
+    pub robots_in_place: u32,
     pub formed: bool,
     /// K: iterations (ticks) until the formation was complete; None: never (censored).
     pub iterations: Option<u64>,
@@ -200,6 +202,7 @@ impl FormationMission {
     pub fn metrics_now(&self, facts: &RunFacts) -> FormationMetrics {
         FormationMetrics {
             robots: self.slots.len() as u32,
+            robots_in_place: self.in_place,
             formed: self.formed_at.is_some(),
             iterations: self.formed_at.map(|k| k + 1),
             simulated_time: self.formed_at.map(|k| (k + 1) as f64 * self.time_step),
