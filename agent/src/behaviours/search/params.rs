@@ -100,7 +100,7 @@ impl Default for Params {
             keep_subgroup_best_across_gaps: true,
             goal_horizon_margin: 10.0,
             subgroup_separation: 20.0,
-            wall_rule: WallRule::None,
+            wall_rule: WallRule::Mirror,
         }
     }
 }
