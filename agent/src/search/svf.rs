@@ -12,6 +12,11 @@
 //!   bent toward the wall when farther than `follow_distance` (the boundary
 //!   attraction) and away from it when nearer, by at most `max_correction`;
 //! * release when nothing lies in the desired direction within L_B.
+//!
+//! Against the published description (docs/search.md 5 item 27): the direction
+//! ±(Q1 − Q2) is the description's; the kept wall side (`keep_side`), the
+//! look-ahead at concave corners and the stand-off bend (in place of eq. 5's
+//! 1/d² boundary attraction) are ours.
 
 use crate::kernels::obstacles::blocked_at;
 use crate::search::bsoa::obstacle_ahead;
