@@ -15,9 +15,13 @@ pub struct Params {
     pub c: f64,
     /// Enhanced obstacle-avoidance distance l_1 = 10 (Table 4, eq. 5).
     pub l1: f64,
-    /// Robot radius L_R; robots repel within d_0 = 2·L_R (eq. 5). The paper
-    /// never gives L_R: 50 so that d_0 = 100 = L_T and roaming robots spread
-    /// out. [chosen] spec §5 item 4.
+    /// L_R; robots repel within d_0 = 2·L_R (eq. 5). The paper never gives
+    /// L_R; by its text it is the radius of a robot's own disc in the family of
+    /// L_T and L_B (both 100, Table 4): d_0 = 2·L_R for a robot (two discs) is
+    /// set against d_0 = L_B for an obstacle (one disc), and "robots repel while
+    /// ∃ R_dis < 2 L_R and spread evenly over the area" (paper §4) then means
+    /// they repel while their sensing discs overlap. So L_R = L_T = 100,
+    /// d_0 = 200 (issue 20 item 5; 50 before). [chosen] spec §5 item 4.
     pub l_r: f64,
     /// Obstacle force cut-off d_0 = L_B = 100 (eq. 5, Table 4).
     pub l_b: f64,
@@ -30,7 +34,7 @@ impl Default for Params {
         Self {
             c: 3.9,
             l1: 10.0,
-            l_r: 50.0,
+            l_r: 100.0,
             l_b: 100.0,
             v_max: 10.0,
         }
@@ -218,7 +222,10 @@ mod tests {
     /// 1000 away, beyond d_0): the force points east, magnitude c (l_1 / 60)^2.
     #[test]
     fn a_wall_mirror_pushes_a_robot_off_the_wall() {
-        let p = Params::default();
+        let p = Params {
+            l_r: 50.0,
+            ..Params::default()
+        };
         let x = Vec2::new(30.0, 500.0);
         let m = wall_mirrors(&x, 1000.0, 1000.0);
         assert_eq!(m[0], Vec2::new(-30.0, 500.0));
