@@ -68,9 +68,53 @@ pub struct Variant {
     pub kill_window: Option<[u64; 2]>,
     /// faults.on_fault: "drop" or "restart" (restart needs `--executor processes`).
     pub on_fault: Option<FaultPolicy>,
+    /// A scenario file (relative to the experiment file) laid over the base scenario for this
+    /// variant: its tables merge, its other values (arrays included: a new obstacle map)
+    /// replace. Applied before `set`.
+    pub overlay: Option<PathBuf>,
+    /// Scenario keys this variant changes, as a TOML table laid over the base scenario
+    /// (`[variants.set.search.kernels.virtual_force]` `l_r = 100.0`); applied after `overlay`.
+    pub set: Option<toml::Table>,
+}
+
+/// Recursively lays `over` onto `base` (tables merge, everything else replaces), as a scenario
+/// file is laid over the default.
+fn merge_toml(base: &mut toml::Table, over: toml::Table) {
+    for (k, v) in over {
+        match (base.get_mut(&k), v) {
+            (Some(toml::Value::Table(b)), toml::Value::Table(o)) => merge_toml(b, o),
+            (_, v) => {
+                base.insert(k, v);
+            }
+        }
+    }
 }
 
 impl Variant {
+    /// The base scenario with this variant's `overlay` and `set` laid over it (`dir`: the
+    /// experiment file's folder).
+    fn scenario(&self, base: &Scenario, dir: &Path) -> Result<Scenario, String> {
+        if self.overlay.is_none() && self.set.is_none() {
+            return Ok(base.clone());
+        }
+        let mut t: toml::Table = base.to_toml().parse().map_err(|e| format!("{e}"))?;
+        if let Some(f) = &self.overlay {
+            let path = dir.join(f);
+            let text = std::fs::read_to_string(&path)
+                .map_err(|e| format!("{}: cannot read: {e}", path.display()))?;
+            let o: toml::Table = text
+                .parse()
+                .map_err(|e| format!("{}: {e}", path.display()))?;
+            merge_toml(&mut t, o);
+        }
+        if let Some(o) = &self.set {
+            merge_toml(&mut t, o.clone());
+        }
+        let source = format!("variant {:?}", self.name);
+        Scenario::parse(&toml::to_string(&t).map_err(|e| e.to_string())?, &source)
+            .map_err(|e| e.to_string())
+    }
+
     fn apply(&self, sc: &mut Scenario) {
         if let Some(v) = self.loss {
             sc.radio.loss = v;
@@ -188,6 +232,12 @@ fn run(a: ExperimentArgs) -> Result<i32, String> {
     }
     let x = load(&a.file)?;
     let base = Scenario::load(&x.scenario).map_err(|e| e.to_string())?;
+    let dir = a.file.parent().unwrap_or(Path::new(".")).to_path_buf();
+    let bases: Vec<Scenario> = x
+        .variants
+        .iter()
+        .map(|v| v.scenario(&base, &dir))
+        .collect::<Result<_, _>>()?;
     let seeds = a.runs.unwrap_or(x.seeds);
     // Every cell's scenario, validated before anything runs.
     let mut jobs: Vec<(String, String, u32, u64, Scenario)> = Vec::new();
@@ -195,8 +245,10 @@ fn run(a: ExperimentArgs) -> Result<i32, String> {
     for mode in &x.modes {
         let mut ok = true;
         for &n in &x.robots {
-            for (s, v) in (0..seeds as u64).flat_map(|s| x.variants.iter().map(move |v| (s, v))) {
-                let mut sc = base.clone();
+            for (s, (v, vbase)) in (0..seeds as u64)
+                .flat_map(|s| x.variants.iter().zip(&bases).map(move |v| (s, v)))
+            {
+                let mut sc = vbase.clone();
                 sc.search.mode = mode.clone();
                 sc.run.robots = n;
                 sc.run.seed = x.first_seed + s;
@@ -339,6 +391,9 @@ fn run(a: ExperimentArgs) -> Result<i32, String> {
     let cells = tabulate(&x, &results);
     let mut md = report(&x, &cells, seeds, &unavailable);
     if x.variants.len() > 1 {
+        if x.variants.iter().any(|v| v.overlay.is_some() || v.set.is_some()) {
+            md += &sensitivity_report(&x, &cells);
+        }
         md += &variants_report(&x, &results);
     }
     print!("{md}");
@@ -563,6 +618,117 @@ fn report(x: &Experiment, cells: &[Cell], seeds: u32, unavailable: &[(String, St
     s
 }
 
+/// Improvement of `ours` over `other` (docs/search.md 4.6) with the per-cell mean `value`.
+fn improvement_by(
+    cells: &[&Cell],
+    ours: &[&str],
+    other: &[&str],
+    value: &dyn Fn(&Cell) -> Option<f64>,
+) -> Option<f64> {
+    let total = |modes: &[&str]| -> Option<f64> {
+        let mut sum = 0.0;
+        for c in cells.iter().filter(|c| modes.contains(&c.mode.as_str())) {
+            sum += value(c)?;
+        }
+        (sum > 0.0).then_some(sum)
+    };
+    let (o, t) = (total(ours)?, total(other)?);
+    Some((t - o) / t * 100.0)
+}
+
+/// One row per variant (a sensitivity table): censored runs, BT's mean steps and energy summed
+/// over the swarm sizes, and the three headline gaps (BSOA vs SVF, TPEPSO vs EPSO, BT vs BE)
+/// the paper's way. Steps count every run, a censored one at the cap (a lower bound then);
+/// energy is over the completed runs.
+fn sensitivity_report(x: &Experiment, cells: &[Cell]) -> String {
+    let mut s = String::new();
+    let ns: Vec<String> = x.robots.iter().map(|n| n.to_string()).collect();
+    let _ = writeln!(
+        s,
+        "\n## Sensitivity: each variant against {:?} (sums over N = {})\n\n\
+         Steps: mean over every run, a censored run counted at the cap ({}); energy (x 10^4): \
+         mean over the completed runs. Gaps: relative reduction of the summed means \
+         (docs/search.md 4.6), steps / energy.\n\n\
+         | variant | runs | censored | BT steps | vs ref | BT energy | vs ref | BSOA vs SVF | TPEPSO vs EPSO | BT vs BE |\n\
+         |---|---|---|---|---|---|---|---|---|---|",
+        x.variants[0].name,
+        ns.join(" / "),
+        x.max_ticks
+    );
+    let steps = |c: &Cell| Some(c.steps_mean_censored_at_cap);
+    let energy = |c: &Cell| c.energy_e4.map(|e| e[1]);
+    let paper_steps = |c: &Cell| c.paper.as_ref().map(|p| p.steps[1]);
+    let paper_energy = |c: &Cell| c.paper.as_ref().map(|p| p.energy[1]);
+    let pct = |v: Option<f64>| v.map_or("n/a".to_string(), |v| format!("{v:.1}"));
+    let gaps = |of: &[&Cell], st: &dyn Fn(&Cell) -> Option<f64>, en: &dyn Fn(&Cell) -> Option<f64>| {
+        [
+            (vec!["BT", "BE", "BA"], vec!["ST", "SE", "SA"]),
+            (vec!["BT", "ST"], vec!["BE", "SE"]),
+            (vec!["BT"], vec!["BE"]),
+        ]
+        .iter()
+        .map(|(o, t)| {
+            format!(
+                "{} / {} %",
+                pct(improvement_by(of, o, t, st)),
+                pct(improvement_by(of, o, t, en))
+            )
+        })
+        .collect::<Vec<_>>()
+    };
+    let bt = |of: &[&Cell], f: &dyn Fn(&Cell) -> Option<f64>| -> Option<f64> {
+        let v: Option<Vec<f64>> = of.iter().filter(|c| c.mode == "BT").map(|c| f(c)).collect();
+        v.filter(|v| !v.is_empty()).map(|v| v.iter().sum())
+    };
+    let of_variant = |name: &str| -> Vec<&Cell> { cells.iter().filter(|c| c.variant == name).collect() };
+    let reference = of_variant(&x.variants[0].name);
+    let (ref_steps, ref_energy) = (bt(&reference, &steps), bt(&reference, &energy));
+    let rel = |v: Option<f64>, r: Option<f64>| match (v, r) {
+        (Some(v), Some(r)) if r > 0.0 => format!("{:+.1} %", (v / r - 1.0) * 100.0),
+        _ => "n/a".into(),
+    };
+    for v in &x.variants {
+        let of = of_variant(&v.name);
+        if of.is_empty() {
+            continue;
+        }
+        let runs: usize = of.iter().map(|c| c.runs).sum();
+        let censored: usize = of.iter().map(|c| c.censored).sum();
+        let (st, en) = (bt(&of, &steps), bt(&of, &energy));
+        let g = gaps(&of, &steps, &energy);
+        let lb = if of.iter().any(|c| c.mode == "BT" && c.steps_mean_is_lower_bound) {
+            ">= "
+        } else {
+            ""
+        };
+        let _ = writeln!(
+            s,
+            "| {} | {runs} | {censored} | {lb}{} | {} | {} | {} | {} | {} | {} |",
+            v.name,
+            st.map_or("n/a".into(), |v| format!("{v:.0}")),
+            rel(st, ref_steps),
+            en.map_or("n/a".into(), |v| format!("{v:.2}")),
+            rel(en, ref_energy),
+            g[0],
+            g[1],
+            g[2],
+        );
+    }
+    if reference.iter().any(|c| c.paper.is_some()) {
+        let g = gaps(&reference, &paper_steps, &paper_energy);
+        let _ = writeln!(
+            s,
+            "| paper's Table 5 (same N) | | | {} | | {} | | {} | {} | {} |",
+            bt(&reference, &paper_steps).map_or("n/a".into(), |v| format!("{v:.0}")),
+            bt(&reference, &paper_energy).map_or("n/a".into(), |v| format!("{v:.2}")),
+            g[0],
+            g[1],
+            g[2],
+        );
+    }
+    s
+}
+
 /// Per (N, mode): each variant's completed runs and its slowdown against the first variant,
 /// seed by seed (only seeds both completed), so layouts are compared with themselves.
 fn variants_report(x: &Experiment, results: &[RunResult]) -> String {
@@ -677,5 +843,44 @@ mod tests {
         assert_eq!(cells[0].steps_mean_censored_at_cap, 570.0);
         assert!(!cells[0].steps_mean_is_lower_bound);
         assert_eq!(fmt_at_cap(&cells[0]), "570");
+    }
+
+    /// A variant's `set` lays its keys over the base scenario and leaves the others alone; an
+    /// overlay file's array replaces the base's (a new obstacle map).
+    #[test]
+    fn a_variant_sets_scenario_keys_over_the_base() {
+        let base = Scenario::default();
+        let set: toml::Table = "[search.kernels.virtual_force]\nl_r = 100.0\n[arena]\nwalls_sensed = false\n"
+            .parse()
+            .unwrap();
+        let v = Variant {
+            name: "L_R 100".into(),
+            set: Some(set),
+            ..Variant::default()
+        };
+        let sc = v.scenario(&base, Path::new(".")).unwrap();
+        assert_eq!(
+            sc.search.kernels["virtual_force"]["l_r"].as_float(),
+            Some(100.0)
+        );
+        assert!(!sc.arena.walls_sensed);
+        assert_eq!(sc.arena.obstacles, base.arena.obstacles);
+        assert_eq!(sc.run.seed, base.run.seed);
+        let dir = std::env::temp_dir().join(format!("exp-overlay-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        std::fs::write(
+            dir.join("map.toml"),
+            "[[arena.obstacles]]\nname = \"one\"\npoints = [[10.0, 10.0], [40.0, 10.0], [40.0, 40.0]]\n",
+        )
+        .unwrap();
+        let v = Variant {
+            name: "map".into(),
+            overlay: Some("map.toml".into()),
+            ..Variant::default()
+        };
+        let sc = v.scenario(&base, &dir).unwrap();
+        assert_eq!(sc.arena.obstacles.len(), 1);
+        assert_eq!(sc.arena.obstacles[0].name, "one");
+        let _ = std::fs::remove_dir_all(&dir);
     }
 }

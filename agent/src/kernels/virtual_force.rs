@@ -15,9 +15,13 @@ pub struct Params {
     pub c: f64,
     /// Enhanced obstacle-avoidance distance l_1 = 10 (Table 4, eq. 5).
     pub l1: f64,
-    /// Robot radius L_R; robots repel within d_0 = 2·L_R (eq. 5). The paper
-    /// never gives L_R: 50 so that d_0 = 100 = L_T and roaming robots spread
-    /// out. [chosen] spec §5 item 4.
+    /// L_R; robots repel within d_0 = 2·L_R (eq. 5). The paper never gives
+    /// L_R; by its text it is the radius of a robot's own disc in the family of
+    /// L_T and L_B (both 100, Table 4): d_0 = 2·L_R for a robot (two discs) is
+    /// set against d_0 = L_B for an obstacle (one disc), and "robots repel while
+    /// ∃ R_dis < 2 L_R and spread evenly over the area" (paper §4) then means
+    /// they repel while their sensing discs overlap. So L_R = L_T = 100,
+    /// d_0 = 200 (issue 20 item 5; 50 before). [chosen] spec §5 item 4.
     pub l_r: f64,
     /// Obstacle force cut-off d_0 = L_B = 100 (eq. 5, Table 4).
     pub l_b: f64,
@@ -30,7 +34,7 @@ impl Default for Params {
         Self {
             c: 3.9,
             l1: 10.0,
-            l_r: 50.0,
+            l_r: 100.0,
             l_b: 100.0,
             v_max: 10.0,
         }
@@ -123,6 +127,19 @@ pub fn roaming_velocity(x: &Vec2, others: &[Vec2], previous_velocity: &Vec2, p: 
     }
 }
 
+/// The mirror images of a robot at `x` in the four walls of the arena [0, width] x [0, height]
+/// (west, east, south, north): a wall seen as a robot standing as far beyond it as the robot
+/// stands before it, so that eq. (5) pushes a robot off a wall it comes within L_R of, as it
+/// pushes it off a robot within 2 L_R. Used by the search behaviour's wall rule.
+pub fn wall_mirrors(x: &Vec2, width: f64, height: f64) -> [Vec2; 4] {
+    [
+        Vec2::new(-x.x, x.y),
+        Vec2::new(2.0 * width - x.x, x.y),
+        Vec2::new(x.x, -x.y),
+        Vec2::new(x.x, 2.0 * height - x.y),
+    ]
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -197,5 +214,26 @@ mod tests {
         assert!((v - Vec2::new(0.0, 10.0)).norm() < 1e-12);
         let v0 = roaming_velocity(&Vec2::new(0.0, 0.0), &[], &Vec2::zeros(), &p);
         assert_eq!(v0, Vec2::zeros());
+    }
+
+    /// Hand-computed: a robot at (30, 500) of a 1000 x 1000 arena has its west mirror at
+    /// (-30, 500), 60 away (inside d_0 = 100 for L_R = 50), the others 940+ away; with no
+    /// robot near, the two nearest "robots" are the west and the south mirror (at (30, -500),
+    /// 1000 away, beyond d_0): the force points east, magnitude c (l_1 / 60)^2.
+    #[test]
+    fn a_wall_mirror_pushes_a_robot_off_the_wall() {
+        let p = Params {
+            l_r: 50.0,
+            ..Params::default()
+        };
+        let x = Vec2::new(30.0, 500.0);
+        let m = wall_mirrors(&x, 1000.0, 1000.0);
+        assert_eq!(m[0], Vec2::new(-30.0, 500.0));
+        assert_eq!(m[1], Vec2::new(1970.0, 500.0));
+        assert_eq!(m[2], Vec2::new(30.0, -500.0));
+        assert_eq!(m[3], Vec2::new(30.0, 1500.0));
+        let f = roaming_force(&x, &m, &p);
+        assert!((f.x - 3.9 * (10.0f64 / 60.0).powi(2)).abs() < 1e-12, "{f:?}");
+        assert!(f.y.abs() < 1e-12, "{f:?}");
     }
 }

@@ -12,6 +12,11 @@
 //!   bent toward the wall when farther than `follow_distance` (the boundary
 //!   attraction) and away from it when nearer, by at most `max_correction`;
 //! * release when nothing lies in the desired direction within L_B.
+//!
+//! Against the published description (docs/search.md 5 item 27): the direction
+//! ±(Q1 − Q2) is the description's; the kept wall side (`keep_side`), the
+//! look-ahead at concave corners and the stand-off bend (in place of eq. 5's
+//! 1/d² boundary attraction) are ours.
 
 use crate::kernels::obstacles::blocked_at;
 use crate::search::bsoa::obstacle_ahead;
@@ -63,6 +68,13 @@ pub struct Params {
     /// Corridor half-width of that test and of the look-ahead (2.0, the
     /// sample spacing). [chosen] spec §5 items 21-22.
     pub corridor_half_width: f64,
+    /// Keep the wall side chosen when following began until release (true), or choose the
+    /// sense of ±(Q1 − Q2) nearer V_if again at every step (false: the published description
+    /// read literally, "left or right along the line through the two nearest obstacle
+    /// points", with no memory). The description also says SVF copes with non-convex
+    /// obstacles, which a robot that may change sense at every step does not do reliably (it
+    /// turns back and forth at the bottom of a U). [chosen] spec §5 item 27.
+    pub keep_side: bool,
 }
 
 impl Default for Params {
@@ -75,6 +87,7 @@ impl Default for Params {
             max_correction: PI / 4.0,
             heading_tolerance: 0.1,
             corridor_half_width: 2.0,
+            keep_side: true,
         }
     }
 }
@@ -109,7 +122,8 @@ pub fn avoid(x: &Vec2, v_if: &Vec2, obstacle_points: &[Vec2], state: Follow, p: 
         Follow::None if !ahead(p.engage_distance) => return free,
         Follow::None => None,
         _ if !ahead(p.l_b) => return free, // release: desired direction clear
-        s => Some(s),
+        s if p.keep_side => Some(s),
+        _ => None,
     };
 
     let (d1, q1) = near[0];

@@ -32,8 +32,10 @@
 //!   candidacies of the same target heard last tick; dropped candidates roam but stay
 //!   candidates, so they move in when a member leaves (the dynamic adjustment of paper 5.1).
 //!   Type II robots attach to any Type I candidate heard (not only kept ones).
-//! * sgb = best pb announced by members of the same target heard, running maximum; pb / sgb
-//!   survive short gaps (`keep_memory_across_gaps`). Type II pb fitness = own I_ij, 0 outside L_T.
+//! * pb_i = best own measurement since the robot joined (paper 3.3): empty at every join, so a
+//!   Type II robot has no c1 term until it senses the target. sgb = best pb announced by
+//!   members of the same target heard, running maximum; it survives short gaps
+//!   (`keep_subgroup_best_across_gaps`).
 //! * T_est uses every detection of the target above I_min heard last tick plus the own one
 //!   (members or not); fewer than `estimator.min_detectors` (3): no c3 term (spec 5 item 14).
 //! * Initial velocity: random heading at V_max (stream 20); roaming keeps the heading of the
@@ -53,7 +55,9 @@ pub mod messages;
 pub mod params;
 
 pub use messages::{Candidacy, Msg, Status, WireRole};
-pub use params::{parse_mode, parse_params, validate_search, ObstacleLayer, Params, SearchLayer};
+pub use params::{
+    parse_mode, parse_params, validate_search, ObstacleLayer, Params, SearchLayer, WallRule,
+};
 
 use crate::kernels::virtual_force;
 use crate::search::calibration::{self, Calibration};
@@ -136,6 +140,9 @@ pub struct Search {
     robot: u32,
     p: Params,
     v_max: f64,
+    /// The search area [0, width] x [0, height] (Table 4), known to every robot; its
+    /// obstacles are not.
+    arena: (f64, f64),
     obstacle: ObstacleLayer,
     layer: SearchLayer,
     cal: Arc<Calibration>,
@@ -182,6 +189,7 @@ impl Search {
         Search {
             robot,
             v_max,
+            arena: (sc.arena.width, sc.arena.height),
             obstacle,
             layer,
             cal,
@@ -336,6 +344,18 @@ fn calibration_of(p: &calibration::Params, seed: u64, robot: u32) -> Arc<Calibra
     built
 }
 
+/// `v` with its component into a wall reversed, for each wall of [0, w] x [0, h] nearer than
+/// `reach` that `v` heads into (the `reflect` wall rule).
+fn reflect_off_walls(x: Vec2, mut v: Vec2, reach: f64, w: f64, h: f64) -> Vec2 {
+    if (x.x < reach && v.x < 0.0) || (w - x.x < reach && v.x > 0.0) {
+        v.x = -v.x;
+    }
+    if (x.y < reach && v.y < 0.0) || (h - x.y < reach && v.y > 0.0) {
+        v.y = -v.y;
+    }
+    v
+}
+
 /// Positions of the robots heard (sent last tick), in sender order.
 fn heard_positions(heard: &[(u32, &Status)]) -> Vec<Vec2> {
     heard
@@ -378,12 +398,13 @@ fn role_of(w: WireRole) -> Role {
 struct Bests {
     /// The own signal I_ij of the target, if sensed at all.
     own: Option<f64>,
-    /// The fitness of this tick: own I_ij, or `type2_initial_fitness` without a signal.
+    /// The fitness of this tick (ARBA's): own I_ij, 0 without a signal (eq. 1).
     fitness: f64,
-    /// pb_i (position, fitness).
-    pb: (Vec2, f64),
-    /// sgb (position, fitness).
-    sgb: (Vec2, f64),
+    /// pb_i (position, fitness); None until the robot has measured the target since it
+    /// joined (then the c1 term of eq. 11 is absent).
+    pb: Option<(Vec2, f64)>,
+    /// sgb (position, fitness); None while no member's pb is known (no c2 term).
+    sgb: Option<(Vec2, f64)>,
 }
 
 /// The paper's loop of spec 2.9, one step of one robot, in the order [`Behaviour::step_refs`]
@@ -473,11 +494,15 @@ impl Search {
         subgroup::is_kept(&members, 0, &self.p.subgroup)
     }
 
-    /// Step 2e, the memory half (TPEPSO's pb_i and sgb, eq. 11): a memory of a found target is
-    /// forgotten; a kept member of `kept` starts a fresh memory (and a fresh ARBA bat) for a
-    /// new target, or after a gap unless `keep_memory_across_gaps`, then updates pb_i from its
-    /// own fitness and sgb from pb_i and the members' pbs heard. A robot not kept forgets
-    /// unless `keep_memory_across_gaps`. Returns the bests of a kept member.
+    /// Step 2e, the memory half (TPEPSO's pb_i and sgb, eq. 11). A memory of a found target
+    /// is forgotten. pb_i is "the best since the robot joined the subgroup" (paper 3.3,
+    /// 加入子联盟后的历史最优): it starts empty at every join (a new target, or the same one
+    /// after a drop) and holds only positions where the robot measured the target itself
+    /// (fitness = own I_ij); a robot that has not measured it yet has no pb_i and no c1 term.
+    /// sgb is the subgroup's best: the running best of pb_i and the members' pbs heard; it
+    /// survives a drop while the target stays the same if `keep_subgroup_best_across_gaps`.
+    /// A fresh memory (new target) also starts a fresh ARBA bat. Returns the bests of a kept
+    /// member.
     fn subgroup_memory(
         &mut self,
         kept: Option<u32>,
@@ -494,30 +519,41 @@ impl Search {
                 self.memory = None;
             }
         }
+        let keep_sgb = self.p.keep_subgroup_best_across_gaps;
         let Some(t) = kept else {
-            if !self.p.keep_memory_across_gaps {
-                self.memory = None;
+            match self.memory.as_mut() {
+                Some(m) if keep_sgb => m.pb = None,
+                _ => self.memory = None,
             }
             return None;
         };
-        let fresh = match self.memory {
-            Some(m) if m.target == t => !self.p.keep_memory_across_gaps && was_member_of != Some(t),
-            _ => true,
-        };
-        if fresh {
-            self.memory = Some(Memory {
-                target: t,
-                pb: None,
-                sgb: None,
-            });
-            self.bat = arba::Bat::new(&self.p.arba);
+        match self.memory.as_mut() {
+            Some(m) if m.target == t => {
+                if was_member_of != Some(t) {
+                    // Joined again: pb_i since this join; sgb kept only if asked.
+                    m.pb = None;
+                    if !keep_sgb {
+                        m.sgb = None;
+                    }
+                }
+            }
+            _ => {
+                self.memory = Some(Memory {
+                    target: t,
+                    pb: None,
+                    sgb: None,
+                });
+                self.bat = arba::Bat::new(&self.p.arba);
+            }
         }
         let own = signals.iter().find(|(id, _)| *id as u32 == t).map(|x| x.1);
-        let fitness = own.unwrap_or(self.p.type2_initial_fitness);
         let mem = self.memory.as_mut().expect("set above");
-        tpepso::update_best(&mut mem.pb, me, fitness);
-        let pb = mem.pb.expect("set above");
-        tpepso::update_best(&mut mem.sgb, pb.0, pb.1);
+        if let Some(i) = own {
+            tpepso::update_best(&mut mem.pb, me, i);
+        }
+        if let Some((q, f)) = mem.pb {
+            tpepso::update_best(&mut mem.sgb, q, f);
+        }
         for (_, st) in heard {
             if let Some(c) = &st.candidacy {
                 if c.target == t && c.member {
@@ -528,12 +564,12 @@ impl Search {
                 }
             }
         }
-        let sgb = mem.sgb.expect("set above");
         Some(Bests {
             own,
-            fitness,
-            pb,
-            sgb,
+            // The signal is 0 where the target is not sensed (eq. 1).
+            fitness: own.unwrap_or(0.0),
+            pb: mem.pb,
+            sgb: mem.sgb,
         })
     }
 
@@ -595,8 +631,9 @@ impl Search {
         let state = tpepso::State {
             position: me,
             velocity: Vec2::new(s.vel[0], s.vel[1]),
-            personal_best: b.pb.0,
-            subgroup_best: b.sgb.0,
+            // A term without its best is absent (its best is the robot's own position).
+            personal_best: b.pb.map_or(me, |p| p.0),
+            subgroup_best: b.sgb.map_or(me, |g| g.0),
             target_estimate: estimate,
         };
         self.mode = Mode::Cooperative { target, role };
@@ -605,7 +642,7 @@ impl Search {
                 &mut self.bat,
                 me,
                 state.velocity,
-                b.sgb.0,
+                state.subgroup_best,
                 b.fitness,
                 &self.p.arba,
                 &mut self.rng_bat,
@@ -643,10 +680,22 @@ impl Search {
     /// Step 2e, roaming velocity (paper 3.1, Fig. 2): V_if = V_max along f_vr1 + f_vr2, the
     /// eq. (5) repulsion of the two nearest robots heard; the heading of the last commanded
     /// velocity without a force (spec 5 item 5).
+    /// The wall rule (`wall_rule`, spec 5 item 6) adds the walls' mirror images to the robots
+    /// heard, or reflects the result off a wall within L_R.
     fn roaming_velocity(&mut self, me: Vec2, heard: &[(u32, &Status)]) -> Vec2 {
         self.mode = Mode::Roaming;
-        let others = heard_positions(heard);
-        virtual_force::roaming_velocity(&me, &others, &self.last_vel, &self.p.virtual_force)
+        let mut others = heard_positions(heard);
+        let (w, h) = self.arena;
+        if self.p.wall_rule == WallRule::Mirror {
+            others.extend(virtual_force::wall_mirrors(&me, w, h));
+        }
+        let v =
+            virtual_force::roaming_velocity(&me, &others, &self.last_vel, &self.p.virtual_force);
+        if self.p.wall_rule == WallRule::Reflect {
+            reflect_off_walls(me, v, self.p.virtual_force.l_r, w, h)
+        } else {
+            v
+        }
     }
 
     /// Step 2f, the obstacle layer, every tick and in every state: BSOA (Table 2, eqs. 12-22)

@@ -38,17 +38,14 @@ pub struct Params {
     /// falls silent for good (3: a lost message is repeated; everyone also gossips the set of
     /// found targets it knows in its status). [chosen] spec 5 item 8 (finder stops) and item 24.
     pub declare_ticks: u32,
-    /// A robot keeps its pb_i and its sgb while its subgroup target stays the same, also across
+    /// A robot keeps the sgb it knows while its subgroup target stays the same, also across
     /// short drops to roaming (true), so a robot that flickers out of a subgroup because of
-    /// signal noise does not forget what it learnt about a static target; they are reset when
-    /// it joins another target's subgroup or the target is found. With false they are reset
-    /// whenever it leaves the subgroup ("pb since it joined", paper 3.3, literally).
+    /// signal noise does not forget where its subgroup found the strongest signal of a static
+    /// target; it is reset when the robot joins another target's subgroup or the target is
+    /// found. With false it is reset at every join. pb_i is always "the best since the robot
+    /// joined the subgroup" (paper 3.3): it is not a choice and has no parameter.
     /// [chosen] spec 5 item 10.
-    pub keep_memory_across_gaps: bool,
-    /// Fitness of pb_i for a Type II robot that senses nothing of the target: its measured
-    /// I_ij, which is 0 beyond L_T (eq. 1), at its position when it joins. [chosen] spec 5
-    /// item 10 ("keep pb_i at their position on joining").
-    pub type2_initial_fitness: f64,
+    pub keep_subgroup_best_across_gaps: bool,
     /// A cooperative robot that senses its target passes to the obstacle layer only the
     /// obstacle points nearer than its own distance estimate G^{-1}(I_ij) (eq. 6) plus this
     /// margin (10 = l_2); points farther away lie beyond the target. Without it, BSOA / SVF turn
@@ -66,6 +63,26 @@ pub struct Params {
     /// there for good as soon as sgb is more than L_0 from the target (PSO stagnation).
     /// Applied in every search layer alike. [chosen] spec 5 item 23.
     pub subgroup_separation: f64,
+    /// How a roaming robot treats the arena walls (the paper has no wall rule, spec 5 item 6).
+    /// `mirror` (default): each wall is a robot's mirror image in eq. (5), one more candidate
+    /// of "the two nearest robots", so a roaming robot within L_R of a wall is pushed off it
+    /// as it is pushed off a robot within 2 L_R. `reflect`: the kept heading is reflected off
+    /// a wall the robot is within L_R of and heading into. `none`: walls are only sensed as
+    /// obstacle points (BSOA / SVF), which steers a roaming robot along them. The walls stay
+    /// sensed obstacle points in every rule (`arena.walls_sensed`). [chosen] spec 5 item 6.
+    pub wall_rule: WallRule,
+}
+
+/// The roaming wall rule ([`Params::wall_rule`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum WallRule {
+    /// Walls only as sensed obstacle points.
+    None,
+    /// Walls as mirror robots in eq. (5) while roaming.
+    Mirror,
+    /// The roaming heading reflected off a wall within L_R.
+    Reflect,
 }
 
 impl Default for Params {
@@ -80,10 +97,10 @@ impl Default for Params {
             svf: svf::Params::default(),
             subgroup: subgroup::Params::default(),
             declare_ticks: 3,
-            keep_memory_across_gaps: true,
-            type2_initial_fitness: 0.0,
+            keep_subgroup_best_across_gaps: true,
             goal_horizon_margin: 10.0,
             subgroup_separation: 20.0,
+            wall_rule: WallRule::Mirror,
         }
     }
 }
@@ -286,7 +303,6 @@ const RANGES: &[Range] = &[
     r("subgroup.g_max", 1.0, 4096.0, false),
     r("subgroup.r_cm", 0.0, DIST, true),
     r("declare_ticks", 0.0, TICKS, false),
-    r("type2_initial_fitness", -SIGNAL, SIGNAL, false),
     // Negative turns the horizon off.
     r("goal_horizon_margin", -DIST, DIST, false),
     r("subgroup_separation", 0.0, DIST, false),

@@ -480,3 +480,51 @@ fn arba_robot_flies_to_the_subgroup_best_heard_on_the_radio() {
         assert_eq!(pb, Some((pack(me), signal_at(60.0) as f32)), "{mode}");
     }
 }
+
+/// Eq. (11)'s pb_i is "the best since the robot joined the subgroup" (paper 3.3): a Type II
+/// robot that has measured nothing has none (no c1 term pulling it back to where it joined);
+/// once it measures the target it has one; after a drop and a new join it starts empty again,
+/// while the subgroup's sgb is kept (`keep_subgroup_best_across_gaps`).
+#[test]
+fn personal_best_is_the_best_since_joining() {
+    let sc = scenario("BT");
+    let mut r = Search::new(&sc, 0);
+    let best = [500.0, 500.0];
+    let member = Candidacy {
+        pb: Some((pack(best), signal_at(20.0) as f32)),
+        ..type1_candidacy(3, signal_at(20.0) as f32).unwrap()
+    };
+    let leader = || {
+        vec![rx(
+            4,
+            status(best, &[(3, signal_at(20.0) as f32)], Some(member.clone())),
+        )]
+    };
+    let mut out = Outbox::new_for_tests(8);
+    // Tick 1: joins as Type II of robot 4 (200 away), senses nothing: no pb, sgb = 4's pb.
+    r.step(&sense([700.0, 500.0], &[]), &leader(), &mut out);
+    assert!(matches!(
+        r.mode(),
+        Mode::Cooperative {
+            target: 3,
+            role: Role::TypeII { .. }
+        }
+    ));
+    assert_eq!(r.personal_best(), None);
+    let (sgb, f) = r.subgroup_best().expect("sgb heard");
+    assert!((sgb - Vec2::new(500.0, 500.0)).norm() < 1e-3 && f > 24.0);
+    // With no pb the c1 term is absent: the status carries no pb either.
+    assert_eq!(r.last_status().unwrap().candidacy.as_ref().unwrap().pb, None);
+    // Tick 2: it measures the target below I_min (still Type II): that is its pb.
+    r.step(&sense([690.0, 500.0], &[(3, 0, 0.5)]), &leader(), &mut out);
+    let (pb, f) = r.personal_best().expect("measured");
+    assert!((pb - Vec2::new(690.0, 500.0)).norm() < 1e-3 && (f - 0.5).abs() < 1e-12);
+    // Tick 3: nobody heard, nothing sensed: it roams and forgets pb, keeps sgb.
+    r.step(&sense([680.0, 500.0], &[]), &[], &mut out);
+    assert_eq!(r.mode(), Mode::Roaming);
+    // Tick 4: joins again: pb empty (since this join), sgb still the subgroup's.
+    r.step(&sense([670.0, 500.0], &[]), &leader(), &mut out);
+    assert!(matches!(r.mode(), Mode::Cooperative { target: 3, .. }));
+    assert_eq!(r.personal_best(), None);
+    assert!(r.subgroup_best().is_some());
+}
