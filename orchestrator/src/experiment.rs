@@ -276,6 +276,7 @@ fn run(a: ExperimentArgs) -> Result<i32, String> {
                             sc,
                             run_id: &run_id,
                             run_dir: &dir,
+                            live: false,
                             on_status: &mut |_| {},
                         })
                         .and_then(|_| {

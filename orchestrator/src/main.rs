@@ -4,6 +4,7 @@ mod bench;
 mod clean;
 mod control;
 mod experiment;
+mod export;
 mod inprocess;
 mod phase;
 mod prepare;
@@ -12,6 +13,7 @@ mod registry;
 mod runid;
 mod signals;
 mod up;
+mod view;
 
 use clap::{Parser, Subcommand};
 
@@ -41,6 +43,10 @@ enum Cmd {
     Status,
     /// SIGKILL agent processes of a running run.
     Kill(control::KillArgs),
+    /// Replay a run in the browser: serves a page on 127.0.0.1 that plays its recording.bin.
+    View(view::ViewArgs),
+    /// Write a run's recording as CSV (one row per robot and tick) or MCAP (for Foxglove).
+    Export(export::ExportArgs),
     /// (internal) A benchmark child process.
     #[command(hide = true, name = "__bench-child")]
     BenchChild(bench::ChildArgs),
@@ -72,6 +78,8 @@ fn main() {
         Cmd::Status => control::status(),
         Cmd::Experiment(a) => experiment::experiment(a),
         Cmd::Kill(a) => control::kill(a),
+        Cmd::View(a) => view::view(a),
+        Cmd::Export(a) => export::export(a),
         Cmd::Clean => {
             let r = clean::clean_dead_runs();
             println!(
