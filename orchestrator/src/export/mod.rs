@@ -2,6 +2,7 @@
 //! read. CSV: one row per robot and tick (pandas, spreadsheets). MCAP: JSON-schema channels of
 //! poses, mission entities and radio counters, one message per tick each (Foxglove).
 
+pub mod charts;
 pub mod csv;
 pub mod mcap;
 
