@@ -51,54 +51,84 @@ pub fn status() -> i32 {
     0
 }
 
-pub fn kill(a: KillArgs) -> i32 {
+/// Why a kill order was refused.
+#[derive(Debug, thiserror::Error)]
+pub enum KillError {
+    #[error("--run {run}: no such live run (live runs: {live})")]
+    NoRun { run: String, live: String },
+    #[error("give --robot I or --robots I,J,...")]
+    NoRobot,
+    #[error("--robot {robot} is out of range: run {run} has robots 0..={last}")]
+    OutOfRange { robot: u32, run: String, last: u32 },
+}
+
+/// SIGKILLs the agents of `robots` in live run `run` (found in the run registry; only a
+/// process whose command line carries the run's prefix). One line per robot: killed, or gone.
+/// `orchestrator kill` and the viewer's kill button both come here.
+pub fn kill_robots(run: &str, robots: &[u32]) -> Result<Vec<String>, KillError> {
     let runs = live_runs();
-    let Some(e) = runs.iter().find(|e| e.run_id == a.run) else {
+    let Some(e) = runs.iter().find(|e| e.run_id == run) else {
         let ids: Vec<&str> = runs.iter().map(|e| e.run_id.as_str()).collect();
-        eprintln!(
-            "error: --run {}: no such live run (live runs: {})",
-            a.run,
-            if ids.is_empty() {
+        return Err(KillError::NoRun {
+            run: run.to_string(),
+            live: if ids.is_empty() {
                 "none".into()
             } else {
                 ids.join(", ")
-            }
-        );
-        return 2;
+            },
+        });
     };
-    let robots: Vec<u32> = a
-        .robot
-        .into_iter()
-        .chain(a.robots.iter().copied())
-        .collect();
     if robots.is_empty() {
-        eprintln!("error: give --robot I or --robots I,J,...");
-        return 2;
+        return Err(KillError::NoRobot);
     }
     let n = e.agent_pids.len() as u32;
-    if let Some(bad) = robots.iter().find(|&&r| r >= n) {
-        eprintln!(
-            "error: --robot {bad} is out of range: run {} has robots 0..={}",
-            e.run_id,
-            n.saturating_sub(1)
-        );
-        return 2;
+    if let Some(&bad) = robots.iter().find(|&&r| r >= n) {
+        return Err(KillError::OutOfRange {
+            robot: bad,
+            run: e.run_id.clone(),
+            last: n.saturating_sub(1),
+        });
     }
-    for r in robots {
+    let mut lines = Vec::new();
+    for &r in robots {
         let pid = e.agent_pids[r as usize];
         // Only a process of this run (its command line carries the run's prefix).
         let ours = std::fs::read(format!("/proc/{pid}/cmdline"))
             .map(|c| String::from_utf8_lossy(&c).contains(&e.prefix))
             .unwrap_or(false);
         if !ours {
-            eprintln!("robot {r}: process {pid} is gone (already dead?)");
+            lines.push(format!("robot {r}: process {pid} is gone (already dead?)"));
             continue;
         }
         // SAFETY: SIGKILL of an agent process of this run.
         unsafe {
             libc::kill(pid as i32, libc::SIGKILL);
         }
-        println!("killed robot {r} (pid {pid}) of run {}", e.run_id);
+        lines.push(format!("killed robot {r} (pid {pid}) of run {}", e.run_id));
     }
-    0
+    Ok(lines)
+}
+
+pub fn kill(a: KillArgs) -> i32 {
+    let robots: Vec<u32> = a
+        .robot
+        .into_iter()
+        .chain(a.robots.iter().copied())
+        .collect();
+    match kill_robots(&a.run, &robots) {
+        Ok(lines) => {
+            for l in lines {
+                if l.starts_with("killed") {
+                    println!("{l}");
+                } else {
+                    eprintln!("{l}");
+                }
+            }
+            0
+        }
+        Err(e) => {
+            eprintln!("error: {e}");
+            2
+        }
+    }
 }

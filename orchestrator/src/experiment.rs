@@ -331,6 +331,7 @@ fn run(a: ExperimentArgs) -> Result<i32, String> {
                             sc,
                             run_id: &run_id,
                             run_dir: &dir,
+                            live: false,
                             on_status: &mut |_| {},
                         })
                         .and_then(|_| {
@@ -398,6 +399,7 @@ fn run(a: ExperimentArgs) -> Result<i32, String> {
     }
     print!("{md}");
     std::fs::write(out.join("results.md"), &md).map_err(|e| e.to_string())?;
+    write_charts(&x, &cells, seeds, &out)?;
     let json = serde_json::json!({ "experiment": x, "seeds": seeds, "runs": results, "cells": cells,
         "unavailable": unavailable, "failures": failures });
     std::fs::write(
@@ -405,8 +407,89 @@ fn run(a: ExperimentArgs) -> Result<i32, String> {
         serde_json::to_string_pretty(&json).expect("json"),
     )
     .map_err(|e| e.to_string())?;
-    println!("\nwritten: {}/results.md, results.json", out.display());
+    println!(
+        "\nwritten: {}/results.md, results.json, steps.svg, energy.svg",
+        out.display()
+    );
     Ok(if failures.is_empty() { 0 } else { 1 })
+}
+
+/// `steps.svg` and `energy.svg` beside results.md: the mean and the spread (min to max) over
+/// the completed runs against the swarm size, one line per mode (and variant), with the
+/// paper's means as crosses where the experiment gives them.
+fn write_charts(x: &Experiment, cells: &[Cell], seeds: u32, out: &Path) -> Result<(), String> {
+    use crate::export::charts::{write, Chart, Point, Series};
+    let many = x.variants.len() > 1;
+    for (file, what, pick, paper) in [
+        (
+            "steps.svg",
+            "steps",
+            (|c: &Cell| c.steps) as fn(&Cell) -> Option<[f64; 3]>,
+            (|p: &PaperRow| p.steps[1]) as fn(&PaperRow) -> f64,
+        ),
+        (
+            "energy.svg",
+            "energy (x 10^4)",
+            |c: &Cell| c.energy_e4,
+            |p: &PaperRow| p.energy[1],
+        ),
+    ] {
+        let mut series = Vec::new();
+        for mode in &x.modes {
+            for v in &x.variants {
+                let points: Vec<Point> = cells
+                    .iter()
+                    .filter(|c| &c.mode == mode && c.variant == v.name)
+                    .filter_map(|c| {
+                        pick(c).map(|[lo, mean, hi]| Point {
+                            x: c.robots as f64,
+                            mean,
+                            lo,
+                            hi,
+                        })
+                    })
+                    .collect();
+                series.push(Series {
+                    label: if many {
+                        format!("{mode} {}", v.name)
+                    } else {
+                        mode.clone()
+                    },
+                    points,
+                    reference: false,
+                });
+            }
+            let theirs: Vec<Point> = x
+                .paper
+                .iter()
+                .filter(|p| &p.mode == mode)
+                .map(|p| {
+                    let m = paper(p);
+                    Point {
+                        x: p.robots as f64,
+                        mean: m,
+                        lo: m,
+                        hi: m,
+                    }
+                })
+                .collect();
+            if !theirs.is_empty() {
+                series.push(Series {
+                    label: format!("{mode} (paper)"),
+                    points: theirs,
+                    reference: true,
+                });
+            }
+        }
+        let chart = Chart {
+            title: format!("{what}: mean and min-max over the completed runs of {seeds} seeds"),
+            x_label: "robots (N)".into(),
+            y_label: what.into(),
+            series,
+        };
+        write(&chart, &out.join(file))?;
+    }
+    Ok(())
 }
 
 fn tabulate(x: &Experiment, results: &[RunResult]) -> Vec<Cell> {

@@ -92,6 +92,8 @@ pub struct InProcess<'a> {
     /// robots are split into contiguous id ranges, one per thread, and their messages joined
     /// in id order, so the result does not depend on it.
     pub threads: usize,
+    /// Flush recording.bin after every tick (a live viewer reads it as it grows).
+    pub live: bool,
 }
 
 impl BehaviourVisitor for InProcess<'_> {
@@ -107,6 +109,9 @@ impl BehaviourVisitor for InProcess<'_> {
             Some(d) => RunOutputs::create(d, &world)?,
             None => RunOutputs::summary_only(),
         };
+        if self.live {
+            outputs.flush_each_tick();
+        }
         let n = world.n;
         let threads = self.threads.clamp(1, (n / MIN_ROBOTS_PER_THREAD).max(1));
         let per = n.div_ceil(threads).max(1);
@@ -211,7 +216,7 @@ impl BehaviourVisitor for InProcess<'_> {
                 }
                 let mut w = world.write().unwrap_or_else(|e| e.into_inner());
                 let rec = w.apply(&actions);
-                outputs.push(&rec)?;
+                outputs.push(&rec, &w)?;
                 mailbox
                     .write()
                     .unwrap_or_else(|e| e.into_inner())
@@ -253,6 +258,18 @@ pub fn run(
     threads: usize,
     on_tick: &mut dyn FnMut(&World),
 ) -> std::io::Result<Summary> {
+    run_live(sc, out_dir, run_id, threads, on_tick, false)
+}
+
+/// [`run`], recording.bin flushed after every tick when `live` (`orchestrator up --view`).
+pub fn run_live(
+    sc: &Scenario,
+    out_dir: Option<&Path>,
+    run_id: &str,
+    threads: usize,
+    on_tick: &mut dyn FnMut(&World),
+    live: bool,
+) -> std::io::Result<Summary> {
     dispatch(
         sc,
         InProcess {
@@ -261,6 +278,7 @@ pub fn run(
             run_id,
             on_tick,
             threads,
+            live,
         },
     )
 }

@@ -5,6 +5,7 @@ mod clean;
 mod control;
 mod experiment;
 mod experiment_formation;
+mod export;
 mod inprocess;
 mod phase;
 mod prepare;
@@ -13,6 +14,7 @@ mod registry;
 mod runid;
 mod signals;
 mod up;
+mod view;
 
 use clap::{Parser, Subcommand};
 
@@ -42,6 +44,10 @@ enum Cmd {
     Status,
     /// SIGKILL agent processes of a running run.
     Kill(control::KillArgs),
+    /// Replay a run in the browser: serves a page on 127.0.0.1 that plays its recording.bin.
+    View(view::ViewArgs),
+    /// Write a run's recording as CSV (one row per robot and tick) or MCAP (for Foxglove).
+    Export(export::ExportArgs),
     /// (internal) A benchmark child process.
     #[command(hide = true, name = "__bench-child")]
     BenchChild(bench::ChildArgs),
@@ -73,6 +79,8 @@ fn main() {
         Cmd::Status => control::status(),
         Cmd::Experiment(a) => experiment::experiment(a),
         Cmd::Kill(a) => control::kill(a),
+        Cmd::View(a) => view::view(a),
+        Cmd::Export(a) => export::export(a),
         Cmd::Clean => {
             let r = clean::clean_dead_runs();
             println!(

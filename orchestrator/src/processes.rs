@@ -36,6 +36,8 @@ pub struct ProcessRun<'a> {
     pub run_id: &'a str,
     pub run_dir: &'a Path,
     pub on_status: &'a mut dyn FnMut(&WorldStatus),
+    /// The world flushes recording.bin after every tick (`up --view` reads it as it grows).
+    pub live: bool,
 }
 
 #[derive(Debug)]
@@ -142,6 +144,7 @@ fn supervise(
     let mut world = Command::new(bin("world"))
         .args(["--run-id", p.run_id, "--prefix", prefix, "--run-dir"])
         .arg(p.run_dir)
+        .args(p.live.then_some("--live"))
         .stdin(Stdio::null())
         .stdout(Stdio::piped())
         .process_group(0)

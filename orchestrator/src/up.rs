@@ -69,6 +69,14 @@ pub struct UpArgs {
     /// No progress bar.
     #[arg(long)]
     pub quiet: bool,
+    /// Watch the run in the browser: serves the viewer on 127.0.0.1 (the URL is printed)
+    /// fed from the run's recording as the world writes it, with a button that kills a
+    /// robot's agent as `orchestrator kill` does.
+    #[arg(long)]
+    pub view: bool,
+    /// Port of --view (0: any free port).
+    #[arg(long, default_value_t = 0, requires = "view")]
+    pub view_port: u16,
 }
 
 #[derive(Copy, Clone, Debug, PartialEq, Eq, ValueEnum)]
@@ -215,6 +223,9 @@ pub fn expand_kills(sc: &mut Scenario) {
     sc.faults.kill_fraction = 0.0;
 }
 
+/// How long `up --view` goes on serving after the run, for the pages to get its last frames.
+const VIEW_LAST_FRAMES: std::time::Duration = std::time::Duration::from_millis(300);
+
 fn progress(sc: &Scenario, quiet: bool) -> ProgressBar {
     if quiet {
         return ProgressBar::hidden();
@@ -296,25 +307,57 @@ pub fn up(a: UpArgs) -> i32 {
         );
         return 2;
     }
+    let live = if a.view {
+        let kill: Option<std::sync::Arc<crate::view::server::KillFn>> =
+            (a.executor == Executor::Processes).then(|| {
+                let id = run_id.clone();
+                std::sync::Arc::new(move |robot: u32| {
+                    crate::control::kill_robots(&id, &[robot])
+                        .map(|lines| lines.join("; "))
+                        .map_err(|e| e.to_string())
+                }) as std::sync::Arc<crate::view::server::KillFn>
+            });
+        match crate::view::live(&run_dir, a.view_port, kill) {
+            Ok(l) => {
+                println!("viewer: {}", l.viewer.url);
+                use std::io::Write;
+                let _ = std::io::stdout().flush();
+                Some(l)
+            }
+            Err(e) => {
+                eprintln!("error: --view-port: {e}");
+                return 2;
+            }
+        }
+    } else {
+        None
+    };
     let pb = progress(&sc, a.quiet);
     let n = sc.run.robots;
     let label = world::mission::progress_label(&sc);
     let result: Result<(), String> = match a.executor {
-        Executor::Inprocess => inprocess::run(&sc, Some(&run_dir), &run_id, cores(), &mut |w| {
-            pb.set_position(w.tick);
-            if w.tick % 16 == 0 {
-                let r = &w.radio;
-                let (done, total) = w.mission.progress();
-                pb.set_message(bar_msg(
-                    w.alive_count(),
-                    n,
-                    r.delivered,
-                    r.dropped_range,
-                    r.dropped_loss,
-                    (label, done, total),
-                ));
-            }
-        })
+        Executor::Inprocess => inprocess::run_live(
+            &sc,
+            Some(&run_dir),
+            &run_id,
+            cores(),
+            &mut |w| {
+                pb.set_position(w.tick);
+                if w.tick % 16 == 0 {
+                    let r = &w.radio;
+                    let (done, total) = w.mission.progress();
+                    pb.set_message(bar_msg(
+                        w.alive_count(),
+                        n,
+                        r.delivered,
+                        r.dropped_range,
+                        r.dropped_loss,
+                        (label, done, total),
+                    ));
+                }
+            },
+            a.view,
+        )
         .map(|_| ())
         .map_err(|e| e.to_string()),
         Executor::Processes => processes::run(processes::ProcessRun {
@@ -332,6 +375,7 @@ pub fn up(a: UpArgs) -> i32 {
                     (label, s.progress_done, s.progress_total),
                 ));
             },
+            live: a.view,
         })
         .and_then(|o| match o.world_exit {
             Ok(0) => Ok(()),
@@ -340,6 +384,13 @@ pub fn up(a: UpArgs) -> i32 {
         }),
     };
     pb.finish_and_clear();
+    if let Some(l) = &live {
+        // The follower reads the last bytes, the open pages get them and the stream's end;
+        // a page keeps every frame it got, to scrub after the run.
+        l.feed.end();
+        std::thread::sleep(VIEW_LAST_FRAMES);
+        l.viewer.stop();
+    }
     if let Err(e) = result {
         eprintln!("error: run {run_id}: {e}");
         // Ctrl-C before the first tick: the shell's code for an interrupted command.

@@ -15,6 +15,7 @@ pub mod cleanup;
 pub mod frames;
 pub mod geometry;
 pub mod key_lines;
+pub mod layer;
 pub mod limits;
 pub mod link;
 pub mod mailbox;

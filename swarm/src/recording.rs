@@ -3,6 +3,7 @@
 //! Holds no wall-clock values, so lock-step runs with the same scenario and seed give
 //! byte-identical files whatever the executor and the OS scheduling.
 
+use crate::layer::Mark;
 use crate::radio::RadioCounters;
 use serde::{Deserialize, Serialize};
 use std::io::{BufReader, BufWriter, Read, Write};
@@ -13,6 +14,9 @@ pub const RECORDING_VERSION: u32 = 1;
 /// when it has something to put there (robots with a body); other runs keep version 1, so
 /// their recordings read as they always did.
 pub const RECORDING_VERSION_EXTRA: u32 = 2;
+/// Version 3: as version 2, each TickExtra followed by the tick's [`TickLayer`] (the mission's
+/// marks, for the viewer). A run writes it when its mission has a layer (search: targets).
+pub const RECORDING_VERSION_LAYER: u32 = 3;
 
 /// Clearances of robot bodies at one tick (robots with `robot.radius` > 0).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -44,6 +48,14 @@ impl Default for BodyFigures {
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 pub struct TickExtra {
     pub body: Option<BodyFigures>,
+}
+
+/// What a version-3 recording adds after each tick's TickExtra: the mission's layer at the end
+/// of the tick (`Mission::live_layer`), or None when it is the previous tick's (a search's
+/// targets change only when one is found, so most ticks cost one byte).
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct TickLayer {
+    pub marks: Option<Vec<Mark>>,
 }
 
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -103,6 +115,10 @@ pub struct TickRecord {
     /// Version 2 only: written after the record, not inside it.
     #[serde(skip)]
     pub extra: Option<TickExtra>,
+    /// Version 3 only: the mission's marks at the end of this tick (written after the
+    /// TickExtra as a [`TickLayer`]; read back whole, unchanged ticks filled in).
+    #[serde(skip)]
+    pub layer: Option<Vec<Mark>>,
 }
 
 fn cfg() -> bincode::config::Configuration {
@@ -113,6 +129,10 @@ pub struct RecordingWriter<W: Write> {
     out: BufWriter<W>,
     /// Version 2: a TickExtra follows each record.
     extra: bool,
+    /// Version 3: a TickLayer follows each TickExtra; the last marks written.
+    layer: Option<Vec<Mark>>,
+    /// Flush after every tick (a live viewer reads the file as it grows).
+    flush_each_tick: bool,
 }
 
 impl<W: Write> RecordingWriter<W> {
@@ -123,15 +143,46 @@ impl<W: Write> RecordingWriter<W> {
         Ok(RecordingWriter {
             out,
             extra: header.version >= RECORDING_VERSION_EXTRA,
+            layer: (header.version >= RECORDING_VERSION_LAYER).then(Vec::new),
+            flush_each_tick: false,
         })
     }
+    /// Every tick reaches the file when pushed (`orchestrator up --view`); otherwise the
+    /// buffer fills first. The bytes are the same.
+    pub fn flush_each_tick(&mut self, on: bool) {
+        self.flush_each_tick = on;
+    }
     pub fn push(&mut self, rec: &TickRecord) -> std::io::Result<()> {
+        self.push_with_layer(rec, rec.layer.as_deref())
+    }
+    /// [`push`](Self::push) with the tick's layer given apart from the record (`None`: no
+    /// marks this tick).
+    pub fn push_with_layer(
+        &mut self,
+        rec: &TickRecord,
+        marks: Option<&[Mark]>,
+    ) -> std::io::Result<()> {
         bincode::serde::encode_into_std_write(rec, &mut self.out, cfg())
             .map_err(std::io::Error::other)?;
         if self.extra {
             let extra = rec.extra.clone().unwrap_or_default();
             bincode::serde::encode_into_std_write(&extra, &mut self.out, cfg())
                 .map_err(std::io::Error::other)?;
+        }
+        if let Some(last) = self.layer.as_mut() {
+            let now = marks.unwrap_or(&[]);
+            // The first tick always carries its marks; later ones only when they changed.
+            let changed = rec.tick == 0 || now != &last[..];
+            let out: Option<&[Mark]> = changed.then_some(now);
+            bincode::serde::encode_into_std_write(out, &mut self.out, cfg())
+                .map_err(std::io::Error::other)?;
+            if changed {
+                last.clear();
+                last.extend_from_slice(now);
+            }
+        }
+        if self.flush_each_tick {
+            self.out.flush()?;
         }
         Ok(())
     }
@@ -145,29 +196,65 @@ pub fn read_recording<R: Read>(r: R) -> std::io::Result<(RecordingHeader, Vec<Ti
     let mut inp = BufReader::new(r);
     let header: RecordingHeader =
         bincode::serde::decode_from_std_read(&mut inp, cfg()).map_err(std::io::Error::other)?;
-    let extra = header.version >= RECORDING_VERSION_EXTRA;
     let mut ticks = Vec::new();
-    loop {
-        match bincode::serde::decode_from_std_read::<TickRecord, _, _>(&mut inp, cfg()) {
-            Ok(mut t) => {
-                if extra {
-                    t.extra = Some(
-                        bincode::serde::decode_from_std_read(&mut inp, cfg())
-                            .map_err(std::io::Error::other)?,
-                    );
-                }
-                ticks.push(t)
-            }
-            Err(bincode::error::DecodeError::UnexpectedEnd { .. }) => break,
-            Err(bincode::error::DecodeError::Io { inner, .. })
-                if inner.kind() == std::io::ErrorKind::UnexpectedEof =>
-            {
-                break
-            }
-            Err(e) => return Err(std::io::Error::other(e)),
-        }
+    let mut reader = TickReader::new(&header);
+    while let Some(t) = reader.next(&mut inp)? {
+        ticks.push(t);
     }
     Ok((header, ticks))
+}
+
+/// Reads the header of a recording (a live run's file, still growing).
+pub fn read_header<R: Read>(r: &mut R) -> std::io::Result<RecordingHeader> {
+    bincode::serde::decode_from_std_read(r, cfg()).map_err(std::io::Error::other)
+}
+
+/// Reads tick records one at a time after the header, filling in each tick's layer.
+pub struct TickReader {
+    extra: bool,
+    layer: Option<Vec<Mark>>,
+}
+
+impl TickReader {
+    pub fn new(header: &RecordingHeader) -> TickReader {
+        TickReader {
+            extra: header.version >= RECORDING_VERSION_EXTRA,
+            layer: (header.version >= RECORDING_VERSION_LAYER).then(Vec::new),
+        }
+    }
+
+    /// The next tick, None at the end of the stream (a record cut short counts as the end).
+    pub fn next<R: Read>(&mut self, inp: &mut R) -> std::io::Result<Option<TickRecord>> {
+        let eof = |e: &bincode::error::DecodeError| match e {
+            bincode::error::DecodeError::UnexpectedEnd { .. } => true,
+            bincode::error::DecodeError::Io { inner, .. } => {
+                inner.kind() == std::io::ErrorKind::UnexpectedEof
+            }
+            _ => false,
+        };
+        let mut t = match bincode::serde::decode_from_std_read::<TickRecord, _, _>(inp, cfg()) {
+            Ok(t) => t,
+            Err(e) if eof(&e) => return Ok(None),
+            Err(e) => return Err(std::io::Error::other(e)),
+        };
+        if self.extra {
+            match bincode::serde::decode_from_std_read(inp, cfg()) {
+                Ok(x) => t.extra = Some(x),
+                Err(e) if eof(&e) => return Ok(None),
+                Err(e) => return Err(std::io::Error::other(e)),
+            }
+        }
+        if let Some(last) = self.layer.as_mut() {
+            match bincode::serde::decode_from_std_read::<Option<Vec<Mark>>, _, _>(inp, cfg()) {
+                Ok(Some(m)) => *last = m,
+                Ok(None) => {}
+                Err(e) if eof(&e) => return Ok(None),
+                Err(e) => return Err(std::io::Error::other(e)),
+            }
+            t.layer = Some(last.clone());
+        }
+        Ok(Some(t))
+    }
 }
 
 #[cfg(test)]
@@ -199,6 +286,7 @@ mod tests {
                 ..Default::default()
             },
             extra: None,
+            layer: None,
         };
         let mut buf = Vec::new();
         let mut w = RecordingWriter::new(&mut buf, &h).unwrap();
@@ -229,5 +317,63 @@ mod tests {
         w.finish().unwrap();
         assert_eq!(read_recording(&buf2[..]).unwrap().1, vec![t2.clone(), t2]);
         assert!(buf2.len() > buf.len());
+    }
+
+    #[test]
+    fn version_3_writes_a_layer_only_when_it_changes_and_reads_every_tick_whole() {
+        let h = RecordingHeader {
+            version: RECORDING_VERSION_LAYER,
+            robots: 1,
+            seed: 0,
+            scenario: String::new(),
+        };
+        let disc = |fill: u8| Mark::Disc {
+            at: [1.0, 2.0],
+            px: 5,
+            fill: [fill, 0, 0],
+            outline: None,
+        };
+        let tick = |k: u64, m: Vec<Mark>| TickRecord {
+            tick: k,
+            poses: vec![[k as f64, 0.0, 0.0]],
+            alive: vec![1],
+            states: vec![0],
+            events: vec![],
+            radio: RadioCounters::default(),
+            extra: Some(TickExtra::default()),
+            layer: Some(m),
+        };
+        let ticks = vec![
+            tick(0, vec![disc(1)]),
+            tick(1, vec![disc(1)]),
+            tick(2, vec![disc(2)]),
+            tick(3, vec![]),
+        ];
+        let mut buf = Vec::new();
+        let mut w = RecordingWriter::new(&mut buf, &h).unwrap();
+        let mut sizes = vec![];
+        for t in &ticks {
+            w.push(t).unwrap();
+            w.out.flush().unwrap();
+            sizes.push(w.out.get_ref().len());
+        }
+        w.finish().unwrap();
+        let (_, back) = read_recording(&buf[..]).unwrap();
+        assert_eq!(back, ticks);
+        // Tick 1 repeats tick 0's marks: one byte (None) instead of the disc; ticks 0 and 1
+        // differ in nothing else of the same size (pose x 0.0 vs 1.0 are both 8 bytes).
+        let t0 = sizes[0] - encoded_header_len(&h);
+        let t1 = sizes[1] - sizes[0];
+        let disc_bytes = bincode::serde::encode_to_vec(Some(vec![disc(1)]), cfg()).unwrap();
+        assert_eq!(t0 - t1, disc_bytes.len() - 1);
+        // A record cut anywhere reads as the end, not as an error, and not as a tick.
+        for cut in sizes[1] + 1..sizes[2] {
+            let (_, part) = read_recording(&buf[..cut]).unwrap();
+            assert_eq!(part.len(), 2, "cut at {cut}");
+        }
+    }
+
+    fn encoded_header_len(h: &RecordingHeader) -> usize {
+        bincode::serde::encode_to_vec(h, cfg()).unwrap().len()
     }
 }

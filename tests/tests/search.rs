@@ -83,6 +83,13 @@ fn the_experiment_grid_writes_the_paper_style_table() {
         md.contains("272 / 463 / 935"),
         "paper values beside ours: {md}"
     );
+    // The table as charts beside it: a line per mode, the paper's mean as a cross.
+    for chart in ["steps.svg", "energy.svg"] {
+        let svg = std::fs::read_to_string(out.join(chart)).unwrap();
+        for label in [">BT<", ">BE<", ">BT (paper)<", ">20<"] {
+            assert!(svg.contains(label), "{chart}: no {label}");
+        }
+    }
     let j: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("results.json")).unwrap()).unwrap();
     let runs = j["runs"].as_array().unwrap();

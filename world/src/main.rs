@@ -14,6 +14,9 @@ struct Args {
     /// The run folder; holds the resolved scenario.toml and receives the outputs.
     #[arg(long)]
     run_dir: PathBuf,
+    /// Flush recording.bin after every tick, for a live viewer (`orchestrator up --view`).
+    #[arg(long)]
+    live: bool,
 }
 
 fn main() {
@@ -37,6 +40,7 @@ fn main() {
         prefix: args.prefix,
         run_dir: args.run_dir,
         scenario: sc,
+        live: args.live,
     };
     match world::process::run(&a) {
         Ok(code) => std::process::exit(code),

@@ -72,6 +72,8 @@ pub struct Summary {
 pub struct RunOutputs {
     pub dir: Option<PathBuf>,
     rec: Option<RecordingWriter<File>>,
+    /// The recording holds the mission's layer per tick (version 3).
+    layer: bool,
 }
 
 impl RunOutputs {
@@ -80,8 +82,9 @@ impl RunOutputs {
         let sc = &world.sc;
         std::fs::create_dir_all(dir)?;
         std::fs::write(dir.join("scenario.toml"), sc.to_toml())?;
+        let version = world.recording_version();
         let header = RecordingHeader {
-            version: world.recording_version(),
+            version,
             robots: sc.run.robots,
             seed: sc.run.seed,
             scenario: sc.to_toml(),
@@ -90,6 +93,7 @@ impl RunOutputs {
         Ok(RunOutputs {
             dir: Some(dir.to_path_buf()),
             rec: Some(rec),
+            layer: version >= swarm::recording::RECORDING_VERSION_LAYER,
         })
     }
 
@@ -98,13 +102,25 @@ impl RunOutputs {
         RunOutputs {
             dir: None,
             rec: None,
+            layer: false,
         }
     }
 
-    pub fn push(&mut self, t: &TickRecord) -> std::io::Result<()> {
+    /// Writes tick record `t` of `world` (which has applied it: its mission's layer is the
+    /// tick's, for a version-3 recording).
+    pub fn push(&mut self, t: &TickRecord, world: &World) -> std::io::Result<()> {
         match self.rec.as_mut() {
+            Some(r) if self.layer => r.push_with_layer(t, Some(&world.mission.live_layer())),
             Some(r) => r.push(t),
             None => Ok(()),
+        }
+    }
+
+    /// Every tick reaches recording.bin as it is pushed, for a live viewer that reads the
+    /// file as it grows (`orchestrator up --view`); the bytes are the same.
+    pub fn flush_each_tick(&mut self) {
+        if let Some(r) = self.rec.as_mut() {
+            r.flush_each_tick(true);
         }
     }
 

@@ -18,6 +18,9 @@ pub struct WorldArgs {
     pub prefix: String,
     pub run_dir: PathBuf,
     pub scenario: Scenario,
+    /// Flush recording.bin after every tick: a live viewer reads it as it grows
+    /// (`orchestrator up --view`). Off, the world does nothing for viewers.
+    pub live: bool,
 }
 
 struct Robot {
@@ -184,6 +187,9 @@ pub fn run(args: &WorldArgs) -> Result<i32> {
     };
     let bell = bell.as_ref();
     let mut outputs = RunOutputs::create(&args.run_dir, &world)?;
+    if args.live {
+        outputs.flush_each_tick();
+    }
     // Tell the orchestrator every service exists: agents may start.
     println!("READY");
     std::io::stdout().flush()?;
@@ -326,7 +332,7 @@ pub fn run(args: &WorldArgs) -> Result<i32> {
             }
         }
         let rec = world.apply(&actions);
-        outputs.push(&rec)?;
+        outputs.push(&rec, &world)?;
         tick_ns.push(t_tick.elapsed().as_nanos() as u64);
         if let Ok(s) = status_pub.loan_uninit() {
             let _ = s.write_payload(world.status(false)).send();

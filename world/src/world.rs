@@ -629,12 +629,16 @@ impl World {
             events,
             radio,
             extra,
+            layer: None,
         }
     }
 
     /// The recording version this run writes: 2 (a TickExtra a tick) when robots have a body.
     pub fn recording_version(&self) -> u32 {
-        if self.body.is_some() {
+        if !self.mission.live_layer().is_empty() {
+            // 3: the mission's marks per tick too (the viewer draws them).
+            swarm::recording::RECORDING_VERSION_LAYER
+        } else if self.body.is_some() {
             swarm::recording::RECORDING_VERSION_EXTRA
         } else {
             swarm::recording::RECORDING_VERSION

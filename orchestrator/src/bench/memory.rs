@@ -128,6 +128,7 @@ fn one(n: u32, ticks: u64) -> Result<Row, String> {
         sc: &sc,
         run_id: &run_id,
         run_dir: &dir,
+        live: false,
         on_status: &mut |st: &WorldStatus| {
             if row.is_none() && st.tick >= SAMPLE_TICK {
                 row = Some(measure(&sc, &prefix, st.tick));

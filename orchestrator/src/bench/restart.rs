@@ -135,6 +135,7 @@ fn run(a: &Args) -> Result<Report, String> {
         sc: &sc,
         run_id: &run_id,
         run_dir: &dir,
+        live: false,
         on_status: &mut |st: &WorldStatus| match phase {
             Phase::Settle { until } if st.tick >= until && !signals::interrupted() => {
                 if kills == a.kills {

@@ -191,6 +191,7 @@ fn run_stats(sc: &Scenario) -> BenchResult<(u64, Stats)> {
         sc,
         run_id: &run_id,
         run_dir: &dir,
+        live: false,
         on_status: &mut |_| {},
     })
     .map_err(BenchError::Run)?;

@@ -33,35 +33,9 @@ pub struct DisplayState {
     pub colour: [u8; 3],
 }
 
-/// One mark of a mission's layer of a picture, in arena coordinates (sizes in pixels).
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub enum Mark {
-    /// A filled disc with an outline (`outline` None: none).
-    Disc {
-        at: [f64; 2],
-        px: u32,
-        fill: [u8; 3],
-        outline: Option<[u8; 3]>,
-    },
-    /// A ring (circle outline) `width` pixels wide.
-    Ring {
-        at: [f64; 2],
-        px: u32,
-        colour: [u8; 3],
-        width: u32,
-    },
-    /// A circle of `radius` arena units (a range, a body).
-    Circle {
-        at: [f64; 2],
-        radius: f64,
-        colour: [u8; 3],
-    },
-    /// A polyline.
-    Path {
-        points: Vec<[f64; 2]>,
-        colour: [u8; 3],
-    },
-}
+/// One mark of a mission's layer of a picture (its home is `swarm::layer`, so recordings
+/// hold it too).
+pub use swarm::layer::Mark;
 
 /// A legend entry: how the mark looks and what it means.
 #[derive(Debug, Clone, PartialEq)]
@@ -112,6 +86,16 @@ pub trait Mission: Send + Sync {
     /// Its layer of run.svg (drawn over the trajectories, under the robots).
     fn layer(&self) -> Vec<Mark> {
         Vec::new()
+    }
+    /// Its layer as it stands now, for the viewer: written into a version-3 recording after
+    /// every tick the layer changes (`swarm::recording::TickLayer`). The default is [`layer`];
+    /// a mission whose `layer` grows with the run (a path of all its history) overrides it
+    /// with what is true at this tick only (positions, states), so a tick costs the same all
+    /// run long.
+    ///
+    /// [`layer`]: Mission::layer
+    fn live_layer(&self) -> Vec<Mark> {
+        self.layer()
     }
     /// Legend entries for its layer.
     fn legend(&self) -> Vec<LegendEntry> {

@@ -1,0 +1,52 @@
+//! One tick as the page draws it: a recording's TickRecord in JSON, with the mission's
+//! progress so far.
+
+use serde::Serialize;
+use swarm::layer::Mark;
+use swarm::radio::RadioCounters;
+use swarm::recording::{Event, TickRecord};
+
+#[derive(Debug, Clone, Serialize)]
+pub struct Frame<'a> {
+    pub tick: u64,
+    /// [x, y, heading] of every robot after the tick.
+    pub poses: &'a [[f64; 3]],
+    pub alive: &'a [u8],
+    pub states: &'a [u8],
+    pub events: &'a [Event],
+    /// The tick's radio outcome (the recording holds counts for the whole swarm, not who
+    /// heard whom).
+    pub radio: &'a RadioCounters,
+    /// The mission's marks at the end of the tick (version-3 recordings; else empty).
+    pub layer: &'a [Mark],
+    /// EntityDone events up to and including this tick.
+    pub done: u32,
+}
+
+/// Turns tick records into the page's JSON frames, counting the mission's progress.
+#[derive(Default)]
+pub struct Framer {
+    done: u32,
+}
+
+impl Framer {
+    pub fn json(&mut self, t: &TickRecord) -> String {
+        self.done += t
+            .events
+            .iter()
+            .filter(|e| matches!(e, Event::EntityDone { .. }))
+            .count() as u32;
+        let f = Frame {
+            tick: t.tick,
+            poses: &t.poses,
+            alive: &t.alive,
+            states: &t.states,
+            events: &t.events,
+            radio: &t.radio,
+            layer: t.layer.as_deref().unwrap_or(&[]),
+            done: self.done,
+        };
+        // Frames hold only numbers, strings and lists: they always serialise.
+        serde_json::to_string(&f).expect("frame JSON")
+    }
+}

@@ -1,0 +1,105 @@
+//! What the page needs to know of a run besides its ticks: the arena, the radio range, the
+//! mission's display states, legend and progress label; built from a recording's header.
+
+use serde::Serialize;
+use swarm::layer::Mark;
+use swarm::recording::RecordingHeader;
+use swarm::scenario::Scenario;
+
+/// Why a recording cannot be shown.
+#[derive(Debug, thiserror::Error)]
+pub enum MetaError {
+    #[error("the recording's scenario does not read back: {0}")]
+    Scenario(#[from] swarm::scenario::ConfigError),
+    #[error("the recording's mission cannot be set up: {0}")]
+    Mission(#[from] world::mission::MissionError),
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct StateInfo {
+    pub state: u8,
+    pub name: &'static str,
+    pub colour: [u8; 3],
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct LegendInfo {
+    pub mark: Mark,
+    pub label: &'static str,
+}
+
+/// The run as the page sees it (`/api/meta`, and `window.RUN.meta` of `/run.js`).
+#[derive(Debug, Clone, Serialize)]
+pub struct Meta {
+    pub run: String,
+    /// A live run (`up --view`): more ticks come over `/api/stream`; robots can be killed.
+    pub live: bool,
+    pub robots: u32,
+    pub seed: u64,
+    pub behaviour: String,
+    pub mission: &'static str,
+    pub recording_version: u32,
+    pub max_ticks: u64,
+    /// Ticks per second of the run's pacing (0: unpaced).
+    pub tick_hz: f64,
+    pub arena: [f64; 2],
+    pub start_region: [f64; 4],
+    pub obstacles: Vec<Vec<[f64; 2]>>,
+    pub comm_radius: f64,
+    /// Robot body radius (0: point robots).
+    pub robot_radius: f64,
+    /// Empty: robots coloured by id.
+    pub states: Vec<StateInfo>,
+    pub legend: Vec<LegendInfo>,
+    pub progress_label: &'static str,
+    /// What the mission counts in all (search: targets); its done count is the number of
+    /// EntityDone events so far.
+    pub progress_total: u32,
+}
+
+impl Meta {
+    pub fn of(header: &RecordingHeader, run: &str, live: bool) -> Result<Meta, MetaError> {
+        let sc = Scenario::parse(&header.scenario, "recording.bin header")?;
+        let m = world::mission::create(&sc)?;
+        Ok(Meta {
+            run: run.to_string(),
+            live,
+            robots: header.robots,
+            seed: header.seed,
+            behaviour: sc.run.behaviour.clone(),
+            mission: m.name(),
+            recording_version: header.version,
+            max_ticks: sc.run.max_ticks,
+            tick_hz: sc.runtime.tick_hz,
+            arena: [sc.arena.width, sc.arena.height],
+            start_region: sc.arena.start_region,
+            obstacles: sc
+                .arena
+                .obstacles
+                .iter()
+                .map(|o| o.points.clone())
+                .collect(),
+            comm_radius: sc.radio.comm_radius,
+            robot_radius: sc.robot.radius,
+            states: m
+                .display_states()
+                .iter()
+                .map(|d| StateInfo {
+                    state: d.state,
+                    name: d.name,
+                    colour: d.colour,
+                })
+                .collect(),
+            legend: m
+                .legend()
+                .into_iter()
+                .map(|e| LegendInfo {
+                    mark: e.mark,
+                    label: e.label,
+                })
+                .collect(),
+            progress_label: world::mission::progress_label(&sc),
+            progress_total: m.progress().1,
+        })
+    }
+}
