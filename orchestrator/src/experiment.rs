@@ -71,7 +71,7 @@ pub struct Variant {
 }
 
 impl Variant {
-    fn apply(&self, sc: &mut Scenario) {
+    pub(crate) fn apply(&self, sc: &mut Scenario) {
         if let Some(v) = self.loss {
             sc.radio.loss = v;
         }
@@ -183,6 +183,9 @@ pub fn experiment(a: ExperimentArgs) -> i32 {
 }
 
 fn run(a: ExperimentArgs) -> Result<i32, String> {
+    if crate::experiment_hunt::is_hunt(&a.file) {
+        return crate::experiment_hunt::run(&a.file, a.out.as_deref());
+    }
     let x = load(&a.file)?;
     let base = Scenario::load(&x.scenario).map_err(|e| e.to_string())?;
     let seeds = a.runs.unwrap_or(x.seeds);

@@ -4,6 +4,7 @@ mod bench;
 mod clean;
 mod control;
 mod experiment;
+mod experiment_hunt;
 mod inprocess;
 mod phase;
 mod prepare;
