@@ -115,7 +115,7 @@ impl Variant {
             .map_err(|e| e.to_string())
     }
 
-    fn apply(&self, sc: &mut Scenario) {
+    pub(crate) fn apply(&self, sc: &mut Scenario) {
         if let Some(v) = self.loss {
             sc.radio.loss = v;
         }
@@ -229,6 +229,9 @@ pub fn experiment(a: ExperimentArgs) -> i32 {
 fn run(a: ExperimentArgs) -> Result<i32, String> {
     if crate::experiment_formation::is_formation(&a.file) {
         return crate::experiment_formation::run(&a.file, a.quiet);
+    }
+    if crate::experiment_hunt::is_hunt(&a.file) {
+        return crate::experiment_hunt::run(&a.file, a.out.as_deref());
     }
     let x = load(&a.file)?;
     let base = Scenario::load(&x.scenario).map_err(|e| e.to_string())?;

@@ -5,6 +5,7 @@ mod clean;
 mod control;
 mod experiment;
 mod experiment_formation;
+mod experiment_hunt;
 mod export;
 mod inprocess;
 mod phase;

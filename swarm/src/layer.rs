@@ -27,6 +27,14 @@ pub enum Mark {
         radius: f64,
         colour: [u8; 3],
     },
+    /// A filled isosceles triangle `px` pixels long pointing along `heading` (rad, arena
+    /// frame): a unicycle robot.
+    Triangle {
+        at: [f64; 2],
+        heading: f64,
+        px: u32,
+        fill: [u8; 3],
+    },
     /// A polyline.
     Path {
         points: Vec<[f64; 2]>,

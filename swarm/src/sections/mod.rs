@@ -3,5 +3,6 @@
 //! behaviour in the agent crate, the mission in the world crate).
 
 pub mod formation;
+pub mod hunt;
 pub mod roam;
 pub mod search;

@@ -57,6 +57,12 @@ pub struct RunFacts {
 pub trait Mission: Send + Sync {
     /// The registry's name.
     fn name(&self) -> &'static str;
+    /// Where the agents start, (x, y, heading) for each of `run.robots` (stations included),
+    /// when the mission's scenario places them (the hunt's tables); None: the world draws
+    /// them in `arena.start_region`.
+    fn start_poses(&self, _sc: &Scenario) -> Option<Vec<[f64; 3]>> {
+        None
+    }
     /// Writes what robot `robot` at `pos` senses of the mission's entities into
     /// `out.entities` (and `n_entities`, which the core sets to 0 before). Called for the live
     /// robots in id order each tick, so a mission may draw sensor noise from its own stream.
@@ -124,7 +130,7 @@ macro_rules! missions {
     };
 }
 
-missions!(roam, search, formation);
+missions!(roam, search, formation, hunt);
 
 /// The scenario's mission: `run.mission`, or the one its behaviour implies, or roam.
 pub fn entry_for(sc: &Scenario) -> Option<&'static MissionEntry> {

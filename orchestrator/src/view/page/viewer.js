@@ -69,6 +69,13 @@
       const [x, y] = px(v.at);
       ctx.beginPath(); ctx.arc(x, y, Math.max(1, v.radius * scale), 0, 2 * Math.PI);
       ctx.strokeStyle = rgb(v.colour); ctx.lineWidth = 1; ctx.stroke();
+    } else if (kind === "Triangle") {
+      // Tip and base corners found in arena units, so the canvas's y flip applies to them too.
+      const l = v.px / scale, h = v.heading;
+      const at = (a, r) => px([v.at[0] + r * Math.cos(h + a), v.at[1] + r * Math.sin(h + a)]);
+      const [t, b1, b2] = [at(0, l * 0.6), at(2.5, l * 0.5), at(-2.5, l * 0.5)];
+      ctx.beginPath(); ctx.moveTo(t[0], t[1]); ctx.lineTo(b1[0], b1[1]); ctx.lineTo(b2[0], b2[1]);
+      ctx.closePath(); ctx.fillStyle = rgb(v.fill); ctx.fill();
     } else if (kind === "Path" && v.points.length) {
       ctx.beginPath();
       v.points.forEach((p, k) => { const [x, y] = px(p); k ? ctx.lineTo(x, y) : ctx.moveTo(x, y); });
