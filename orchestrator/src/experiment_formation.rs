@@ -266,7 +266,9 @@ fn table1(
     }
     let runs = run_all(jobs, quiet)?;
     let pick = |g: &str, l: &str| -> Vec<&FormationRun> {
-        runs.iter().filter(|r| r.group == g && r.label == l).collect()
+        runs.iter()
+            .filter(|r| r.group == g && r.label == l)
+            .collect()
     };
     let mut md = String::from(
         "# Formation, Table 1: ours (with rotation) vs ref. [10] (no rotation)\n\n\
@@ -386,7 +388,12 @@ fn table2(
                 break;
             }
             let sign = if opt[3] < 0.0 { -1.0 } else { 1.0 };
-            let q = [opt[0] + d[0], opt[1] + d[1], opt[2] + d[2], opt[3] + sign * d[3]];
+            let q = [
+                opt[0] + d[0],
+                opt[1] + d[1],
+                opt[2] + d[2],
+                opt[3] + sign * d[3],
+            ];
             let tf = Transform {
                 alpha: q[0],
                 d: [q[1], q[2]],
@@ -534,11 +541,20 @@ fn one_shot(
     }
     md.push_str("\nThe paper shows this only qualitatively (Figs. 8-9: shorter paths with per-step reassignment; no numbers).\n");
     // Fig. 9: the per-step run of the first seed.
-    if let Some(series) = runs.iter().find(|r| r.label == "per-step").and_then(|r| r.series.clone()) {
+    if let Some(series) = runs
+        .iter()
+        .find(|r| r.label == "per-step")
+        .and_then(|r| r.series.clone())
+    {
         std::fs::create_dir_all(&x.results).map_err(|e| e.to_string())?;
         let path = x.results.join("formation-fig9.svg");
         std::fs::write(&path, fig9(&series)).map_err(|e| e.to_string())?;
-        let _ = writeln!(md, "\nFig. 9 analogue: {} (seed {}).", path.display(), x.first_seed);
+        let _ = writeln!(
+            md,
+            "\nFig. 9 analogue: {} (seed {}).",
+            path.display(),
+            x.first_seed
+        );
     }
     Ok((md, runs))
 }

@@ -7,6 +7,7 @@ use std::path::Path;
 pub use crate::sections::hunt::HuntSection;
 pub use crate::sections::roam::{RoamParams, ROAM_BEACON_OVERHEAD};
 pub use crate::sections::formation::FormationSection;
+pub use crate::sections::roam::{RoamParams, ROAM_BEACON_OVERHEAD};
 pub use crate::sections::search::{SearchParams, SEARCH_MODES};
 
 /// The default scenario, embedded so that `orchestrator up` needs no file.
@@ -510,7 +511,13 @@ impl Scenario {
                     ),
                 ));
             }
-            c.range_f(&format!("arena.discs[{i}].radius"), d.radius, 0.0, 1e6, true)?;
+            c.range_f(
+                &format!("arena.discs[{i}].radius"),
+                d.radius,
+                0.0,
+                1e6,
+                true,
+            )?;
         }
         c.range_f("robot.v_max", self.robot.v_max, 0.0, 1e6, true)?;
         c.range_f(

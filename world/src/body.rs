@@ -177,6 +177,23 @@ mod tests {
     use rand::{Rng, SeedableRng};
 
     #[test]
+    fn disc_obstacles_are_exact_circles_in_the_clearance() {
+        let mut sc = Scenario::roam();
+        sc.arena.obstacles.clear();
+        sc.arena.discs.push(swarm::scenario::DiscObstacle {
+            name: "d".into(),
+            centre: [50.0, 50.0],
+            radius: 2.0,
+        });
+        let st = Statics::new(&sc);
+        // 5 from the centre: 3 outside the circle; 1 from it: 1 inside.
+        assert!((st.clearance([55.0, 50.0]) - 3.0).abs() < 1e-12);
+        assert!((st.clearance([50.0, 51.0]) + 1.0).abs() < 1e-12);
+        assert!(!st.disc_clear([53.5, 50.0], 2.0));
+        assert!(st.disc_clear([54.0, 50.0], 2.0));
+    }
+
+    #[test]
     fn closest_pairs_matches_all_pairs() {
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
         for n in [0, 1, 2, 3, 10, 60] {

@@ -787,6 +787,24 @@ mod tests {
     }
 
     #[test]
+    fn a_point_robot_step_stops_where_it_enters_a_disc() {
+        let d = swarm::scenario::DiscObstacle {
+            name: "d".into(),
+            centre: [5.0, 0.0],
+            radius: 1.0,
+        };
+        // Along +x from 0 by 10: enters the circle at x = 4, t = 0.4.
+        let t = disc_hit(Vec2::new(0.0, 0.0), Vec2::new(10.0, 0.0), &d).unwrap();
+        assert!((t - 0.4).abs() < 1e-12, "{t}");
+        // Passing 2 above the centre: no hit; too short to reach it: none.
+        assert_eq!(
+            disc_hit(Vec2::new(0.0, 2.0), Vec2::new(10.0, 0.0), &d),
+            None
+        );
+        assert_eq!(disc_hit(Vec2::new(0.0, 0.0), Vec2::new(3.0, 0.0), &d), None);
+    }
+
+    #[test]
     fn dead_robots_stand_still_and_are_sensed_as_obstacles() {
         let mut w = world();
         w.poses[1] = [50.0, 50.0, 0.0];

@@ -120,9 +120,18 @@ pub fn builtin_template(name: &str, n: usize) -> Result<Vec<[f64; 2]>, String> {
             [0.0, 0.0],
             [0.0, 2.2],
             [0.0, 4.4],
-            [2.8 + 2.8 * 135f64.to_radians().cos(), 4.4 + 2.8 * 135f64.to_radians().sin()],
-            [2.8 + 2.8 * 90f64.to_radians().cos(), 4.4 + 2.8 * 90f64.to_radians().sin()],
-            [2.8 + 2.8 * 45f64.to_radians().cos(), 4.4 + 2.8 * 45f64.to_radians().sin()],
+            [
+                2.8 + 2.8 * 135f64.to_radians().cos(),
+                4.4 + 2.8 * 135f64.to_radians().sin(),
+            ],
+            [
+                2.8 + 2.8 * 90f64.to_radians().cos(),
+                4.4 + 2.8 * 90f64.to_radians().sin(),
+            ],
+            [
+                2.8 + 2.8 * 45f64.to_radians().cos(),
+                4.4 + 2.8 * 45f64.to_radians().sin(),
+            ],
             [5.6, 4.4],
             [5.6, 2.2],
             [5.6, 0.0],
@@ -217,7 +226,11 @@ mod tests {
         for n in [10, 100, 500] {
             let c = builtin_template("C", n).unwrap();
             assert_eq!(c.len(), n);
-            assert!(min_spacing(&c) >= LETTER_SPACING - 1e-9, "n {n}: {}", min_spacing(&c));
+            assert!(
+                min_spacing(&c) >= LETTER_SPACING - 1e-9,
+                "n {n}: {}",
+                min_spacing(&c)
+            );
         }
         assert!(builtin_template("n", 10).is_err());
         assert!(builtin_template("Z", 9).is_err());

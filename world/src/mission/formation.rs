@@ -472,9 +472,10 @@ mod tests {
     fn the_template_must_fit_the_robots() {
         let mut sc = Scenario::default();
         sc.run.robots = 9;
-        let mut f = FormationSection::default();
-        f.template = vec![[0.0, 0.0]; 3];
-        sc.formation = Some(f);
+        sc.formation = Some(FormationSection {
+            template: vec![[0.0, 0.0]; 3],
+            ..Default::default()
+        });
         let c = Check {
             key_source: &|_| "t.toml".to_string(),
         };
