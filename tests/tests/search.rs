@@ -86,8 +86,12 @@ fn the_experiment_grid_writes_the_paper_style_table() {
     // The table as charts beside it: a line per mode, the paper's mean as a cross.
     for chart in ["steps.svg", "energy.svg"] {
         let svg = std::fs::read_to_string(out.join(chart)).unwrap();
-        for label in [">BT<", ">BE<", ">BT (paper)<", ">20<"] {
-            assert!(svg.contains(label), "{chart}: no {label}");
+        for label in ["BT", "BE", "BT (paper)", "20"] {
+            // plotters writes each text on a line of its own.
+            assert!(
+                svg.contains(&format!("\n{label}\n</text>")),
+                "{chart}: no {label}"
+            );
         }
     }
     let j: serde_json::Value =

@@ -12,6 +12,8 @@ use std::path::{Path, PathBuf};
 use std::sync::{Arc, Condvar, Mutex};
 use std::time::Duration;
 use swarm::recording::{read_header, RecordingHeader, TickReader};
+#[cfg(test)]
+use swarm::scenario::Scenario;
 
 /// How often the follower looks for new bytes of a live recording.
 const FOLLOW_POLL: Duration = Duration::from_millis(20);
@@ -191,5 +193,79 @@ fn follow_loop(path: &Path, run: &str, feed: &Feed) -> Result<(), String> {
             return Ok(());
         }
         std::thread::sleep(FOLLOW_POLL);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::io::Write;
+    use swarm::recording::{RecordingWriter, TickRecord, RECORDING_VERSION_LAYER};
+
+    #[test]
+    fn a_growing_recording_is_followed_across_pieces_cut_inside_the_header_and_records() {
+        let sc = Scenario::default();
+        let header = RecordingHeader {
+            version: RECORDING_VERSION_LAYER,
+            robots: 2,
+            seed: 1,
+            scenario: sc.to_toml(),
+        };
+        let mut bytes = Vec::new();
+        let mut w = RecordingWriter::new(&mut bytes, &header).unwrap();
+        for k in 0..30u64 {
+            w.push(&TickRecord {
+                tick: k,
+                poses: vec![[k as f64, 1.0, 0.0], [2.0, k as f64, 0.0]],
+                alive: vec![1, 1],
+                states: vec![0, 1],
+                events: vec![],
+                radio: Default::default(),
+                extra: None,
+                layer: Some(vec![swarm::layer::Mark::Disc {
+                    at: [k as f64 / 10.0, 0.0],
+                    px: 3,
+                    fill: [1, 2, 3],
+                    outline: None,
+                }]),
+            })
+            .unwrap();
+        }
+        w.finish().unwrap();
+        let path = std::env::temp_dir().join(format!("feed-{}.bin", std::process::id()));
+        let _ = std::fs::remove_file(&path);
+        let feed = follow(path.clone(), "t".into());
+        let mut f = std::fs::File::create(&path).unwrap();
+        // Pieces that end inside the header, then inside records.
+        let hl = bincode::serde::encode_to_vec(&header, bincode::config::standard())
+            .unwrap()
+            .len();
+        let body = bytes.len() - hl;
+        let cuts = [7, hl + body / 3, hl + body / 2 + 5, bytes.len()];
+        let mut from = 0;
+        let mut seen = vec![];
+        for &c in &cuts {
+            f.write_all(&bytes[from..c]).unwrap();
+            f.flush().unwrap();
+            from = c;
+            std::thread::sleep(FOLLOW_POLL * 4);
+            seen.push(feed.len());
+        }
+        feed.end();
+        let t = std::time::Instant::now();
+        while feed.len() < 30 && t.elapsed() < Duration::from_secs(5) {
+            std::thread::sleep(FOLLOW_POLL);
+        }
+        let _ = std::fs::remove_file(&path);
+        assert_eq!(seen[0], 0, "no tick before the header is whole");
+        assert!(seen[1] > 0 && seen[1] < seen[2] && seen[2] < 30, "{seen:?}");
+        let (frames, ended) = feed.since(0);
+        assert!(ended);
+        assert_eq!(frames.len(), 30);
+        let last: serde_json::Value = serde_json::from_str(&frames[29]).unwrap();
+        assert_eq!(last["tick"], 29);
+        assert_eq!(last["poses"][1][1], 29.0);
+        assert_eq!(last["layer"][0]["Disc"]["at"][0], 2.9);
+        assert!(feed.meta().unwrap().contains("\"live\":true"));
     }
 }
