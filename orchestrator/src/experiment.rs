@@ -248,8 +248,8 @@ fn run(a: ExperimentArgs) -> Result<i32, String> {
     for mode in &x.modes {
         let mut ok = true;
         for &n in &x.robots {
-            for (s, (v, vbase)) in (0..seeds as u64)
-                .flat_map(|s| x.variants.iter().zip(&bases).map(move |v| (s, v)))
+            for (s, (v, vbase)) in
+                (0..seeds as u64).flat_map(|s| x.variants.iter().zip(&bases).map(move |v| (s, v)))
             {
                 let mut sc = vbase.clone();
                 sc.search.mode = mode.clone();
@@ -395,7 +395,10 @@ fn run(a: ExperimentArgs) -> Result<i32, String> {
     let cells = tabulate(&x, &results);
     let mut md = report(&x, &cells, seeds, &unavailable);
     if x.variants.len() > 1 {
-        if x.variants.iter().any(|v| v.overlay.is_some() || v.set.is_some()) {
+        if x.variants
+            .iter()
+            .any(|v| v.overlay.is_some() || v.set.is_some())
+        {
             md += &sensitivity_report(&x, &cells);
         }
         md += &variants_report(&x, &results);
@@ -746,27 +749,29 @@ fn sensitivity_report(x: &Experiment, cells: &[Cell]) -> String {
     let paper_steps = |c: &Cell| c.paper.as_ref().map(|p| p.steps[1]);
     let paper_energy = |c: &Cell| c.paper.as_ref().map(|p| p.energy[1]);
     let pct = |v: Option<f64>| v.map_or("n/a".to_string(), |v| format!("{v:.1}"));
-    let gaps = |of: &[&Cell], st: &dyn Fn(&Cell) -> Option<f64>, en: &dyn Fn(&Cell) -> Option<f64>| {
-        [
-            (vec!["BT", "BE", "BA"], vec!["ST", "SE", "SA"]),
-            (vec!["BT", "ST"], vec!["BE", "SE"]),
-            (vec!["BT"], vec!["BE"]),
-        ]
-        .iter()
-        .map(|(o, t)| {
-            format!(
-                "{} / {} %",
-                pct(improvement_by(of, o, t, st)),
-                pct(improvement_by(of, o, t, en))
-            )
-        })
-        .collect::<Vec<_>>()
-    };
+    let gaps =
+        |of: &[&Cell], st: &dyn Fn(&Cell) -> Option<f64>, en: &dyn Fn(&Cell) -> Option<f64>| {
+            [
+                (vec!["BT", "BE", "BA"], vec!["ST", "SE", "SA"]),
+                (vec!["BT", "ST"], vec!["BE", "SE"]),
+                (vec!["BT"], vec!["BE"]),
+            ]
+            .iter()
+            .map(|(o, t)| {
+                format!(
+                    "{} / {} %",
+                    pct(improvement_by(of, o, t, st)),
+                    pct(improvement_by(of, o, t, en))
+                )
+            })
+            .collect::<Vec<_>>()
+        };
     let bt = |of: &[&Cell], f: &dyn Fn(&Cell) -> Option<f64>| -> Option<f64> {
         let v: Option<Vec<f64>> = of.iter().filter(|c| c.mode == "BT").map(|c| f(c)).collect();
         v.filter(|v| !v.is_empty()).map(|v| v.iter().sum())
     };
-    let of_variant = |name: &str| -> Vec<&Cell> { cells.iter().filter(|c| c.variant == name).collect() };
+    let of_variant =
+        |name: &str| -> Vec<&Cell> { cells.iter().filter(|c| c.variant == name).collect() };
     let reference = of_variant(&x.variants[0].name);
     let (ref_steps, ref_energy) = (bt(&reference, &steps), bt(&reference, &energy));
     let rel = |v: Option<f64>, r: Option<f64>| match (v, r) {
@@ -782,7 +787,10 @@ fn sensitivity_report(x: &Experiment, cells: &[Cell]) -> String {
         let censored: usize = of.iter().map(|c| c.censored).sum();
         let (st, en) = (bt(&of, &steps), bt(&of, &energy));
         let g = gaps(&of, &steps, &energy);
-        let lb = if of.iter().any(|c| c.mode == "BT" && c.steps_mean_is_lower_bound) {
+        let lb = if of
+            .iter()
+            .any(|c| c.mode == "BT" && c.steps_mean_is_lower_bound)
+        {
             ">= "
         } else {
             ""
@@ -936,9 +944,10 @@ mod tests {
     #[test]
     fn a_variant_sets_scenario_keys_over_the_base() {
         let base = Scenario::default();
-        let set: toml::Table = "[search.kernels.virtual_force]\nl_r = 100.0\n[arena]\nwalls_sensed = false\n"
-            .parse()
-            .unwrap();
+        let set: toml::Table =
+            "[search.kernels.virtual_force]\nl_r = 100.0\n[arena]\nwalls_sensed = false\n"
+                .parse()
+                .unwrap();
         let v = Variant {
             name: "L_R 100".into(),
             set: Some(set),

@@ -233,7 +233,10 @@ mod tests {
         assert_eq!(m[2], Vec2::new(30.0, -500.0));
         assert_eq!(m[3], Vec2::new(30.0, 1500.0));
         let f = roaming_force(&x, &m, &p);
-        assert!((f.x - 3.9 * (10.0f64 / 60.0).powi(2)).abs() < 1e-12, "{f:?}");
+        assert!(
+            (f.x - 3.9 * (10.0f64 / 60.0).powi(2)).abs() < 1e-12,
+            "{f:?}"
+        );
         assert!(f.y.abs() < 1e-12, "{f:?}");
     }
 }

@@ -64,12 +64,16 @@ pub struct Params {
     /// Applied in every search layer alike. [chosen] spec 5 item 23.
     pub subgroup_separation: f64,
     /// How a roaming robot treats the arena walls (the paper has no wall rule, spec 5 item 6).
-    /// `mirror` (default): each wall is a robot's mirror image in eq. (5), one more candidate
-    /// of "the two nearest robots", so a roaming robot within L_R of a wall is pushed off it
-    /// as it is pushed off a robot within 2 L_R. `reflect`: the kept heading is reflected off
-    /// a wall the robot is within L_R of and heading into. `none`: walls are only sensed as
-    /// obstacle points (BSOA / SVF), which steers a roaming robot along them. The walls stay
-    /// sensed obstacle points in every rule (`arena.walls_sensed`). [chosen] spec 5 item 6.
+    /// `none` (default): the walls are obstacles like any other, sensed as boundary points
+    /// (`arena.walls_sensed`) and avoided by the mode's obstacle layer (BSOA / SVF), the
+    /// paper's only rule for what a robot must not cross; it steers some roaming robots along
+    /// the walls. `mirror`: each wall is also a robot's mirror image in eq. (5), one more
+    /// candidate of "the two nearest robots", so a roaming robot within L_R of a wall is pushed
+    /// off it as it is pushed off a robot within 2 L_R. `reflect`: the kept heading is
+    /// reflected off a wall the robot is within L_R of and heading into. Both alternatives keep
+    /// sparse roaming robots L_R = L_T from the walls, so targets near the north and east walls
+    /// (inside the target region) go unsensed: at N = 20 they leave runs censored
+    /// (docs/search.md 5 item 6, section 8). [chosen] spec 5 item 6.
     pub wall_rule: WallRule,
 }
 
@@ -100,7 +104,7 @@ impl Default for Params {
             keep_subgroup_best_across_gaps: true,
             goal_horizon_margin: 10.0,
             subgroup_separation: 20.0,
-            wall_rule: WallRule::Mirror,
+            wall_rule: WallRule::None,
         }
     }
 }
