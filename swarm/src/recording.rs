@@ -7,12 +7,15 @@ use crate::radio::RadioCounters;
 use serde::{Deserialize, Serialize};
 use std::io::{BufReader, BufWriter, Read, Write};
 
-/// Version 1: the header, then one [`TickRecord`] per tick.
-pub const RECORDING_VERSION: u32 = 1;
-/// Version 2: as version 1, each TickRecord followed by its [`TickExtra`]. A run writes it
-/// when it has something to put there (robots with a body); other runs keep version 1, so
-/// their recordings read as they always did.
-pub const RECORDING_VERSION_EXTRA: u32 = 2;
+/// Version 3: the header, then one [`TickRecord`] per tick. (Versions 1 and 2 had the link
+/// design's radio counters, with `dropped_unlinked`; the shared medium's counters replaced
+/// them: see [`RadioCounters`].)
+pub const RECORDING_VERSION: u32 = 3;
+/// Version 4: as version 3, each TickRecord followed by its [`TickExtra`]. A run writes it
+/// when it has something to put there (robots with a body); other runs keep version 3.
+pub const RECORDING_VERSION_EXTRA: u32 = 4;
+/// The oldest version this reader understands.
+pub const RECORDING_VERSION_OLDEST: u32 = 3;
 
 /// Clearances of robot bodies at one tick (robots with `robot.radius` > 0).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -98,9 +101,11 @@ pub struct TickRecord {
     /// Each robot's display state this tick (Action.events & STATE_MASK).
     pub states: Vec<u8>,
     pub events: Vec<Event>,
-    /// Radio outcome of the messages due at this tick, plus range drops of those sent at it.
+    /// The medium's counts of the messages sent at this tick (offered and dropped), the
+    /// outcome of those due at it (delivered, malformed, receiver dead), and what is in flight
+    /// after it.
     pub radio: RadioCounters,
-    /// Version 2 only: written after the record, not inside it.
+    /// Version 4 only: written after the record, not inside it.
     #[serde(skip)]
     pub extra: Option<TickExtra>,
 }
@@ -111,7 +116,7 @@ fn cfg() -> bincode::config::Configuration {
 
 pub struct RecordingWriter<W: Write> {
     out: BufWriter<W>,
-    /// Version 2: a TickExtra follows each record.
+    /// Version 4: a TickExtra follows each record.
     extra: bool,
 }
 
@@ -145,6 +150,13 @@ pub fn read_recording<R: Read>(r: R) -> std::io::Result<(RecordingHeader, Vec<Ti
     let mut inp = BufReader::new(r);
     let header: RecordingHeader =
         bincode::serde::decode_from_std_read(&mut inp, cfg()).map_err(std::io::Error::other)?;
+    if header.version < RECORDING_VERSION_OLDEST {
+        return Err(std::io::Error::other(format!(
+            "recording version {} is older than {RECORDING_VERSION_OLDEST} (the link design's radio counters): \
+             re-run the scenario to record it again",
+            header.version
+        )));
+    }
     let extra = header.version >= RECORDING_VERSION_EXTRA;
     let mut ticks = Vec::new();
     loop {
