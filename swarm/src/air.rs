@@ -288,7 +288,8 @@ mod tests {
         }
         assert_eq!(tx.failures, 0);
         let used = tx.used;
-        assert_eq!(used, 40 + 8 + 40 + 0 + 40 + 24);
+        // 5 bytes pad to 8, 0 bytes to 0, 20 bytes to 24, each behind a 40-byte header.
+        assert_eq!(used, 40 + 8 + 40 + 40 + 24);
         let got = act_messages(&buf[..used]).unwrap();
         assert_eq!(got.len(), 3);
         for (k, (h, p)) in got.iter().enumerate() {

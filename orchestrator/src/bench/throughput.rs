@@ -173,7 +173,7 @@ fn one(n: u32, size: usize, enc: &str, ticks: u64) -> BenchResult<Row> {
                     .collect::<Result<Vec<_>, _>>()?,
             )
         } else {
-            Radio::Medium(WorldRadio::create(&node, &sc)?)
+            Radio::Medium(Box::new(WorldRadio::create(&node, &sc)?))
         };
         let mut radio = radio;
         let extra = [
@@ -281,17 +281,20 @@ fn one(n: u32, size: usize, enc: &str, ticks: u64) -> BenchResult<Row> {
 
 /// How the parent carries the traffic: the world's medium, or nothing but raw services.
 enum Radio {
-    Medium(WorldRadio),
+    Medium(Box<WorldRadio>),
     /// The per-robot services, held open while the children use them.
     Raw(#[allow(dead_code)] Vec<RawService>),
 }
 
+/// A robot's act service and the world's subscription to it.
+type ActPort = (
+    transport::ActService,
+    Subscriber<ipc::Service, [u8], swarm::Action>,
+);
+
 /// The world's side of the medium: every robot's act service, the air, the medium.
 struct WorldRadio {
-    acts: Vec<(
-        transport::ActService,
-        Subscriber<ipc::Service, [u8], swarm::Action>,
-    )>,
+    acts: Vec<ActPort>,
     _air_svc: transport::AirService,
     air: iceoryx2::port::publisher::Publisher<ipc::Service, [u8], swarm::frames::AirHeader>,
     medium: Medium,
