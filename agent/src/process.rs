@@ -1,17 +1,14 @@
 //! The agent process: one robot, one behaviour, over iceoryx2 and the tick barrier.
 
 use crate::behaviours::{dispatch, BehaviourVisitor};
-use iceoryx2::port::subscriber::Subscriber;
-use iceoryx2::prelude::*;
-use std::collections::BTreeMap;
 use std::sync::atomic::AtomicUsize;
 use std::sync::Arc;
 use std::time::Duration;
+use swarm::air::ActTx;
 use swarm::barrier::{BarrierError, TickBarrier, Wake};
-use swarm::frames::RadioHeader;
 use swarm::scenario::Scenario;
-use swarm::transport::{self, ServiceId, ShmTx, TransportError};
-use swarm::{AgentRuntime, Behaviour};
+use swarm::transport::{self, ServiceId, TransportError};
+use swarm::{AgentRuntime, Behaviour, Received};
 
 /// Why an agent process stopped before the run ended.
 #[derive(Debug, thiserror::Error)]
@@ -36,13 +33,6 @@ pub struct AgentArgs {
 pub const EXIT_OK: i32 = 0;
 pub const EXIT_WORLD_GONE: i32 = 3;
 pub const EXIT_SETUP: i32 = 4;
-
-struct Link {
-    _service: transport::RadioService,
-    sub: Subscriber<ipc::Service, [u8], RadioHeader>,
-    /// Samples of this link held by zero-copy views.
-    live: Arc<AtomicUsize>,
-}
 
 fn world_alive(pid: u32) -> bool {
     // SAFETY: signal 0 only checks for existence.
@@ -83,16 +73,16 @@ fn run_loop<B: Behaviour>(args: &AgentArgs, mut rt: AgentRuntime<B>) -> Result<i
             source,
         })?;
     let act_svc = transport::act_service(&node, robot, false)?;
-    let act_pub =
-        act_svc
-            .publisher_builder()
-            .create()
-            .map_err(|source| TransportError::Publisher {
-                service: ServiceId::Act(robot),
-                source,
-            })?;
-    let radio_svc = transport::radio_service(&node, robot, sc, false)?;
-    let radio_pub = transport::radio_publisher(&radio_svc, sc)?;
+    let act_pub = transport::act_publisher(&act_svc, sc)?;
+    let air_svc = transport::air_service(&node, sc, false)?;
+    let air_sub = air_svc
+        .subscriber_builder()
+        .buffer_size(1)
+        .create()
+        .map_err(|source| TransportError::Subscriber {
+            service: ServiceId::Air,
+            source,
+        })?;
     let barrier = TickBarrier::open(&args.prefix)?;
     let world_pid = barrier.world_pid();
     let bell = match sc.runtime.barrier {
@@ -103,12 +93,11 @@ fn run_loop<B: Behaviour>(args: &AgentArgs, mut rt: AgentRuntime<B>) -> Result<i
     };
     let bell = bell.as_ref();
     let poll = Duration::from_millis(sc.runtime.poll_ms);
-    let held_limit = transport::radio_held_per_link(sc);
-    let mut links: BTreeMap<u32, Link> = BTreeMap::new();
-    let mut tx = ShmTx {
-        publisher: &radio_pub,
-        failures: 0,
-    };
+    let held_limit = transport::air_held(sc);
+    // Air samples held by zero-copy views.
+    let live: Arc<AtomicUsize> = Arc::default();
+    let area = transport::act_slice_len(sc);
+    let mut inbox: Vec<Received<B::Msg>> = Vec::new();
     let mut done = barrier.acked_up_to(robot);
     barrier.mark_ready(robot);
     loop {
@@ -122,7 +111,8 @@ fn run_loop<B: Behaviour>(args: &AgentArgs, mut rt: AgentRuntime<B>) -> Result<i
             }
             Wake::Tick(k) => k,
         };
-        // The world published Sense_k before releasing tick k: read it in place.
+        // The world published Sense_k and the air of tick k before releasing tick k: read
+        // them in place.
         let mut latest = None;
         while let Some(s) = sense_sub
             .receive()
@@ -142,74 +132,44 @@ fn run_loop<B: Behaviour>(args: &AgentArgs, mut rt: AgentRuntime<B>) -> Result<i
             done = k + 1;
             continue;
         }
-        rt.begin(&sense);
-        // Take off each link exactly the messages its sender sent at k-1 (FIFO per link; any of
-        // tick k that a faster sender already sent stay for the next tick, or are taken early
-        // in their place: the runtime orders and times delivery by header, not by arrival).
-        //
-        // A link whose robot was beyond comm_radius + link_margin at k-1 carries nothing in
-        // range: its messages are left on the link (not even touched), where the sender's next
-        // messages overwrite the oldest (iceoryx2's safe overflow). When the robot comes back
-        // within reach, what is older than k-1 is taken off and dropped before its k-1 messages.
-        if k > 0 {
-            for (&s, link) in links.iter() {
-                if !rt.links().reaches(s, k - 1) {
-                    continue;
-                }
-                let mut taken = 0;
-                while taken < barrier.sent_count(s, k - 1) {
-                    match link.sub.receive() {
-                        Ok(Some(m)) if m.user_header().tick + 1 < k => rt.stats.skipped += 1,
-                        Ok(Some(m)) => {
-                            transport::take_radio(&mut rt, m, &link.live, held_limit);
-                            taken += 1;
-                        }
-                        _ => break,
-                    }
-                }
-            }
+        // This tick's inbox: our list in the air (the latest sample; the world sent it
+        // before the release, so it is there unless we attached after).
+        inbox.clear();
+        let mut malformed = 0;
+        let mut air = None;
+        while let Some(a) = air_sub
+            .receive()
+            .map_err(|source| TransportError::Receive {
+                service: ServiceId::Air,
+                source,
+            })?
+        {
+            air = Some(a);
         }
-        let action = rt.step(&sense, &mut tx);
-        barrier.record_sent(robot, k, action.n_sent);
-        let (added, removed) = rt.update_links(&sense);
-        for r in removed {
-            links.remove(r);
-        }
-        for &r in added {
-            match transport::radio_service(&node, r, sc, false).and_then(|svc| {
-                let sub = svc
-                    .subscriber_builder()
-                    .buffer_size(transport::radio_buffer(sc))
-                    .create()
-                    .map_err(|source| TransportError::Subscriber {
-                        service: ServiceId::Radio(r),
-                        source,
-                    })?;
-                Ok(Link {
-                    _service: svc,
-                    sub,
-                    live: Arc::default(),
-                })
-            }) {
-                Ok(l) => {
-                    links.insert(r, l);
-                }
-                Err(e) => eprintln!("agent {robot}: no link to robot {r}: {e}"),
-            }
+        if let Some(a) = air.filter(|a| a.user_header().tick == k) {
+            malformed =
+                transport::air_inbox(a, robot, rt.zero_copy(), &live, held_limit, &mut inbox);
         }
         let sample = act_pub
-            .loan_uninit()
+            .loan_slice_uninit(area)
             .map_err(|source| TransportError::Loan {
                 service: ServiceId::Act(robot),
                 source,
             })?;
-        sample
-            .write_payload(action)
-            .send()
-            .map_err(|source| TransportError::Send {
-                service: ServiceId::Act(robot),
-                source,
-            })?;
+        // SAFETY: the slot is shared memory of the publisher's data segment, mapped from
+        // tmpfs: its bytes are always initialised (zero when first mapped, then whatever an
+        // earlier tick left), and every u8 value is valid. The world reads only the
+        // `radio_bytes` that ActTx writes.
+        let mut sample = unsafe { sample.assume_init() };
+        let mut tx = ActTx::new(sample.payload_mut());
+        let mut action = rt.step_owned(&sense, &inbox, malformed, &mut tx);
+        action.radio_bytes = tx.used as u32;
+        inbox.clear();
+        *sample.user_header_mut() = action;
+        sample.send().map_err(|source| TransportError::Send {
+            service: ServiceId::Act(robot),
+            source,
+        })?;
         drop(sense);
         barrier.ack_with(robot, k, bell);
         done = k + 1;

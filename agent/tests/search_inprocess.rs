@@ -3,7 +3,7 @@
 
 use agent::behaviours::search::{Mode, Search};
 use swarm::frames::{Action, Sense};
-use swarm::mailbox::Air;
+use swarm::mailbox::{Air, Mailbox};
 use swarm::scenario::Scenario;
 use swarm::AgentRuntime;
 use world::World;
@@ -38,7 +38,7 @@ fn run(sc: &Scenario) -> Outcome {
         .map(|i| AgentRuntime::new(sc, i, Search::new(sc, i)))
         .collect();
     let mut senses: Vec<Box<Sense>> = (0..n).map(|_| Sense::zeroed()).collect();
-    let mut prev = Air::default();
+    let mut mailbox: Mailbox<agent::behaviours::search::Msg> = Mailbox::new();
     let mut cur = Air::default();
     let mut actions: Vec<Option<Action>> = vec![None; n];
     while world.tick < sc.run.max_ticks {
@@ -46,6 +46,7 @@ fn run(sc: &Scenario) -> Outcome {
         if world.tick + 1 == sc.run.max_ticks {
             world.set_stopping();
         }
+        mailbox.post(world.air());
         for i in 0..n {
             actions[i] = None;
             if !world.alive[i] {
@@ -54,15 +55,11 @@ fn run(sc: &Scenario) -> Outcome {
             world.sense(i, &mut senses[i]);
             let rt = &mut rts[i];
             let s = &senses[i];
-            rt.begin(s);
-            for (h, payload) in prev.messages() {
-                rt.ingest(h, payload);
-            }
-            actions[i] = Some(rt.step(s, &mut cur));
-            rt.update_links(s);
+            let mut inbox = Vec::new();
+            let malformed = mailbox.inbox(i as u32, &mut inbox);
+            actions[i] = Some(rt.step(s, &inbox, malformed, &mut cur));
         }
-        world.apply(&actions);
-        std::mem::swap(&mut prev, &mut cur);
+        world.apply(&actions, &cur);
         cur.clear();
         if world.end_reason().is_some() {
             break;

@@ -20,21 +20,17 @@ use world::{RunOutputs, Summary, Timing, World};
 /// than small ticks).
 const MIN_ROBOTS_PER_THREAD: usize = 16;
 
-/// One robot's agent side of a tick: its inbox from last tick's messages, its step (messages
-/// into `air`), its links.
+/// One robot's agent side of a tick: its inbox (its list in the tick's air, decoded once for
+/// all receivers by the mailbox), its step (messages into `air`).
 fn agent_tick<B: Behaviour>(
     rt: &mut AgentRuntime<B>,
     s: &Sense,
     mailbox: &Mailbox<B::Msg>,
     air: &mut Air,
 ) -> Action {
-    rt.begin(s);
-    // What the robot's links carry: the messages sent last tick by the robots it is linked to,
-    // exactly as its subscriptions would.
-    rt.ingest_mailbox(mailbox);
-    let a = rt.step_mailbox(s, mailbox, air);
-    rt.update_links(s);
-    a
+    let mut inbox = Vec::new();
+    let malformed = mailbox.inbox(rt.robot, &mut inbox);
+    rt.step(s, &inbox, malformed, air)
 }
 
 /// The robots of one worker thread (a contiguous id range) and everything their side of a
@@ -43,8 +39,6 @@ struct Chunk<B: Behaviour> {
     first: usize,
     rts: Vec<AgentRuntime<B>>,
     senses: Vec<Box<Sense>>,
-    /// The robots' last neighbour lists (the world's, lent for the run).
-    listed: Vec<Vec<u32>>,
     actions: Vec<Option<Action>>,
     /// Messages sent this tick, in robot order.
     air: Air,
@@ -58,12 +52,7 @@ impl<B: Behaviour> Chunk<B> {
         for j in 0..self.rts.len() {
             let i = self.first + j;
             self.actions[j] = if world.alive[i] {
-                world.sense_geometry(
-                    i,
-                    &mut self.listed[j],
-                    &mut self.scratch,
-                    &mut self.senses[j],
-                );
+                world.sense_geometry(i, &mut self.scratch, &mut self.senses[j]);
                 Some(agent_tick(
                     &mut self.rts[j],
                     &self.senses[j],
@@ -104,7 +93,7 @@ impl BehaviourVisitor for InProcess<'_> {
     {
         let t0 = Instant::now();
         let sc = self.sc;
-        let mut world = World::new(sc).map_err(std::io::Error::other)?;
+        let world = World::new(sc).map_err(std::io::Error::other)?;
         let mut outputs = match self.out_dir {
             Some(d) => RunOutputs::create(d, &world)?,
             None => RunOutputs::summary_only(),
@@ -115,7 +104,6 @@ impl BehaviourVisitor for InProcess<'_> {
         let n = world.n;
         let threads = self.threads.clamp(1, (n / MIN_ROBOTS_PER_THREAD).max(1));
         let per = n.div_ceil(threads).max(1);
-        let mut lists = world.take_neighbour_lists().into_iter();
         let chunks: Vec<Mutex<Chunk<B>>> = (0..n)
             .step_by(per)
             .map(|first| {
@@ -127,7 +115,6 @@ impl BehaviourVisitor for InProcess<'_> {
                         .map(|i| AgentRuntime::new(sc, i as u32, make(i as u32)))
                         .collect(),
                     senses: ids.clone().map(|_| Sense::zeroed()).collect(),
-                    listed: lists.by_ref().take(ids.len()).collect(),
                     actions: vec![None; ids.len()],
                     air: Air::default(),
                     scratch: SenseScratch::default(),
@@ -139,9 +126,8 @@ impl BehaviourVisitor for InProcess<'_> {
         let zero_copy = chunks
             .iter()
             .any(|c| c.lock().expect("fresh").rts.iter().any(|r| r.zero_copy()));
-        // Last tick's messages, decoded once for all their receivers.
-        let mailbox: RwLock<Mailbox<B::Msg>> =
-            RwLock::new(Mailbox::new(n, sc.radio.delay_ticks as u64).zero_copy(zero_copy));
+        // The tick's due messages, decoded once for all their receivers.
+        let mailbox: RwLock<Mailbox<B::Msg>> = RwLock::new(Mailbox::new().zero_copy(zero_copy));
         let mut cur = Air::default();
         let mut actions: Vec<Option<Action>> = vec![None; n];
         let mut tick_ns = Vec::with_capacity(sc.run.max_ticks.min(10_000_000) as usize);
@@ -192,6 +178,10 @@ impl BehaviourVisitor for InProcess<'_> {
                 if w.tick + 1 == sc.run.max_ticks {
                     w.set_stopping();
                 }
+                mailbox
+                    .write()
+                    .unwrap_or_else(|e| e.into_inner())
+                    .post(w.air());
                 for c in &chunks {
                     let mut c = lock(c);
                     let c = &mut *c;
@@ -215,12 +205,8 @@ impl BehaviourVisitor for InProcess<'_> {
                     c.air.clear();
                 }
                 let mut w = world.write().unwrap_or_else(|e| e.into_inner());
-                let rec = w.apply(&actions);
+                let rec = w.apply(&actions, &cur);
                 outputs.push(&rec, &w)?;
-                mailbox
-                    .write()
-                    .unwrap_or_else(|e| e.into_inner())
-                    .post(rec.tick, &cur);
                 cur.clear();
                 tick_ns.push(t_tick.elapsed().as_nanos() as u64);
                 on_tick(&w);
@@ -235,12 +221,6 @@ impl BehaviourVisitor for InProcess<'_> {
         });
         result?;
         let mut world = world.into_inner().unwrap_or_else(|e| e.into_inner());
-        world.put_neighbour_lists(
-            chunks
-                .into_iter()
-                .flat_map(|c| c.into_inner().unwrap_or_else(|e| e.into_inner()).listed)
-                .collect(),
-        );
         let timing = Timing {
             wall_seconds: t0.elapsed().as_secs_f64(),
             loop_seconds: t_loop.elapsed().as_secs_f64(),

@@ -41,6 +41,17 @@ pub struct UpArgs {
     /// Radio delay in ticks [scenario: radio.delay_ticks].
     #[arg(long)]
     pub delay: Option<u32>,
+    /// Bytes a robot may put on the air per tick, headers of 40 bytes included; 0 = no cap
+    /// [scenario: radio.bandwidth_bytes_per_tick].
+    #[arg(long)]
+    pub bandwidth: Option<u32>,
+    /// Bursty loss (Gilbert-Elliott per link): P_GOOD_BAD,P_BAD_GOOD,LOSS_GOOD,LOSS_BAD, each
+    /// 0..=1, e.g. 0.05,0.25,0,0.8 [scenario: radio.burst].
+    #[arg(long, value_parser = parse_burst)]
+    pub burst: Option<swarm::radio::BurstParams>,
+    /// Obstacles block the radio's line of sight [scenario: radio.occlusion].
+    #[arg(long)]
+    pub occlusion: bool,
     /// Pacing: at most this many ticks per second, 0 = unpaced; results are the same
     /// [scenario: runtime.tick_hz].
     #[arg(long)]
@@ -122,6 +133,29 @@ fn parse_kills(s: &str) -> Result<KillList, String> {
         .map(KillList)
 }
 
+/// `--burst P_GOOD_BAD,P_BAD_GOOD,LOSS_GOOD,LOSS_BAD` (ranges are checked with the scenario).
+fn parse_burst(s: &str) -> Result<swarm::radio::BurstParams, String> {
+    let v: Vec<f64> = s
+        .split(',')
+        .map(|x| {
+            x.trim()
+                .parse::<f64>()
+                .map_err(|_| format!("{x:?} is not a number"))
+        })
+        .collect::<Result<_, _>>()?;
+    match v[..] {
+        [p_good_bad, p_bad_good, loss_good, loss_bad] => Ok(swarm::radio::BurstParams {
+            p_good_bad,
+            p_bad_good,
+            loss_good,
+            loss_bad,
+        }),
+        _ => Err(format!(
+            "{s:?}: four numbers wanted, P_GOOD_BAD,P_BAD_GOOD,LOSS_GOOD,LOSS_BAD (e.g. 0.05,0.25,0,0.8)"
+        )),
+    }
+}
+
 /// Which flag set a scenario key, for error messages.
 const FLAG_KEYS: &[(&str, &str)] = &[
     ("run.robots", "--robots"),
@@ -130,6 +164,12 @@ const FLAG_KEYS: &[(&str, &str)] = &[
     ("radio.comm_radius", "--comm-radius"),
     ("radio.loss", "--loss"),
     ("radio.delay_ticks", "--delay"),
+    ("radio.bandwidth_bytes_per_tick", "--bandwidth"),
+    ("radio.burst.p_good_bad", "--burst"),
+    ("radio.burst.p_bad_good", "--burst"),
+    ("radio.burst.loss_good", "--burst"),
+    ("radio.burst.loss_bad", "--burst"),
+    ("radio.occlusion", "--occlusion"),
     ("search.mode", "--mode"),
     ("faults.chaos_rate", "--chaos"),
     ("faults.kill_at", "--chaos-at"),
@@ -180,6 +220,25 @@ pub fn resolve(a: &UpArgs) -> Result<Scenario, ConfigError> {
     }
     if let Some(v) = a.delay {
         set("radio.delay_ticks", &mut || sc.radio.delay_ticks = v);
+    }
+    if let Some(v) = a.bandwidth {
+        set("radio.bandwidth_bytes_per_tick", &mut || {
+            sc.radio.bandwidth_bytes_per_tick = v
+        });
+    }
+    if let Some(v) = a.burst {
+        // One flag sets the four keys; whichever is out of range names it.
+        set("radio.burst.p_good_bad", &mut || sc.radio.burst = Some(v));
+        for key in [
+            "radio.burst.p_bad_good",
+            "radio.burst.loss_good",
+            "radio.burst.loss_bad",
+        ] {
+            set(key, &mut || {});
+        }
+    }
+    if a.occlusion {
+        set("radio.occlusion", &mut || sc.radio.occlusion = true);
     }
     if let Some(v) = a.chaos {
         set("faults.chaos_rate", &mut || sc.faults.chaos_rate = v);
@@ -245,6 +304,7 @@ fn bar_msg(
     delivered: u64,
     range: u64,
     loss: u64,
+    other: u64,
     progress: (&str, u32, u32),
 ) -> String {
     let (label, done, total) = progress;
@@ -253,7 +313,7 @@ fn bar_msg(
     } else {
         String::new()
     };
-    format!("{t}robots alive {alive}/{n} | messages delivered {delivered}, dropped: out of range {range}, lost {loss}")
+    format!("{t}robots alive {alive}/{n} | messages delivered {delivered}, dropped: out of range {range}, lost {loss}, other {other}")
 }
 
 pub fn up(a: UpArgs) -> i32 {
@@ -269,9 +329,7 @@ pub fn up(a: UpArgs) -> i32 {
     if a.executor == Executor::Processes {
         // Refused before anything starts, rather than EMFILE in the world after seconds.
         let (soft, _) = swarm::limits::raise_nofile();
-        let links = (sc.radio.max_links as u64 + sc.radio.lingering_links as u64)
-            .min(sc.run.robots.saturating_sub(1) as u64);
-        if let Err(e) = swarm::limits::check_fits(sc.run.robots, links, soft) {
+        if let Err(e) = swarm::limits::check_fits(sc.run.robots, soft) {
             eprintln!("error: {e}");
             return 2;
         }
@@ -352,6 +410,7 @@ pub fn up(a: UpArgs) -> i32 {
                         r.delivered,
                         r.dropped_range,
                         r.dropped_loss,
+                        r.dropped_occluded + r.dropped_bandwidth + r.receiver_dead + r.malformed,
                         (label, done, total),
                     ));
                 }
@@ -372,6 +431,7 @@ pub fn up(a: UpArgs) -> i32 {
                     s.delivered,
                     s.dropped_range,
                     s.dropped_loss,
+                    s.dropped_other,
                     (label, s.progress_done, s.progress_total),
                 ));
             },
@@ -439,9 +499,10 @@ fn print_summary(v: &serde_json::Value, dir: &Path) {
         f("/tick_time/p99_us")
     );
     println!(
-        "  messages offered {}  delivered {}  dropped: range {}  loss {}  unlinked {}  malformed {}  in flight {}",
-        g("/messages/offered"), g("/messages/delivered"), g("/messages/dropped_range"), g("/messages/dropped_loss"),
-        g("/messages/dropped_unlinked"), g("/messages/malformed"), g("/messages/in_flight")
+        "  messages offered {}  delivered {}  dropped: range {}  occluded {}  bandwidth {}  loss {}  malformed {}  receiver dead {}  in flight {}",
+        g("/messages/offered"), g("/messages/delivered"), g("/messages/dropped_range"),
+        g("/messages/dropped_occluded"), g("/messages/dropped_bandwidth"), g("/messages/dropped_loss"),
+        g("/messages/malformed"), g("/messages/receiver_dead"), g("/messages/in_flight")
     );
     let rejected: u64 = v
         .pointer("/rejected_actions")

@@ -1,6 +1,7 @@
 //! Criterion benches of the frame encode / decode on the runtime's hot path: a radio message
-//! through `AgentRuntime::step` (bincode sized, then encoded into the transmit buffer) and
-//! `AgentRuntime::ingest` (range, loss and decode), and a whole Sense frame written in place.
+//! through `AgentRuntime::step` (bincode sized, then encoded into the transmit buffer), its
+//! decode as an agent decodes its list of the air (`wire::decode`, or `decode_in` in place)
+//! followed by the delivering step, and a whole Sense frame written in place.
 //!
 //! `cargo bench -p swarm --bench frames`
 
@@ -55,27 +56,21 @@ impl RadioTx for Buf {
     }
 }
 
-fn sense(robot: u32, other: u32, tick: u64, x: f64) -> Box<Sense> {
+fn sense(robot: u32, tick: u64, x: f64) -> Box<Sense> {
     let mut s = Sense::zeroed();
     s.robot = robot;
     s.tick = tick;
     s.pos = [x, 0.0];
-    s.neighbours[0] = other;
-    s.n_neighbours = 1;
     s
 }
 
-/// Robot 0 running `b`, linked to robot 1 at tick 0, and a buffer for what it sends.
-fn linked_receiver<B: Behaviour>(sc: &Scenario, b: B) -> (AgentRuntime<B>, Buf) {
-    let mut rx = AgentRuntime::new(sc, 0, b);
-    let s0 = sense(0, 1, 0, 0.0);
-    rx.begin(&s0);
-    rx.update_links(&s0);
+/// Robot 0 running `b`, and a buffer for what it sends.
+fn receiver<B: Behaviour>(sc: &Scenario, b: B) -> (AgentRuntime<B>, Buf) {
     let sink = Buf {
         header: RadioHeader::default(),
         bytes: Vec::new(),
     };
-    (rx, sink)
+    (AgentRuntime::new(sc, 0, b), sink)
 }
 
 fn bench_radio<M>(c: &mut Criterion, name: &str, msg: M, bytes: u64)
@@ -92,29 +87,21 @@ where
         header: RadioHeader::default(),
         bytes: Vec::new(),
     };
-    let s1 = sense(1, 0, 1, 10.0);
-    tx.begin(&s1);
+    let s1 = sense(1, 1, 10.0);
     g.bench_function(BenchmarkId::new("step-encode", name), |b| {
-        b.iter(|| tx.step(black_box(&s1), &mut buf))
+        b.iter(|| tx.step(black_box(&s1), &[], 0, &mut buf))
     });
-    // Decode: ingest of the encoded message by a linked receiver, then its next step (which
-    // moves it to the inbox), so pending messages do not pile up.
+    // Decode: the encoded message decoded as from the air, then the step that delivers it.
     drop(msg);
-    let (mut rx, mut sink) = linked_receiver(&sc, Quiet::<M>(std::marker::PhantomData));
-    let mut h = buf.header;
+    let (mut rx, mut sink) = receiver(&sc, Quiet::<M>(std::marker::PhantomData));
+    let h = buf.header;
     let payload = buf.bytes.clone();
-    let mut k = 1u64;
-    let mut s = sense(0, 1, 1, 0.0);
-    g.bench_function(BenchmarkId::new("ingest-decode", name), |b| {
+    let s = sense(0, 2, 0.0);
+    g.bench_function(BenchmarkId::new("decode-step", name), |b| {
         b.iter(|| {
-            h.tick = k;
-            s.tick = k;
-            rx.begin(&s);
-            rx.ingest(black_box(&h), black_box(&payload));
-            k += 1;
-            s.tick = k;
-            rx.begin(&s);
-            rx.step(&s, &mut sink)
+            let m: M = swarm::wire::decode(black_box(&h), black_box(&payload)).expect("decodes");
+            let r = Received::new(&h, m);
+            rx.step(&s, &[&r], 0, &mut sink)
         })
     });
     g.finish();
@@ -147,8 +134,8 @@ impl swarm::blob::AsBytes for Shared {
     }
 }
 
-/// Zero-copy receive of a `swarm::Blob` message: `ingest_held` decodes in place (the Blob is a
-/// view), then the delivering step; against `ingest-decode` of the same wire bytes.
+/// Zero-copy receive of a `swarm::Blob` message: `decode_in` decodes in place (the Blob is a
+/// view), then the delivering step; against `decode-step` of the same wire bytes.
 fn bench_in_place(c: &mut Criterion, name: &str, data: usize) {
     let mut sc = Scenario::roam();
     sc.radio.max_message_bytes = 65_536;
@@ -159,27 +146,22 @@ fn bench_in_place(c: &mut Criterion, name: &str, data: usize) {
     .expect("encodable");
     let mut g = c.benchmark_group("radio");
     g.throughput(Throughput::Bytes(wire.len() as u64));
-    let (mut rx, mut sink) = linked_receiver(&sc, InPlace);
-    let mut h = RadioHeader {
+    let (mut rx, mut sink) = receiver(&sc, InPlace);
+    let h = RadioHeader {
         sender: 1,
         len: wire.len() as u32,
         sender_pos: [10.0, 0.0],
         ..Default::default()
     };
     let wire = std::sync::Arc::new(wire);
-    let mut k = 1u64;
-    let mut s = sense(0, 1, 1, 0.0);
-    g.bench_function(BenchmarkId::new("ingest-in-place", name), |b| {
+    let s = sense(0, 2, 0.0);
+    g.bench_function(BenchmarkId::new("decode-in-place-step", name), |b| {
         b.iter(|| {
-            h.tick = k;
-            h.seq = k as u32;
-            s.tick = k;
-            rx.begin(&s);
-            rx.ingest_held(black_box(&h), Shared(wire.clone()));
-            k += 1;
-            s.tick = k;
-            rx.begin(&s);
-            rx.step(&s, &mut sink)
+            let owner: std::sync::Arc<dyn swarm::blob::AsBytes> =
+                std::sync::Arc::new(Shared(wire.clone()));
+            let m: swarm::Blob = swarm::wire::decode_in(black_box(&h), &owner, 0).expect("decodes");
+            let r = Received::new(&h, m);
+            rx.step(&s, &[&r], 0, &mut sink)
         })
     });
     g.finish();
@@ -222,7 +204,7 @@ fn bench_sense(c: &mut Criterion) {
             for q in s.obstacle_points() {
                 acc += q[0] - q[1];
             }
-            acc + s.neighbours().len() as f64
+            acc + s.nearby().len() as f64
         })
     });
     g.finish();

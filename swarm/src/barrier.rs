@@ -3,7 +3,7 @@
 //! One futex word wakes every agent at once (one FUTEX_WAKE for all); each agent writes the tick
 //! it finished into its own slot and bumps a counter that wakes the world when it reaches the
 //! number of live robots. This replaces one iceoryx2 event per agent (~37 us a wake-up on this
-//! VM); the data (Sense, Action, radio) stays on iceoryx2. The same slots tell the world exactly
+//! VM); the data (Sense, Action, the air) stays on iceoryx2. The same slots tell the world exactly
 //! which robots acknowledged a tick, which the fault handling needs.
 //!
 //! The segment is `/dev/shm/<run prefix>tick`, removed with the rest of the run.
@@ -14,7 +14,7 @@ use std::time::{Duration, Instant};
 
 const MAGIC: u64 = 0x5357_4152_4d54_4b33; // "SWARMTK3"
 
-/// Bytes of one robot's slot: ack word, two sent-count words, attach counter, kill order,
+/// Bytes of one robot's slot: ack word, two unused words, attach counter, kill order,
 /// dead-up-to mark.
 const SLOT_BYTES: usize = 48;
 
@@ -223,8 +223,8 @@ impl TickBarrier {
         unsafe { &*(self.base as *const Header) }
     }
 
-    /// Word `w` of robot `robot`'s slot: 0 = acknowledged tick + 1; 1, 2 = messages sent at
-    /// even / odd ticks, as (tick + 1) << 16 | count; 3 = agent processes that attached;
+    /// Word `w` of robot `robot`'s slot: 0 = acknowledged tick + 1; 1, 2 = unused (the link
+    /// design's sent counts); 3 = agent processes that attached;
     /// 4 = the attach number (value of word 3 after its attach) of the agent the world wants
     /// killed; 5 = the highest attach number the orchestrator knows to be dead. Words 4 and 5
     /// name an agent *incarnation*, so a death report, a kill or an attach is never applied to
@@ -238,28 +238,6 @@ impl TickBarrier {
 
     fn slot(&self, robot: u32) -> &AtomicU64 {
         self.word(robot, 0)
-    }
-
-    /// Records that `robot` sent `count` radio messages at tick k (before it acknowledges k).
-    pub fn record_sent(&self, robot: u32, tick: u64, count: u32) {
-        self.word(robot, 1 + (tick % 2) as usize).store(
-            (tick + 1) << 16 | (count as u64 & 0xffff),
-            Ordering::Release,
-        );
-    }
-
-    /// How many radio messages `robot` sent at tick k (0 if it has not recorded tick k). A
-    /// receiver takes exactly that many samples off the link: no empty receive calls, and a
-    /// silent link costs one atomic load.
-    pub fn sent_count(&self, robot: u32, tick: u64) -> u32 {
-        let v = self
-            .word(robot, 1 + (tick % 2) as usize)
-            .load(Ordering::Acquire);
-        if v >> 16 == tick + 1 {
-            (v & 0xffff) as u32
-        } else {
-            0
-        }
     }
 
     pub fn robots(&self) -> u32 {

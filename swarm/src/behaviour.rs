@@ -1,16 +1,14 @@
 //! The behaviour API and the agent-side runtime that sits between a behaviour and the radio.
 //!
 //! A behaviour is a pure state machine: `step_refs(sense, inbox, outbox) -> command`. It can
-//! only `broadcast` or `send(to)`; range, loss, delay, ordering and counting happen below it in
-//! [`AgentRuntime`], which both executors use: the multi-process agent feeds it the messages
-//! it takes off its links (`ingest`), the in-process executor its view of the shared
-//! [`Mailbox`] (`ingest_mailbox`), with the same decisions.
+//! only `broadcast` or `send(to)`; range, loss, delay, ordering and counting happen below it:
+//! the world's medium decides every (message, receiver) pair and holds the delay
+//! (`world::medium`), and [`AgentRuntime`], which both executors use, hands the behaviour the
+//! messages the medium delivered at this tick (the multi-process agent decodes them from the
+//! tick's air sample, the in-process executor's [`crate::mailbox::Mailbox`] once for all
+//! receivers) and encodes what it sends behind its Action.
 
-use crate::blob::AsBytes;
 use crate::frames::{Action, RadioHeader, Sense, BROADCAST, MAX_SENT};
-use crate::link::LinkSet;
-use crate::mailbox::Mailbox;
-use crate::radio::{decide, Verdict};
 use crate::scenario::Scenario;
 use crate::wire::bincode_config;
 #[cfg(test)]
@@ -18,8 +16,6 @@ pub(crate) use crate::wire::encode;
 pub use crate::wire::{decode, decode_in, RadioTx, Received};
 use serde::de::DeserializeOwned;
 use serde::Serialize;
-use std::collections::VecDeque;
-use std::sync::Arc;
 
 /// A robot's behaviour.
 pub trait Behaviour {
@@ -113,48 +109,20 @@ impl<M> Outbox<M> {
     }
 }
 
-// A decoded message is boxed: held inline it made every Pending as large as the behaviour's
-// message, and the in-process executor (which holds only `Posted` indices) moved those ~7 %
-// slower; unboxed, the multi-process radio gained ~3 % (bench throughput).
-enum Outcome<M> {
-    /// Decoded by this runtime (a message taken off a link).
-    Delivered(Box<Received<M>>),
-    /// The mailbox's message with this index (in-process).
-    Posted(u64),
-    Lost,
-    Malformed,
-}
-
-struct Pending<M> {
-    due: u64,
-    from: u32,
-    seq: u32,
-    outcome: Outcome<M>,
-}
-
 /// Counters the runtime keeps beyond those reported per tick in the Action frame.
 #[derive(Debug, Default, Clone, Copy)]
 pub struct RuntimeStats {
     pub refused_sends: u64,
     pub oversize_sends: u64,
-    pub stale_messages: u64,
-    /// Messages left on a link while their sender was out of reach, dropped when it came back.
-    pub skipped: u64,
 }
 
-/// Everything between one behaviour and the transport, for one robot.
+/// Everything between one behaviour and the transport, for one robot: no links and no
+/// pending queue (the world's medium decides delivery and holds the delay).
 pub struct AgentRuntime<B: Behaviour> {
     pub robot: u32,
     behaviour: B,
-    seed: u64,
     radio: crate::scenario::RadioParams,
-    links: LinkSet,
     seq: u32,
-    /// Own position at recent ticks (for the range test of messages sent at those ticks).
-    positions: VecDeque<(u64, [f64; 2])>,
-    pending: Vec<Pending<B::Msg>>,
-    /// The due messages of the current tick (kept to reuse its allocation).
-    due: Vec<Pending<B::Msg>>,
     /// The behaviour's outbox (kept to reuse its allocation).
     out: Vec<(u32, B::Msg)>,
     pub stats: RuntimeStats,
@@ -166,17 +134,8 @@ impl<B: Behaviour> AgentRuntime<B> {
     pub fn new(sc: &Scenario, robot: u32, behaviour: B) -> Self {
         AgentRuntime {
             robot,
-            seed: sc.run.seed,
             radio: sc.radio.clone(),
-            links: LinkSet::new(
-                sc.radio.max_links as usize,
-                sc.radio.lingering_links as usize,
-                sc.radio.link_linger_ticks as u64,
-            ),
             seq: 0,
-            positions: VecDeque::new(),
-            pending: Vec::new(),
-            due: Vec::new(),
             out: Vec::new(),
             stats: RuntimeStats::default(),
             zero_copy: behaviour.zero_copy(),
@@ -193,192 +152,25 @@ impl<B: Behaviour> AgentRuntime<B> {
         &self.behaviour
     }
 
-    pub fn links(&self) -> &LinkSet {
-        &self.links
-    }
-
-    /// Starts tick k: remembers the robot's own position from Sense_k.
-    pub fn begin(&mut self, sense: &Sense) {
-        if self.positions.back().map(|p| p.0) != Some(sense.tick) {
-            self.positions.push_back((sense.tick, sense.pos));
-        }
-        while self.positions.len() > 2 {
-            self.positions.pop_front();
-        }
-    }
-
-    fn own_pos_at(&self, tick: u64) -> Option<[f64; 2]> {
-        self.positions.iter().find(|p| p.0 == tick).map(|p| p.1)
-    }
-
-    /// Takes one raw message off a link (straight from shared memory): decides range and loss
-    /// now, decodes only if delivered, and holds it until its due tick.
-    pub fn ingest(&mut self, h: &RadioHeader, payload: &[u8]) {
-        self.take(h, || decode(h, payload));
-    }
-
-    /// [`AgentRuntime::ingest`] for a message whose bytes `owner` holds (an iceoryx2 sample):
-    /// a delivered message is decoded in place, its [`crate::Blob`] fields are views that keep
-    /// `owner` alive; anything else drops `owner` at once.
-    pub fn ingest_held<O: AsBytes + 'static>(&mut self, h: &RadioHeader, owner: O) {
-        self.take(h, || {
-            let owner: Arc<dyn AsBytes> = Arc::new(owner);
-            decode_in(h, &owner, 0)
-        });
-    }
-
-    /// The decisions of `ingest`; `decode` runs only for a delivered message.
-    fn take(&mut self, h: &RadioHeader, decode: impl FnOnce() -> Option<B::Msg>) {
-        if h.sender == self.robot || !self.links.accepts(h.sender, h.tick) {
-            return;
-        }
-        if let Some(deliver) = self.judge(h, self.own_pos_at(h.tick)) {
-            let outcome = if !deliver {
-                Outcome::Lost
-            } else {
-                match decode() {
-                    Some(msg) => Outcome::Delivered(Box::new(Received::new(h, msg))),
-                    None => Outcome::Malformed,
-                }
-            };
-            self.hold(h, outcome);
-        }
-    }
-
-    /// In-process: takes the mailbox's latest messages that this robot's links carry, with the
-    /// decisions `ingest` makes for each. Links are walked in robot-id order, so the messages
-    /// are held in (sender, seq) order, as the multi-process agent takes them off its links.
-    pub fn ingest_mailbox(&mut self, mailbox: &Mailbox<B::Msg>) {
-        let Some(tick) = mailbox.latest_tick() else {
-            return;
-        };
-        let own = self.own_pos_at(tick);
-        for i in 0..self.links.len() {
-            // Links whose robot was out of reach at `tick` carry nothing in range (the agent
-            // process does not take those messages off its links either).
-            let Some(sender) = self.links.reaching(i, tick) else {
-                continue;
-            };
-            for (index, h, decoded) in mailbox.latest_from(sender) {
-                if let Some(deliver) = self.judge(h, own) {
-                    let outcome = match (deliver, decoded) {
-                        (false, _) => Outcome::Lost,
-                        (true, true) => Outcome::Posted(index),
-                        (true, false) => Outcome::Malformed,
-                    };
-                    self.hold(h, outcome);
-                }
-            }
-        }
-    }
-
-    /// For a message on one of this robot's links, given the robot's own position at the send
-    /// tick: None if it is not for this robot or out of range (the world counts range drops
-    /// from ground truth; the receiver ignores them), else whether the loss draw delivers it.
-    #[inline]
-    fn judge(&mut self, h: &RadioHeader, own: Option<[f64; 2]>) -> Option<bool> {
-        if h.dest != BROADCAST && h.dest != self.robot {
-            return None;
-        }
-        let Some(own) = own else {
-            self.stats.stale_messages += 1;
-            return None;
-        };
-        match decide(
-            &self.radio,
-            self.seed,
-            h.tick,
-            h.sender,
-            h.sender_pos,
-            self.robot,
-            own,
-            h.seq,
-        ) {
-            Verdict::OutOfRange => None,
-            Verdict::Lost => Some(false),
-            Verdict::Deliver => Some(true),
-        }
-    }
-
-    /// Holds a message's outcome until its due tick.
-    fn hold(&mut self, h: &RadioHeader, outcome: Outcome<B::Msg>) {
-        self.pending.push(Pending {
-            due: h.tick + 1 + self.radio.delay_ticks as u64,
-            from: h.sender,
-            seq: h.seq,
-            outcome,
-        });
-    }
-
-    /// Finishes tick k: delivers what is due, steps the behaviour, transmits its messages and
-    /// returns the Action frame.
-    pub fn step(&mut self, sense: &Sense, tx: &mut dyn RadioTx) -> Action {
-        self.step_with(sense, None, tx)
-    }
-
-    /// `step` in-process: messages held by `ingest_mailbox` are read from the mailbox.
-    pub fn step_mailbox(
+    /// Tick k: hands the behaviour Sense_k and the messages the medium delivered at k
+    /// (`inbox`, in (sender, seq) order; `malformed` more could not be decoded), steps it,
+    /// transmits its messages through `tx` and returns the Action frame.
+    pub fn step(
         &mut self,
         sense: &Sense,
-        mailbox: &Mailbox<B::Msg>,
-        tx: &mut dyn RadioTx,
-    ) -> Action {
-        self.step_with(sense, Some(mailbox), tx)
-    }
-
-    fn step_with(
-        &mut self,
-        sense: &Sense,
-        mailbox: Option<&Mailbox<B::Msg>>,
+        inbox: &[&Received<B::Msg>],
+        malformed: u32,
         tx: &mut dyn RadioTx,
     ) -> Action {
         let k = sense.tick;
         let mut action = Action::idle(k, self.robot);
-        // Due messages in a fixed order: (sender, seq). Scheduling cannot change the inbox.
-        // (sender, seq) is unique, so any sort gives the same order; messages usually arrive
-        // in it already (links are walked by robot id), and then nothing moves.
-        let mut due = std::mem::take(&mut self.due);
-        if self.pending.iter().all(|p| p.due <= k) {
-            std::mem::swap(&mut due, &mut self.pending);
-        } else {
-            let mut i = 0;
-            while i < self.pending.len() {
-                if self.pending[i].due <= k {
-                    due.push(self.pending.swap_remove(i));
-                } else {
-                    i += 1;
-                }
-            }
-        }
-        if !due.is_sorted_by_key(|p| (p.from, p.seq)) {
-            due.sort_unstable_by_key(|p| (p.from, p.seq));
-        }
-        let mut inbox: Vec<&Received<B::Msg>> = Vec::with_capacity(due.len());
-        for p in &due {
-            match &p.outcome {
-                Outcome::Delivered(r) => inbox.push(r),
-                Outcome::Posted(i) => match mailbox.and_then(|m| m.get(*i)) {
-                    Some(r) => inbox.push(r),
-                    // Only a runtime stepped again after missing ticks could hold a message
-                    // the mailbox has forgotten; the in-process executor never does that.
-                    None => {
-                        self.stats.stale_messages += 1;
-                        continue;
-                    }
-                },
-                Outcome::Lost => action.radio_dropped_loss += 1,
-                Outcome::Malformed => action.radio_malformed += 1,
-            }
-        }
         action.radio_delivered = inbox.len() as u32;
+        action.radio_malformed = malformed;
         let mut out = Outbox::reusing(
             std::mem::take(&mut self.out),
             self.radio.max_messages_per_tick as usize,
         );
-        let cmd = self.behaviour.step_refs(sense, &inbox, &mut out);
-        drop(inbox);
-        due.clear();
-        self.due = due;
+        let cmd = self.behaviour.step_refs(sense, inbox, &mut out);
         self.stats.refused_sends += out.refused as u64;
         action.cmd = cmd.cmd;
         action.report = cmd.report;
@@ -410,10 +202,16 @@ impl<B: Behaviour> AgentRuntime<B> {
         action
     }
 
-    /// Applies Sense_k's neighbour list to the links: (added, removed).
-    pub fn update_links(&mut self, sense: &Sense) -> (&[u32], &[u32]) {
-        self.links
-            .update(sense.tick, sense.neighbours(), self.robot)
+    /// [`AgentRuntime::step`] with owned inbox messages (the multi-process agent, tests).
+    pub fn step_owned(
+        &mut self,
+        sense: &Sense,
+        inbox: &[Received<B::Msg>],
+        malformed: u32,
+        tx: &mut dyn RadioTx,
+    ) -> Action {
+        let refs: Vec<&Received<B::Msg>> = inbox.iter().collect();
+        self.step(sense, &refs, malformed, tx)
     }
 }
 
@@ -422,7 +220,7 @@ mod tests {
     use super::*;
     use crate::frames::Sense;
 
-    /// Broadcasts its tick; remembers what it heard.
+    /// Broadcasts its tick, then sends robot 9 a unicast; remembers what it heard.
     struct Echo {
         heard: Vec<(u32, u64)>,
     }
@@ -436,6 +234,7 @@ mod tests {
         ) -> Command {
             self.heard.extend(inbox.iter().map(|r| (r.from, r.msg)));
             out.broadcast(s.tick);
+            out.send(9, s.tick + 100);
             Command::default()
         }
     }
@@ -457,121 +256,40 @@ mod tests {
         s
     }
 
-    /// Receiver 0's links to robots 1..=3, made while handling Sense_0.
-    fn linked_receiver(sc: &Scenario) -> AgentRuntime<Echo> {
-        let mut rx = AgentRuntime::new(sc, 0, Echo { heard: vec![] });
-        let mut s = sense(0, 0, [0.0, 0.0]);
-        s.neighbours[..3].copy_from_slice(&[1, 2, 3]);
-        s.n_neighbours = 3;
-        rx.begin(&s);
-        rx.step(&s, &mut Collect(vec![]));
-        rx.update_links(&s);
-        rx
-    }
-
     #[test]
-    fn messages_arrive_next_tick_in_sender_order_and_out_of_range_is_ignored() {
+    fn a_step_sends_headed_messages_and_reports_its_inbox() {
         let sc = Scenario::default();
-        let mut rx = linked_receiver(&sc);
+        let mut rt = AgentRuntime::new(&sc, 3, Echo { heard: vec![] });
         let mut tx = Collect(vec![]);
-        let mut senders: Vec<_> = (1..4)
-            .map(|i| AgentRuntime::new(&sc, i, Echo { heard: vec![] }))
-            .collect();
-        // Tick 1: robots 1..3 send; robot 3 is out of range.
-        let s1 = sense(0, 1, [0.0, 0.0]);
-        rx.begin(&s1);
-        for (j, a) in senders.iter_mut().enumerate() {
-            let x = if j == 2 { 500.0 } else { 10.0 * (j + 1) as f64 };
-            let s = sense(a.robot, 1, [x, 0.0]);
-            a.begin(&s);
-            a.step(&s, &mut tx);
-        }
-        // Feed in reverse order: the inbox must still be sorted by sender.
-        for (h, p) in tx.0.iter().rev() {
-            rx.ingest(h, p);
-        }
-        let act1 = rx.step(&s1, &mut Collect(vec![]));
-        assert_eq!(act1.radio_delivered, 0, "nothing is due at the send tick");
-        let s2 = sense(0, 2, [0.0, 0.0]);
-        rx.begin(&s2);
-        let act2 = rx.step(&s2, &mut Collect(vec![]));
-        assert_eq!(act2.radio_delivered, 2);
-        assert_eq!(rx.behaviour().heard, vec![(1, 1), (2, 1)]);
-    }
-
-    #[test]
-    fn messages_on_a_link_made_at_their_send_tick_or_no_link_are_not_received() {
-        let sc = Scenario::default();
-        let mut rx = linked_receiver(&sc);
-        let s1 = sense(0, 1, [0.0, 0.0]);
-        rx.begin(&s1);
-        let mut tx = Collect(vec![]);
-        for (robot, tick) in [(1, 0), (7, 1)] {
-            let mut a = AgentRuntime::new(&sc, robot, Echo { heard: vec![] });
-            let s = sense(robot, tick, [5.0, 0.0]);
-            a.begin(&s);
-            a.step(&s, &mut tx);
-        }
-        for (h, p) in &tx.0 {
-            rx.ingest(h, p);
-        }
-        rx.step(&s1, &mut Collect(vec![]));
-        let s2 = sense(0, 2, [0.0, 0.0]);
-        rx.begin(&s2);
-        assert_eq!(rx.step(&s2, &mut Collect(vec![])).radio_delivered, 0);
-    }
-
-    #[test]
-    fn garbage_payload_is_counted_as_malformed_not_delivered() {
-        let sc = Scenario::default();
-        let mut rx = linked_receiver(&sc);
-        let s1 = sense(0, 1, [0.0, 0.0]);
-        rx.begin(&s1);
+        let s = sense(3, 5, [1.0, 2.0]);
         let h = RadioHeader {
             sender: 1,
-            len: 9,
-            tick: 1,
+            tick: 4,
             ..Default::default()
         };
-        rx.ingest(&h, &[0xff; 9]);
-        let h2 = RadioHeader {
-            sender: 2,
-            len: 200,
-            tick: 1,
-            ..Default::default()
-        };
-        rx.ingest(&h2, &[1; 4]); // claims more bytes than it carries
-        rx.step(&s1, &mut Collect(vec![]));
-        let s2 = sense(0, 2, [0.0, 0.0]);
-        rx.begin(&s2);
-        let a = rx.step(&s2, &mut Collect(vec![]));
-        assert_eq!((a.radio_delivered, a.radio_malformed), (0, 2));
+        let inbox = [Received::new(&h, 40u64)];
+        let a = rt.step_owned(&s, &inbox, 2, &mut tx);
+        assert_eq!(rt.behaviour().heard, vec![(1, 40)]);
+        assert_eq!((a.radio_delivered, a.radio_malformed, a.n_sent), (1, 2, 2));
+        assert_eq!(&a.sent_to[..2], &[BROADCAST, 9]);
+        let (h0, p0) = &tx.0[0];
+        assert_eq!(
+            (h0.sender, h0.tick, h0.seq, h0.sender_pos),
+            (3, 5, 1, [1.0, 2.0])
+        );
+        assert_eq!(decode::<u64>(h0, p0), Some(5));
+        assert_eq!((tx.0[1].0.dest, tx.0[1].0.seq), (9, 2));
+        assert_eq!(decode::<u64>(&tx.0[1].0, &tx.0[1].1), Some(105));
     }
 
     #[test]
-    fn delay_holds_messages_for_extra_ticks() {
+    fn oversize_messages_are_not_sent() {
         let mut sc = Scenario::default();
-        sc.radio.delay_ticks = 2;
-        let mut rx = linked_receiver(&sc);
+        sc.radio.max_message_bytes = 0;
+        let mut rt = AgentRuntime::new(&sc, 0, Echo { heard: vec![] });
         let mut tx = Collect(vec![]);
-        let mut a = AgentRuntime::new(&sc, 1, Echo { heard: vec![] });
-        let s = sense(1, 1, [5.0, 0.0]);
-        a.begin(&s);
-        a.step(&s, &mut tx);
-        let mut delivered_at = None;
-        for k in 1..6 {
-            let s = sense(0, k, [0.0, 0.0]);
-            rx.begin(&s);
-            if k == 1 {
-                for (h, p) in &tx.0 {
-                    rx.ingest(h, p);
-                }
-            }
-            if rx.step(&s, &mut Collect(vec![])).radio_delivered > 0 {
-                delivered_at.get_or_insert(k);
-            }
-        }
-        assert_eq!(delivered_at, Some(4));
+        let a = rt.step_owned(&sense(0, 1, [0.0; 2]), &[], 0, &mut tx);
+        assert_eq!((a.n_sent, tx.0.len(), rt.stats.oversize_sends), (0, 0, 2));
     }
 
     #[test]

@@ -6,8 +6,6 @@
 
 use iceoryx2::prelude::*;
 
-/// Most robots listed in a Sense frame's neighbour list (the agent's radio links).
-pub const MAX_NEIGHBOURS: usize = 128;
 /// Most obstacle / wall boundary points in a Sense frame (the nearest when more are in range).
 pub const MAX_OBSTACLE_POINTS: usize = 768;
 /// Most mission entities in a Sense frame (whatever the mission lets a robot sense).
@@ -73,15 +71,9 @@ pub struct Sense {
     pub vel: [f64; 2],
     /// Live robots in the run (the robot's own count of the swarm, as a radio beacon would).
     pub alive_robots: u32,
-    pub n_neighbours: u32,
     pub n_obstacle_points: u32,
     pub n_entities: u32,
     pub n_nearby: u32,
-    pub reserved: u32,
-    /// Robots within comm_radius + link_margin, by robot id: whom the transport links to (at
-    /// most radio.max_links; when more are in reach, those of the last list first, then the
-    /// nearest others).
-    pub neighbours: [u32; MAX_NEIGHBOURS],
     /// Obstacle, wall and dead-robot points within the sensing radius, as a set: in no
     /// particular order, but the same order for the same positions (the nearest
     /// MAX_OBSTACLE_POINTS when more are in range).
@@ -94,7 +86,7 @@ pub struct Sense {
 
 /// Bytes of a Sense frame before its lists: what a writer zeroes before filling the lists up
 /// to their counts.
-pub const SENSE_FIXED_BYTES: usize = std::mem::offset_of!(Sense, neighbours);
+pub const SENSE_FIXED_BYTES: usize = std::mem::offset_of!(Sense, obstacle_points);
 
 impl Sense {
     /// An all-zero frame (every field of a Sense is valid when zero).
@@ -110,13 +102,9 @@ impl Sense {
     /// Writes every list in full with values derived from `x` (the largest frame, as the
     /// benchmarks send it); the fixed fields other than the counts are left as they are.
     pub fn fill_every_list(&mut self, x: f64) {
-        self.n_neighbours = MAX_NEIGHBOURS as u32;
         self.n_obstacle_points = MAX_OBSTACLE_POINTS as u32;
         self.n_entities = MAX_ENTITIES as u32;
         self.n_nearby = MAX_NEARBY as u32;
-        for (i, n) in self.neighbours.iter_mut().enumerate() {
-            *n = i as u32;
-        }
         for (i, q) in self.obstacle_points.iter_mut().enumerate() {
             *q = [i as f64, x];
         }
@@ -140,9 +128,6 @@ impl Sense {
         }
     }
 
-    pub fn neighbours(&self) -> &[u32] {
-        &self.neighbours[..(self.n_neighbours as usize).min(MAX_NEIGHBOURS)]
-    }
     pub fn obstacle_points(&self) -> &[[f64; 2]] {
         &self.obstacle_points[..(self.n_obstacle_points as usize).min(MAX_OBSTACLE_POINTS)]
     }
@@ -174,9 +159,11 @@ pub struct Action {
     pub report: [f64; 4],
     /// Messages sent this tick and their destinations (BROADCAST or a robot id).
     pub n_sent: u32,
-    /// Radio outcome of the messages due at this tick, as the receiver's transport saw them.
+    /// Messages due at this tick that the receiver's transport decoded (its inbox).
     pub radio_delivered: u32,
-    pub radio_dropped_loss: u32,
+    /// Bytes of this tick's messages behind the Action in the act sample (`swarm::air`).
+    pub radio_bytes: u32,
+    /// Messages due at this tick that the receiver could not decode.
     pub radio_malformed: u32,
     pub sent_to: [u32; MAX_SENT],
 }
@@ -191,10 +178,17 @@ impl Action {
             report: [0.0; 4],
             n_sent: 0,
             radio_delivered: 0,
-            radio_dropped_loss: 0,
+            radio_bytes: 0,
             radio_malformed: 0,
             sent_to: [0; MAX_SENT],
         }
+    }
+}
+
+impl Default for Action {
+    /// An idle action of robot 0 at tick 0 (iceoryx2 wants a default user header).
+    fn default() -> Self {
+        Action::idle(0, 0)
     }
 }
 
@@ -228,6 +222,34 @@ impl Default for RadioHeader {
     }
 }
 
+/// The user header of an air sample (`radio/air`, see `swarm::air`): the world's one
+/// publication of the messages due at `tick`.
+#[derive(Debug, Clone, Copy, ZeroCopySend, Default, PartialEq)]
+#[type_name("swarm::AirHeader")]
+#[repr(C)]
+pub struct AirHeader {
+    /// The tick the messages are due at (the Sense frame's tick).
+    pub tick: u64,
+    /// The tick they were sent at.
+    pub sent_tick: u64,
+    pub robots: u32,
+    pub messages: u32,
+    /// (message, receiver) pairs listed.
+    pub index_len: u32,
+    pub payload_bytes: u32,
+}
+
+/// One message of an air sample: its header (sender, destination, send tick, seq, length, the
+/// sender's position at the send tick, as the world knows it) and its payload's offset in the
+/// sample's payload area.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[repr(C)]
+pub struct AirEntry {
+    pub header: RadioHeader,
+    pub offset: u32,
+    pub reserved: u32,
+}
+
 /// World -> observers (the orchestrator's progress bar), once per tick.
 #[derive(Debug, Clone, Copy, ZeroCopySend, Default, PartialEq)]
 #[type_name("swarm::WorldStatus")]
@@ -247,6 +269,8 @@ pub struct WorldStatus {
     pub delivered: u64,
     pub dropped_range: u64,
     pub dropped_loss: u64,
+    /// Dropped by the medium for line of sight or bandwidth, or due at a dead receiver.
+    pub dropped_other: u64,
     pub rejected_actions: u64,
 }
 
@@ -274,17 +298,15 @@ mod tests {
     fn frames_have_fixed_c_layout() {
         // The layout is part of the wire format between processes: pin it.
         assert_eq!(std::mem::size_of::<RadioHeader>(), 40);
+        assert_eq!(std::mem::size_of::<AirEntry>(), 48);
+        assert_eq!(std::mem::size_of::<AirHeader>(), 32);
         assert_eq!(std::mem::align_of::<Sense>(), 8);
-        assert_eq!(SENSE_FIXED_BYTES, 80);
+        assert_eq!(SENSE_FIXED_BYTES, 72);
         assert_eq!(std::mem::size_of::<Entity>(), 40);
         assert_eq!(std::mem::size_of::<Nearby>(), 40);
         assert_eq!(
             std::mem::size_of::<Sense>(),
-            SENSE_FIXED_BYTES
-                + 4 * MAX_NEIGHBOURS
-                + 16 * MAX_OBSTACLE_POINTS
-                + 40 * MAX_ENTITIES
-                + 40 * MAX_NEARBY
+            SENSE_FIXED_BYTES + 16 * MAX_OBSTACLE_POINTS + 40 * MAX_ENTITIES + 40 * MAX_NEARBY
         );
         assert_eq!(std::mem::size_of::<Action>(), 80 + 4 * MAX_SENT);
     }
@@ -292,7 +314,6 @@ mod tests {
     #[test]
     fn zeroed_sense_has_empty_lists() {
         let s = Sense::zeroed();
-        assert!(s.neighbours().is_empty());
         assert!(s.obstacle_points().is_empty());
         assert!(s.entities().is_empty());
         assert!(s.nearby().is_empty());
@@ -301,7 +322,7 @@ mod tests {
     #[test]
     fn list_accessors_clamp_corrupt_counts() {
         let mut s = Sense::zeroed();
-        s.n_neighbours = u32::MAX;
-        assert_eq!(s.neighbours().len(), MAX_NEIGHBOURS);
+        s.n_nearby = u32::MAX;
+        assert_eq!(s.nearby().len(), MAX_NEARBY);
     }
 }

@@ -2,10 +2,11 @@
 //!
 //! Everything both executors (multi-process and in-process) share lives here, so that the two
 //! give byte-identical recordings: the frames, the scenario types and their validation, the
-//! radio model (range, loss, delay, link management), the behaviour API with its agent-side
+//! radio model (range, loss; the medium`s wire format in `air`), the behaviour API with its agent-side
 //! runtime, the in-process radio (`mailbox`), the recording format, and the iceoryx2 / futex
 //! plumbing of the multi-process path.
 
+pub mod air;
 pub mod barrier;
 pub mod behaviour;
 pub mod bell;
@@ -17,7 +18,6 @@ pub mod geometry;
 pub mod key_lines;
 pub mod layer;
 pub mod limits;
-pub mod link;
 pub mod mailbox;
 pub mod radio;
 pub mod recording;

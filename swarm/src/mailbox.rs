@@ -1,17 +1,17 @@
 //! The in-process executor's radio: what iceoryx2 carries between processes, carried in memory.
 //!
-//! Senders encode their messages into an [`Air`] exactly as into loaned shared-memory slots.
-//! After the tick, the [`Mailbox`] decodes every message once and keeps it while it can still
-//! be due; each receiver's runtime ([`crate::AgentRuntime::ingest_mailbox`]) makes the same
-//! range / loss / link decisions as for a message taken off a link, but holds an index into the
-//! mailbox instead of its own decoded copy. At N = 100 a message has ~50 receivers: decoding,
-//! cloning and dropping it once per receiver was most of the in-process radio's cost.
+//! Senders encode their messages into an [`Air`] as the agent process writes them behind its
+//! Action; the world's medium decides who hears what and hands back the tick's
+//! [`TickAir`] when it is due. The [`Mailbox`] decodes each of its messages once; each
+//! receiver's inbox is references into it, by the air's index (at N = 100 a message has ~50
+//! receivers: decoding, cloning and dropping it once per receiver was most of the in-process
+//! radio's cost).
 
+use crate::air::TickAir;
 use crate::behaviour::{decode, decode_in, RadioTx, Received};
 use crate::blob::AsBytes;
 use crate::frames::RadioHeader;
 use serde::de::DeserializeOwned;
-use std::collections::VecDeque;
 use std::sync::Arc;
 
 /// Messages sent in one tick: headers (with the offset of their payload) and the payloads.
@@ -60,42 +60,30 @@ impl Air {
     }
 }
 
-/// The messages of the last `delay + 1` ticks, decoded, grouped by sender.
+/// The messages due at a tick, decoded once for all their receivers.
 pub struct Mailbox<M> {
-    /// Headers and decoded payloads (None: malformed), oldest first; entry i has the index
-    /// `base + i`. Apart, since receivers read every header but only the messages they get.
-    headers: VecDeque<RadioHeader>,
-    msgs: VecDeque<Option<Received<M>>>,
-    base: u64,
-    /// (tick, index of its first message) of each tick kept, oldest first.
-    ticks: VecDeque<(u64, u64)>,
-    /// Messages of the latest tick by sender: those of robot r are the indices
-    /// `latest_first + by_sender[r] .. latest_first + by_sender[r + 1]`.
-    by_sender: Vec<u32>,
-    latest_first: u64,
-    /// Ticks kept: a message sent at t is due at t + 1 + delay.
-    keep: u64,
-    /// Scratch of `post`: message order grouped by sender, next free place per sender.
-    order: Vec<u32>,
-    next: Vec<u32>,
+    /// Decoded messages of the air (None: malformed), by the air's message index.
+    msgs: Vec<Option<Received<M>>>,
+    /// Receiver r's messages are `index[start[r]..start[r + 1]]`.
+    start: Vec<u32>,
+    index: Vec<u32>,
     /// Decode each tick's messages in a shared copy of its bytes, so that their Blob fields are
     /// views into it (the behaviour's `zero_copy()`).
     zero_copy: bool,
 }
 
+impl<M: DeserializeOwned> Default for Mailbox<M> {
+    fn default() -> Self {
+        Mailbox::new()
+    }
+}
+
 impl<M: DeserializeOwned> Mailbox<M> {
-    /// A mailbox for robots `0..robots` and a radio delay of `delay_ticks`.
-    pub fn new(robots: usize, delay_ticks: u64) -> Mailbox<M> {
+    pub fn new() -> Mailbox<M> {
         Mailbox {
-            headers: VecDeque::new(),
-            msgs: VecDeque::new(),
-            base: 0,
-            ticks: VecDeque::new(),
-            by_sender: vec![0; robots + 1],
-            latest_first: 0,
-            keep: delay_ticks + 1,
-            order: Vec::new(),
-            next: Vec::new(),
+            msgs: Vec::new(),
+            start: Vec::new(),
+            index: Vec::new(),
             zero_copy: false,
         }
     }
@@ -107,93 +95,45 @@ impl<M: DeserializeOwned> Mailbox<M> {
         self
     }
 
-    /// Posts the messages sent at `tick` (decoding each once) and forgets those that can no
-    /// longer be due at a later tick. Messages of one sender keep their order.
-    pub fn post(&mut self, tick: u64, air: &Air) {
-        while let Some(&(t, _)) = self.ticks.front() {
-            if t + self.keep > tick {
-                break;
-            }
-            self.ticks.pop_front();
-            let end = self
-                .ticks
-                .front()
-                .map_or(self.latest_end(), |&(_, first)| first);
-            let gone = (end - self.base) as usize;
-            self.headers.drain(..gone);
-            self.msgs.drain(..gone);
-            self.base = end;
-        }
-        // Group by sender (a stable counting sort; in-process the messages come in robot order
-        // already, and then the order is the identity). A sender id beyond the robots cannot be
-        // linked by anyone: such a message is not posted.
-        let n = self.by_sender.len() - 1;
-        self.by_sender.fill(0);
-        for (h, _) in &air.headers {
-            if (h.sender as usize) < n {
-                self.by_sender[h.sender as usize + 1] += 1;
-            }
-        }
-        for r in 0..n {
-            self.by_sender[r + 1] += self.by_sender[r];
-        }
-        self.order.clear();
-        self.order.resize(self.by_sender[n] as usize, 0);
-        self.next.clear();
-        self.next.extend_from_slice(&self.by_sender[..n]);
-        for (i, (h, _)) in air.headers.iter().enumerate() {
-            if let Some(slot) = self.next.get_mut(h.sender as usize) {
-                self.order[*slot as usize] = i as u32;
-                *slot += 1;
-            }
-        }
-        self.latest_first = self.latest_end();
-        self.ticks.push_back((tick, self.latest_first));
+    /// Posts the messages due at this tick (None: nothing is), decoding each once.
+    pub fn post(&mut self, air: Option<&TickAir>) {
+        self.msgs.clear();
+        self.start.clear();
+        self.index.clear();
+        let Some(air) = air else {
+            return;
+        };
         let shared: Option<Arc<dyn AsBytes>> = self
             .zero_copy
             .then(|| Arc::new(air.bytes.clone()) as Arc<dyn AsBytes>);
-        for &i in &self.order {
-            let (h, at) = &air.headers[i as usize];
+        for (h, range) in &air.messages {
             let msg = match &shared {
-                Some(owner) => decode_in::<M>(h, owner, *at),
-                None => decode::<M>(h, &air.bytes[*at..]),
+                Some(owner) => decode_in::<M>(h, owner, range.start),
+                None => decode::<M>(h, &air.bytes[range.clone()]),
             };
-            self.headers.push_back(*h);
-            self.msgs.push_back(msg.map(|msg| Received::new(h, msg)));
+            self.msgs.push(msg.map(|m| Received::new(h, m)));
         }
+        self.start.extend_from_slice(&air.start);
+        self.index.extend_from_slice(&air.index);
     }
 }
 
 impl<M> Mailbox<M> {
-    fn latest_end(&self) -> u64 {
-        self.base + self.headers.len() as u64
-    }
-
-    /// The tick of the latest messages posted, if any.
-    pub fn latest_tick(&self) -> Option<u64> {
-        self.ticks.back().map(|&(t, _)| t)
-    }
-
-    /// The latest tick's messages from `sender` in the order sent: (index, header, whether it
-    /// decoded).
-    pub fn latest_from(&self, sender: u32) -> impl Iterator<Item = (u64, &RadioHeader, bool)> + '_ {
-        let r = sender as usize;
-        let range = if self.ticks.is_empty() || r + 1 >= self.by_sender.len() {
-            0..0
-        } else {
-            self.by_sender[r] as u64..self.by_sender[r + 1] as u64
+    /// Robot `robot`'s inbox (appended to `inbox`, in (sender, seq) order) and how many of
+    /// its messages were malformed.
+    pub fn inbox<'a>(&'a self, robot: u32, inbox: &mut Vec<&'a Received<M>>) -> u32 {
+        let r = robot as usize;
+        let (Some(&a), Some(&b)) = (self.start.get(r), self.start.get(r + 1)) else {
+            return 0;
         };
-        range.map(move |k| {
-            let i = self.latest_first + k;
-            let at = (i - self.base) as usize;
-            (i, &self.headers[at], self.msgs[at].is_some())
-        })
-    }
-
-    /// The decoded message with index `i`, if still kept and not malformed.
-    pub fn get(&self, i: u64) -> Option<&Received<M>> {
-        let k = i.checked_sub(self.base)? as usize;
-        self.msgs.get(k)?.as_ref()
+        let mut malformed = 0;
+        for &i in &self.index[a as usize..b as usize] {
+            match self.msgs.get(i as usize).and_then(|m| m.as_ref()) {
+                Some(m) => inbox.push(m),
+                None => malformed += 1,
+            }
+        }
+        malformed
     }
 }
 
@@ -202,94 +142,86 @@ mod tests {
     use super::*;
     use crate::behaviour::encode;
 
-    fn send(air: &mut Air, sender: u32, tick: u64, seq: u32, msg: u64) {
-        let len = encode(&msg).len() as u32;
-        let h = RadioHeader {
-            sender,
-            tick,
-            seq,
-            len,
-            ..Default::default()
-        };
-        air.transmit(&h, &mut |buf| buf.copy_from_slice(&encode(&msg)));
+    /// An air whose messages are `msgs` (sender, payload bytes), every robot of `robots`
+    /// hearing the messages listed for it.
+    fn air(msgs: &[(u32, Vec<u8>)], lists: &[Vec<u32>]) -> TickAir {
+        let mut a = TickAir::default();
+        for (k, (s, b)) in msgs.iter().enumerate() {
+            let at = a.bytes.len();
+            a.bytes.extend_from_slice(b);
+            let h = RadioHeader {
+                sender: *s,
+                seq: k as u32,
+                len: b.len() as u32,
+                ..Default::default()
+            };
+            a.messages.push((h, at..at + b.len()));
+        }
+        a.start.push(0);
+        for l in lists {
+            a.index.extend_from_slice(l);
+            a.start.push(a.index.len() as u32);
+        }
+        a
     }
 
     #[test]
-    fn groups_by_sender_keeps_order_and_forgets_what_cannot_be_due() {
-        let mut mb: Mailbox<u64> = Mailbox::new(4, 1);
-        let mut air = Air::default();
-        send(&mut air, 2, 0, 1, 20);
-        send(&mut air, 0, 0, 1, 0);
-        send(&mut air, 2, 0, 2, 21);
-        mb.post(0, &air);
-        let from2: Vec<u64> = mb
-            .latest_from(2)
-            .map(|(i, _, _)| mb.get(i).unwrap().msg)
-            .collect();
-        assert_eq!(from2, vec![20, 21]);
-        assert_eq!(mb.latest_from(1).count(), 0);
-        let (i0, _, _) = mb.latest_from(0).next().unwrap();
-        air.clear();
-        send(&mut air, 1, 1, 1, 10);
-        mb.post(1, &air);
-        // Delay 1: tick 0's messages can still be due at tick 2.
-        assert_eq!(mb.get(i0).unwrap().msg, 0);
-        assert_eq!(mb.latest_tick(), Some(1));
-        air.clear();
-        mb.post(2, &air);
-        assert!(mb.get(i0).is_none());
-        assert_eq!(mb.latest_from(1).count(), 0);
+    fn each_receiver_gets_its_listed_messages_decoded_once() {
+        let mut mb: Mailbox<u64> = Mailbox::new();
+        let a = air(
+            &[(0, encode(&7u64)), (2, encode(&9u64)), (2, vec![0xff; 9])],
+            &[vec![1, 2], vec![], vec![0]],
+        );
+        mb.post(Some(&a));
+        let mut got = Vec::new();
+        assert_eq!(mb.inbox(0, &mut got), 1, "the garbage payload is malformed");
+        assert_eq!(
+            got.iter().map(|r| (r.from, r.msg)).collect::<Vec<_>>(),
+            vec![(2, 9)]
+        );
+        let mut got2 = Vec::new();
+        assert_eq!(mb.inbox(2, &mut got2), 0);
+        assert_eq!(got2[0].msg, 7);
+        // One decoded copy: two receivers of one message hold the same reference.
+        let b = air(&[(0, encode(&7u64))], &[vec![], vec![0], vec![0]]);
+        mb.post(Some(&b));
+        let (mut x, mut y) = (Vec::new(), Vec::new());
+        mb.inbox(1, &mut x);
+        mb.inbox(2, &mut y);
+        assert!(std::ptr::eq(x[0], y[0]));
+        assert_eq!(mb.inbox(7, &mut x), 0);
+        mb.post(None);
+        let mut z = Vec::new();
+        mb.inbox(1, &mut z);
+        assert!(z.is_empty());
     }
 
     #[test]
     fn zero_copy_blobs_are_views_into_one_shared_copy_of_the_tick() {
         use crate::blob::Blob;
         for on in [false, true] {
-            let mut mb: Mailbox<(u32, Blob)> = Mailbox::new(3, 0).zero_copy(on);
-            let mut air = Air::default();
-            for sender in 0..3u32 {
-                let msg = (sender, Blob::from(vec![sender as u8; 100]));
-                let bytes = encode(&msg);
-                let h = RadioHeader {
-                    sender,
-                    len: bytes.len() as u32,
-                    ..Default::default()
-                };
-                air.transmit(&h, &mut |buf| buf.copy_from_slice(&bytes));
-            }
-            mb.post(0, &air);
-            let got: Vec<&(u32, Blob)> = (0..3)
-                .map(|s| {
-                    let (i, _, _) = mb.latest_from(s).next().unwrap();
-                    &mb.get(i).unwrap().msg
-                })
+            let mut mb: Mailbox<(u32, Blob)> = Mailbox::new().zero_copy(on);
+            let msgs: Vec<(u32, Vec<u8>)> = (0..3u32)
+                .map(|s| (s, encode(&(s, Blob::from(vec![s as u8; 100])))))
                 .collect();
+            let a = air(&msgs, &[vec![0, 1, 2]]);
+            mb.post(Some(&a));
+            let mut got = Vec::new();
+            mb.inbox(0, &mut got);
             for (s, m) in got.iter().enumerate() {
-                assert_eq!(m.0, s as u32);
-                assert_eq!(&m.1[..], &[s as u8; 100][..]);
-                assert_eq!(m.1.is_view(), on);
+                assert_eq!(m.msg.0, s as u32);
+                assert_eq!(&m.msg.1[..], &[s as u8; 100][..]);
+                assert_eq!(m.msg.1.is_view(), on);
             }
             if on {
-                // One copy of the tick's bytes: the views lie in it, in order, and not in Air.
-                let (a, b) = (got[0].1.as_ptr() as usize, got[1].1.as_ptr() as usize);
-                assert!(b > a && b - a < air.bytes.len());
-                assert!(!air.bytes.as_ptr_range().contains(&got[0].1.as_ptr()));
+                // One copy of the tick's bytes: the views lie in it, in order, and not in the air.
+                let (p, q) = (
+                    got[0].msg.1.as_ptr() as usize,
+                    got[1].msg.1.as_ptr() as usize,
+                );
+                assert!(q > p && q - p < a.bytes.len());
+                assert!(!a.bytes.as_ptr_range().contains(&got[0].msg.1.as_ptr()));
             }
         }
-    }
-
-    #[test]
-    fn a_malformed_payload_is_kept_as_none() {
-        let mut mb: Mailbox<u64> = Mailbox::new(2, 0);
-        let mut air = Air::default();
-        let h = RadioHeader {
-            sender: 1,
-            len: 9,
-            ..Default::default()
-        };
-        air.transmit(&h, &mut |buf| buf.fill(0xff));
-        mb.post(0, &air);
-        let (i, h, decoded) = mb.latest_from(1).next().unwrap();
-        assert!(h.sender == 1 && !decoded && mb.get(i).is_none());
     }
 }

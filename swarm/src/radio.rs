@@ -107,7 +107,43 @@ pub fn decide(
     }
 }
 
-/// Run-wide message counters, per (message, intended receiver) pair.
+/// The scenario's `[radio.burst]`: the Gilbert-Elliott channel, one two-state Markov chain
+/// per directed link (`world::medium::burst`). Mean burst length 1 / p_bad_good ticks;
+/// long-run share of Bad ticks p_good_bad / (p_good_bad + p_bad_good).
+#[derive(Serialize, Deserialize, Clone, Copy, Debug, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct BurstParams {
+    /// p: probability per tick of Good -> Bad.
+    pub p_good_bad: f64,
+    /// r: probability per tick of Bad -> Good (mean burst length 1 / r ticks).
+    pub p_bad_good: f64,
+    /// Loss probability while Good.
+    pub loss_good: f64,
+    /// Loss probability while Bad.
+    pub loss_bad: f64,
+}
+
+impl BurstParams {
+    /// pi_B, the long-run share of Bad ticks.
+    pub fn bad_share(&self) -> f64 {
+        let s = self.p_good_bad + self.p_bad_good;
+        if s > 0.0 {
+            self.p_good_bad / s
+        } else {
+            0.0
+        }
+    }
+    /// The long-run loss rate pi_G loss_good + pi_B loss_bad.
+    pub fn long_run_loss(&self) -> f64 {
+        let b = self.bad_share();
+        (1.0 - b) * self.loss_good + b * self.loss_bad
+    }
+}
+
+/// Message counters, per (message, intended receiver) pair: of one tick (a recording's tick
+/// record) or of the run (the summary). They add up: offered = delivered + dropped_range +
+/// dropped_occluded + dropped_bandwidth + dropped_loss + malformed + receiver_dead +
+/// in_flight, over the ticks up to any tick with that tick's `in_flight`.
 #[derive(
     Debug,
     Clone,
@@ -121,31 +157,52 @@ pub fn decide(
     bincode::Decode,
 )]
 pub struct RadioCounters {
-    /// Pairs offered: a broadcast counts once per other live robot, a unicast once.
+    /// Pairs offered at the send tick: a broadcast counts once per other live robot, a unicast
+    /// once.
     pub offered: u64,
+    /// Due at this tick and decoded by the receiver.
     pub delivered: u64,
-    /// Receiver beyond comm_radius at the send tick (or dead, or unknown).
+    /// Receiver beyond comm_radius at the send tick (or a unicast to a dead or unknown robot).
     pub dropped_range: u64,
-    /// In range, dropped by the loss model.
+    /// In range, but an obstacle blocked the line of sight (`radio.occlusion`).
+    pub dropped_occluded: u64,
+    /// In range, but beyond the sender's `radio.bandwidth_bytes_per_tick`.
+    pub dropped_bandwidth: u64,
+    /// In range, dropped by the loss model (Bernoulli, distance or Gilbert-Elliott).
     pub dropped_loss: u64,
-    /// In range, but the receiver could not decode the payload.
+    /// Due at this tick, but the receiver could not decode the payload.
     pub malformed: u64,
-    /// In range, but never reached the receiver's transport: no link (max_links + lingering_links reached)
-    /// or the receiver died before the message was due.
-    pub dropped_unlinked: u64,
-    /// Sent in the last ticks of the run and not yet due when it ended.
+    /// Due at this tick, but the receiver was dead (or sent no action).
+    pub receiver_dead: u64,
+    /// Passed the medium and not due yet, after this tick (a snapshot, not a sum: the run's is
+    /// that of its last tick).
     pub in_flight: u64,
 }
 
 impl RadioCounters {
+    /// Adds a tick's counts; `in_flight` becomes the tick's.
     pub fn add(&mut self, o: &RadioCounters) {
         self.offered += o.offered;
         self.delivered += o.delivered;
         self.dropped_range += o.dropped_range;
+        self.dropped_occluded += o.dropped_occluded;
+        self.dropped_bandwidth += o.dropped_bandwidth;
         self.dropped_loss += o.dropped_loss;
         self.malformed += o.malformed;
-        self.dropped_unlinked += o.dropped_unlinked;
-        self.in_flight += o.in_flight;
+        self.receiver_dead += o.receiver_dead;
+        self.in_flight = o.in_flight;
+    }
+
+    /// Every pair's outcome so far, in flight included: equals `offered` when the books balance.
+    pub fn accounted(&self) -> u64 {
+        self.delivered
+            + self.dropped_range
+            + self.dropped_occluded
+            + self.dropped_bandwidth
+            + self.dropped_loss
+            + self.malformed
+            + self.receiver_dead
+            + self.in_flight
     }
 }
 

@@ -8,15 +8,18 @@ use crate::radio::RadioCounters;
 use serde::{Deserialize, Serialize};
 use std::io::{BufReader, BufWriter, Read, Write};
 
-/// Version 1: the header, then one [`TickRecord`] per tick.
-pub const RECORDING_VERSION: u32 = 1;
-/// Version 2: as version 1, each TickRecord followed by its [`TickExtra`]. A run writes it
-/// when it has something to put there (robots with a body); other runs keep version 1, so
-/// their recordings read as they always did.
-pub const RECORDING_VERSION_EXTRA: u32 = 2;
-/// Version 3: as version 2, each TickExtra followed by the tick's [`TickLayer`] (the mission's
+/// Version 3: the header, then one [`TickRecord`] per tick. (Versions 1 and 2 had the link
+/// design's radio counters, with `dropped_unlinked`; the shared medium's counters replaced
+/// them: see [`RadioCounters`].)
+pub const RECORDING_VERSION: u32 = 3;
+/// Version 4: as version 3, each TickRecord followed by its [`TickExtra`]. A run writes it
+/// when it has something to put there (robots with a body); other runs keep version 3.
+pub const RECORDING_VERSION_EXTRA: u32 = 4;
+/// Version 5: as version 4, each TickExtra followed by the tick's [`TickLayer`] (the mission's
 /// marks, for the viewer). A run writes it when its mission has a layer (search: targets).
-pub const RECORDING_VERSION_LAYER: u32 = 3;
+pub const RECORDING_VERSION_LAYER: u32 = 5;
+/// The oldest version this reader understands.
+pub const RECORDING_VERSION_OLDEST: u32 = 3;
 
 /// Clearances of robot bodies at one tick (robots with `robot.radius` > 0).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -50,7 +53,7 @@ pub struct TickExtra {
     pub body: Option<BodyFigures>,
 }
 
-/// What a version-3 recording adds after each tick's TickExtra: the mission's layer at the end
+/// What a version-5 recording adds after each tick's TickExtra: the mission's layer at the end
 /// of the tick (`Mission::live_layer`), or None when it is the previous tick's (a search's
 /// targets change only when one is found, so most ticks cost one byte).
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
@@ -110,12 +113,14 @@ pub struct TickRecord {
     /// Each robot's display state this tick (Action.events & STATE_MASK).
     pub states: Vec<u8>,
     pub events: Vec<Event>,
-    /// Radio outcome of the messages due at this tick, plus range drops of those sent at it.
+    /// The medium's counts of the messages sent at this tick (offered and dropped), the
+    /// outcome of those due at it (delivered, malformed, receiver dead), and what is in flight
+    /// after it.
     pub radio: RadioCounters,
-    /// Version 2 only: written after the record, not inside it.
+    /// Version 4 only: written after the record, not inside it.
     #[serde(skip)]
     pub extra: Option<TickExtra>,
-    /// Version 3 only: the mission's marks at the end of this tick (written after the
+    /// Version 5 only: the mission's marks at the end of this tick (written after the
     /// TickExtra as a [`TickLayer`]; read back whole, unchanged ticks filled in).
     #[serde(skip)]
     pub layer: Option<Vec<Mark>>,
@@ -127,9 +132,9 @@ fn cfg() -> bincode::config::Configuration {
 
 pub struct RecordingWriter<W: Write> {
     out: BufWriter<W>,
-    /// Version 2: a TickExtra follows each record.
+    /// Version 4: a TickExtra follows each record.
     extra: bool,
-    /// Version 3: a TickLayer follows each TickExtra; the last marks written.
+    /// Version 5: a TickLayer follows each TickExtra; the last marks written.
     layer: Option<Vec<Mark>>,
     /// Flush after every tick (a live viewer reads the file as it grows).
     flush_each_tick: bool,
@@ -196,6 +201,13 @@ pub fn read_recording<R: Read>(r: R) -> std::io::Result<(RecordingHeader, Vec<Ti
     let mut inp = BufReader::new(r);
     let header: RecordingHeader =
         bincode::serde::decode_from_std_read(&mut inp, cfg()).map_err(std::io::Error::other)?;
+    if header.version < RECORDING_VERSION_OLDEST {
+        return Err(std::io::Error::other(format!(
+            "recording version {} is older than {RECORDING_VERSION_OLDEST} (the link design's radio counters): \
+             re-run the scenario to record it again",
+            header.version
+        )));
+    }
     let mut ticks = Vec::new();
     let mut reader = TickReader::new(&header);
     while let Some(t) = reader.next(&mut inp)? {

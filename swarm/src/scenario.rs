@@ -182,17 +182,22 @@ pub struct RadioParams {
     pub loss_at_range: f64,
     pub loss_exponent: f64,
     pub delay_ticks: u32,
-    pub link_margin: f64,
-    pub link_linger_ticks: u32,
-    pub max_links: u32,
-    /// Links an agent keeps beyond max_links to robots that dropped off its list.
-    #[serde(default)]
-    pub lingering_links: u32,
     pub max_message_bytes: u32,
     pub max_messages_per_tick: u32,
-    /// Samples per radio link that zero-copy receive may hold (`Behaviour::zero_copy`).
+    /// Air samples an agent may hold while zero-copy views refer into them
+    /// (`Behaviour::zero_copy`).
     #[serde(default = "default_zero_copy_held")]
     pub zero_copy_held: u32,
+    /// Bytes (headers included) a robot may put on the air per tick; the excess of a tick is
+    /// dropped and counted (`dropped_bandwidth`). 0: no cap.
+    #[serde(default)]
+    pub bandwidth_bytes_per_tick: u32,
+    /// Bursty loss: a Gilbert-Elliott chain per directed link instead of `loss_model`.
+    #[serde(default)]
+    pub burst: Option<crate::radio::BurstParams>,
+    /// Obstacles block the line of sight between sender and receiver.
+    #[serde(default)]
+    pub occlusion: bool,
 }
 
 fn default_zero_copy_held() -> u32 {
@@ -560,35 +565,21 @@ impl Scenario {
             true,
         )?;
         c.range_u("radio.delay_ticks", self.radio.delay_ticks as u64, 0, 1000)?;
-        let min_margin = 2.0 * self.robot.v_max;
-        c.range_f(
-            "radio.link_margin",
-            self.radio.link_margin,
-            min_margin,
-            1e7,
-            false,
-        )
-        .map_err(|mut err| {
-            err.message += " (at least 2 * robot.v_max, so no in-range message is missed)";
-            err
-        })?;
+        if let Some(b) = &self.radio.burst {
+            for (key, v) in [
+                ("radio.burst.p_good_bad", b.p_good_bad),
+                ("radio.burst.p_bad_good", b.p_bad_good),
+                ("radio.burst.loss_good", b.loss_good),
+                ("radio.burst.loss_bad", b.loss_bad),
+            ] {
+                c.range_f(key, v, 0.0, 1.0, false)?;
+            }
+        }
         c.range_u(
-            "radio.link_linger_ticks",
-            self.radio.link_linger_ticks as u64,
+            "radio.bandwidth_bytes_per_tick",
+            self.radio.bandwidth_bytes_per_tick as u64,
             0,
-            100_000,
-        )?;
-        c.range_u(
-            "radio.max_links",
-            self.radio.max_links as u64,
-            1,
-            crate::frames::MAX_NEIGHBOURS as u64,
-        )?;
-        c.range_u(
-            "radio.lingering_links",
-            self.radio.lingering_links as u64,
-            0,
-            crate::frames::MAX_NEIGHBOURS as u64,
+            u32::MAX as u64,
         )?;
         c.range_u(
             "radio.zero_copy_held",
@@ -741,8 +732,32 @@ mod tests {
         sc.run.robots = 0;
         assert_eq!(sc.validate(&file).unwrap_err().key, "run.robots");
         let mut sc = Scenario::default();
-        sc.radio.link_margin = 5.0;
-        assert_eq!(sc.validate(&file).unwrap_err().key, "radio.link_margin");
+        sc.radio.burst = Some(crate::radio::BurstParams {
+            p_good_bad: 0.1,
+            p_bad_good: 1.5,
+            loss_good: 0.0,
+            loss_bad: 1.0,
+        });
+        let err = sc.validate(&file).unwrap_err();
+        assert_eq!(err.key, "radio.burst.p_bad_good");
+        assert!(err.to_string().contains("[0, 1]"), "{err}");
+    }
+
+    #[test]
+    fn the_medium_keys_parse() {
+        let sc = Scenario::parse(
+            "[radio]\nbandwidth_bytes_per_tick = 300\nocclusion = true\n\
+             [radio.burst]\np_good_bad = 0.05\np_bad_good = 0.25\nloss_good = 0.0\nloss_bad = 0.8\n",
+            "t.toml",
+        )
+        .unwrap();
+        assert_eq!(sc.radio.bandwidth_bytes_per_tick, 300);
+        assert!(sc.radio.occlusion);
+        assert_eq!(sc.radio.burst.unwrap().p_bad_good, 0.25);
+        let e = Scenario::parse("[radio.burst]\np_good_bad = 0.1\n", "t.toml").unwrap_err();
+        assert!(e.to_string().contains("p_bad_good"), "{e}");
+        let e = Scenario::parse("[radio]\nmax_links = 3\n", "t.toml").unwrap_err();
+        assert!(e.to_string().contains("max_links"), "{e}");
     }
 
     #[test]

@@ -5,11 +5,13 @@
 //! starts; agents only open them. Each run has its own iceoryx2 prefix and root folder, so two
 //! runs never see each other and a run's leftovers are easy to find and remove.
 
+use crate::air::AirView;
 use crate::blob::AsBytes;
-use crate::frames::{Action, Control, RadioHeader, Sense, WorldStatus};
+use crate::frames::{Action, AirHeader, Control, Sense, WorldStatus};
 use crate::scenario::Scenario;
-use crate::{AgentRuntime, Behaviour};
+use crate::wire::{decode, decode_in, Received};
 use iceoryx2::prelude::*;
+use serde::de::DeserializeOwned;
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Arc;
@@ -19,7 +21,7 @@ mod service;
 pub use error::{Port, TransportError, TransportResult};
 pub use service::{
     event, pub_sub, service_name, EventCapacity, EventService, PubSubCapacity, PubSubService,
-    Reach, ServiceId, ShmPayload, CONTROL_NAME, STATUS_NAME,
+    Reach, ServiceId, ShmPayload, AIR_NAME, CONTROL_NAME, STATUS_NAME,
 };
 
 /// A boxed error of any kind, and a result with it: what a process's run loop returns when
@@ -29,8 +31,10 @@ pub type Error = Box<dyn std::error::Error + Send + Sync>;
 pub type Result<T> = std::result::Result<T, Error>;
 
 pub type SenseService = PubSubService<Sense, ()>;
-pub type ActService = PubSubService<Action, ()>;
-pub type RadioService = PubSubService<[u8], RadioHeader>;
+/// A robot's Action frame as the user header, its messages of the tick behind it.
+pub type ActService = PubSubService<[u8], Action>;
+/// The world's one publication a tick of the messages due (`swarm::air`).
+pub type AirService = PubSubService<[u8], AirHeader>;
 pub type StatusService = PubSubService<WorldStatus, ()>;
 pub type ControlService = PubSubService<Control, ()>;
 
@@ -109,33 +113,6 @@ pub fn node(config: &Config, name: &str) -> TransportResult<Node<ipc::Service>> 
 /// Slack for a restarted agent whose dead predecessor's ports are not cleaned yet.
 const RESTART_SLACK: usize = 1;
 
-/// Subscribers one radio service must admit. Each agent holds at most radio.max_links +
-/// radio.lingering_links links,
-/// but the robots linked to one sender are bounded only by the swarm (links linger, and
-/// "among my nearest max_links" is not symmetric). A subscription refused for capacity would
-/// make delivery depend on timing, so every robot can always link to every other one. The
-/// data segment is sized for it, but only the slots in use are ever touched.
-pub fn radio_max_subscribers(sc: &Scenario) -> usize {
-    (sc.run.robots as usize).saturating_sub(1).max(1) + RESTART_SLACK
-}
-
-/// Radio messages that can wait in one link's buffer: this tick's and the next's.
-pub fn radio_buffer(sc: &Scenario) -> usize {
-    2 * sc.radio.max_messages_per_tick as usize
-}
-
-/// Samples of one link that zero-copy receive may hold while Blob views refer into them
-/// (`radio.zero_copy_held`). Past it (more messages a tick, a behaviour keeping views, a radio
-/// delay) messages are decoded as copies, with the same content.
-pub fn radio_held_per_link(sc: &Scenario) -> usize {
-    sc.radio.zero_copy_held as usize
-}
-
-/// Samples a radio subscriber may borrow at once: those held, and the one being taken off.
-pub fn radio_max_borrowed(sc: &Scenario) -> usize {
-    radio_held_per_link(sc) + 1
-}
-
 /// Sense frames: the world publishes, the robot's agent subscribes; the latest frame only.
 pub fn sense_capacity() -> PubSubCapacity {
     PubSubCapacity {
@@ -149,7 +126,8 @@ pub fn sense_capacity() -> PubSubCapacity {
     }
 }
 
-/// Action frames: the agent publishes, the world subscribes; this tick's and the next's.
+/// Action frames with the tick's messages: the agent publishes, the world subscribes; this
+/// tick's and the next's.
 pub fn act_capacity() -> PubSubCapacity {
     PubSubCapacity {
         buffer: 2,
@@ -157,19 +135,41 @@ pub fn act_capacity() -> PubSubCapacity {
     }
 }
 
-/// A robot's radio: its agent publishes, every other robot may subscribe (see
-/// `radio_max_subscribers`); the world holds the service open.
-pub fn radio_capacity(sc: &Scenario) -> PubSubCapacity {
-    let subscribers = radio_max_subscribers(sc);
+/// Bytes of an act sample's message area: the most messages a robot may send a tick, each
+/// of the largest size (`swarm::air::act_bytes`).
+pub fn act_slice_len(sc: &Scenario) -> usize {
+    crate::air::act_bytes(sc.radio.max_messages_per_tick, sc.radio.max_message_bytes).max(8)
+}
+
+/// Air samples an agent may hold while zero-copy views refer into them
+/// (`radio.zero_copy_held`); past it messages are decoded as copies, with the same content.
+pub fn air_held(sc: &Scenario) -> usize {
+    sc.radio.zero_copy_held as usize
+}
+
+/// The air: the world publishes once a tick, every agent subscribes (and a restarted one's
+/// dead predecessor may still hold its port). Each subscriber keeps the latest sample only;
+/// iceoryx2 sizes the data segment for subscribers x (buffer + borrowed) samples, so the
+/// borrowed ones are the one being read and those zero-copy views hold.
+pub fn air_capacity(sc: &Scenario) -> PubSubCapacity {
+    let subscribers = sc.run.robots as usize + 2 * RESTART_SLACK;
     PubSubCapacity {
-        publishers: 1 + RESTART_SLACK,
+        publishers: 1,
         subscribers,
-        nodes: subscribers + 1 + RESTART_SLACK + 1,
-        buffer: radio_buffer(sc),
-        borrowed: Some(radio_max_borrowed(sc)),
+        nodes: subscribers + 2,
+        buffer: 1,
+        borrowed: Some(air_held(sc) + 1),
         history: Some(0),
         safe_overflow: None,
     }
+}
+
+/// The first air sample's size, before the publisher's data segment grows (by powers of two)
+/// to the largest tick: every robot's header and index start, a message each, ~8 receivers
+/// each.
+pub fn air_initial_len(sc: &Scenario) -> usize {
+    let n = sc.run.robots as usize;
+    crate::air::air_len(None, n) + n * (std::mem::size_of::<crate::frames::AirEntry>() + 64 + 32)
 }
 
 /// The world's status: the world publishes; the orchestrator and tools subscribe.
@@ -225,17 +225,16 @@ pub fn act_service(
     )
 }
 
-/// Robot i's radio service: the world creates it (`create`), agents open it.
-pub fn radio_service(
+/// The air service: the world creates it (`create`), agents open it.
+pub fn air_service(
     node: &Node<ipc::Service>,
-    robot: u32,
     sc: &Scenario,
     create: bool,
-) -> TransportResult<RadioService> {
+) -> TransportResult<AirService> {
     pub_sub(
         node,
-        ServiceId::Radio(robot),
-        Reach::create_if(create, || radio_capacity(sc)),
+        ServiceId::Air,
+        Reach::create_if(create, || air_capacity(sc)),
     )
 }
 
@@ -257,13 +256,13 @@ pub fn control_service(node: &Node<ipc::Service>, create: bool) -> TransportResu
     )
 }
 
-/// Radio publisher of robot i (fixed-size slots: no reallocation, no lost dynamic samples).
-pub fn radio_publisher(
-    svc: &RadioService,
+/// Robot i's act publisher: fixed-size slots of the largest message area (no reallocation).
+pub fn act_publisher(
+    svc: &ActService,
     sc: &Scenario,
-) -> TransportResult<iceoryx2::port::publisher::Publisher<ipc::Service, [u8], RadioHeader>> {
+) -> TransportResult<iceoryx2::port::publisher::Publisher<ipc::Service, [u8], Action>> {
     svc.publisher_builder()
-        .initial_max_slice_len(sc.radio.max_message_bytes as usize)
+        .initial_max_slice_len(act_slice_len(sc))
         .allocation_strategy(AllocationStrategy::Static)
         .max_loaned_samples(1)
         .create()
@@ -273,49 +272,36 @@ pub fn radio_publisher(
         })
 }
 
-/// The radio's send side in shared memory: loans exactly the message's bytes in the robot's
-/// own radio service, writes the header and lets the runtime encode the message straight into
-/// the slot, then sends. Used by the agent process and by the benches that time its path.
-pub struct ShmTx<'a> {
-    pub publisher: &'a iceoryx2::port::publisher::Publisher<ipc::Service, [u8], RadioHeader>,
-    /// Loans or sends that failed (the message is lost; counted, never fatal).
-    pub failures: u64,
+/// The world's air publisher: its data segment grows by powers of two to the largest tick
+/// (the air of 1,000 robots in one square is megabytes; of the same robots spread out,
+/// kilobytes).
+pub fn air_publisher(
+    svc: &AirService,
+    sc: &Scenario,
+) -> TransportResult<iceoryx2::port::publisher::Publisher<ipc::Service, [u8], AirHeader>> {
+    svc.publisher_builder()
+        .initial_max_slice_len(air_initial_len(sc))
+        .allocation_strategy(AllocationStrategy::PowerOfTwo)
+        .max_loaned_samples(1)
+        .create()
+        .map_err(|source| TransportError::Publisher {
+            service: ServiceId::of(svc),
+            source,
+        })
 }
 
-impl crate::behaviour::RadioTx for ShmTx<'_> {
-    fn transmit(&mut self, h: &RadioHeader, fill: &mut dyn FnMut(&mut [u8])) {
-        let len = (h.len as usize).max(1);
-        match self.publisher.loan_slice_uninit(len) {
-            Ok(sample) => {
-                // SAFETY: the slot is shared memory of the publisher's data segment, mapped
-                // from tmpfs: its bytes are always initialised (zero when first mapped, then
-                // whatever an earlier message left), and every u8 value is valid. `fill`
-                // overwrites the first h.len bytes; a zero-length message leaves one
-                // unread byte. Skipping a zeroing pass saves a write of the whole message.
-                let mut sample = unsafe { sample.assume_init() };
-                *sample.user_header_mut() = *h;
-                fill(&mut sample.payload_mut()[..h.len as usize]);
-                if sample.send().is_err() {
-                    self.failures += 1;
-                }
-            }
-            Err(_) => self.failures += 1,
-        }
-    }
-}
+/// A sample of the air.
+pub type AirSample = iceoryx2::sample::Sample<ipc::Service, [u8], AirHeader>;
 
-/// A received radio sample kept while [`crate::Blob`] views refer into it (zero-copy
-/// receive). Dropping the last view returns the sample to its publisher.
+/// An air sample kept while [`crate::Blob`] views refer into it (zero-copy receive). Dropping
+/// the last view returns the sample to the world.
 pub struct HeldSample {
-    sample: std::mem::ManuallyDrop<RadioSample>,
+    sample: std::mem::ManuallyDrop<AirSample>,
     bytes: *const u8,
     len: usize,
     thread: std::thread::ThreadId,
     live: Arc<AtomicUsize>,
 }
-
-/// A sample taken off a radio link.
-pub type RadioSample = iceoryx2::sample::Sample<ipc::Service, [u8], RadioHeader>;
 
 // SAFETY: an iceoryx2 ipc sample is neither Send nor Sync because releasing it touches its
 // subscriber's single-threaded state (an Rc). HeldSample reads only the payload bytes through
@@ -327,7 +313,7 @@ unsafe impl Sync for HeldSample {}
 
 impl HeldSample {
     /// Holds `sample`, counted in `live` until dropped.
-    pub fn new(sample: RadioSample, live: &Arc<AtomicUsize>) -> HeldSample {
+    pub fn new(sample: AirSample, live: &Arc<AtomicUsize>) -> HeldSample {
         let p = sample.payload();
         live.fetch_add(1, Ordering::AcqRel);
         HeldSample {
@@ -357,21 +343,49 @@ impl Drop for HeldSample {
     }
 }
 
-/// Hands a radio sample taken off a link to the runtime: in place (zero-copy) if the behaviour
-/// asks for it (`Behaviour::zero_copy`) and the link holds fewer than `radio_held_per_link` samples (`live`), else
-/// decoded at once and released.
-pub fn take_radio<B: Behaviour>(
-    rt: &mut AgentRuntime<B>,
-    sample: RadioSample,
+/// Robot `robot`'s inbox from the tick's air sample: its messages in (sender, seq) order,
+/// decoded where they lie (zero-copy, when `zero_copy` and fewer than `held_limit` air
+/// samples are held by views, `live`) or as copies; and how many were malformed. The sample
+/// is released here unless views hold it.
+pub fn air_inbox<M: DeserializeOwned>(
+    sample: AirSample,
+    robot: u32,
+    zero_copy: bool,
     live: &Arc<AtomicUsize>,
     held_limit: usize,
-) {
-    if rt.zero_copy() && live.load(Ordering::Acquire) < held_limit {
-        let h = *sample.user_header();
-        rt.ingest_held(&h, HeldSample::new(sample, live));
+    inbox: &mut Vec<Received<M>>,
+) -> u32 {
+    let h = *sample.user_header();
+    let mut malformed = 0;
+    if zero_copy && live.load(Ordering::Acquire) < held_limit {
+        let owner: Arc<dyn AsBytes> = Arc::new(HeldSample::new(sample, live));
+        let Some(view) = AirView::new(&h, owner.as_bytes()) else {
+            return 0;
+        };
+        for i in view.deliveries(robot) {
+            match view.message(i) {
+                Some((mh, at)) => match decode_in::<M>(&mh, &owner, at) {
+                    Some(m) => inbox.push(Received::new(&mh, m)),
+                    None => malformed += 1,
+                },
+                None => malformed += 1,
+            }
+        }
     } else {
-        rt.ingest(sample.user_header(), sample.payload());
+        let Some(view) = AirView::new(&h, sample.payload()) else {
+            return 0;
+        };
+        for i in view.deliveries(robot) {
+            match view.message(i) {
+                Some((mh, at)) => match decode::<M>(&mh, &view.bytes()[at..]) {
+                    Some(m) => inbox.push(Received::new(&mh, m)),
+                    None => malformed += 1,
+                },
+                None => malformed += 1,
+            }
+        }
     }
+    malformed
 }
 
 /// Quiets iceoryx2's own logging (it warns about the missing global config file otherwise).

@@ -28,30 +28,36 @@ fn services_have_their_capacities_and_errors_name_them() {
         let world = transport::node(&config, "world").unwrap();
         let agent = transport::node(&config, "agent-2").unwrap();
 
-        // Opening before the world created it: the error names robot 2's radio.
-        let e = transport::radio_service(&agent, 2, &sc, false).unwrap_err();
+        // Opening before the world created it: the error names robot 2's act service.
+        let e = transport::act_service(&agent, 2, false).unwrap_err();
         assert!(matches!(e, TransportError::Open { .. }), "{e}");
         assert_eq!(e.robot(), Some(2));
-        assert_eq!(e.service(), Some(&ServiceId::Radio(2)));
+        assert_eq!(e.service(), Some(&ServiceId::Act(2)));
         assert!(
-            e.to_string().starts_with("open service robot/2/radio: "),
+            e.to_string().starts_with("open service robot/2/act: "),
             "{e}"
         );
+        let e = transport::air_service(&agent, &sc, false).unwrap_err();
+        assert_eq!(e.service(), Some(&ServiceId::Air));
+        assert_eq!(e.robot(), None);
 
-        let radio = transport::radio_service(&world, 2, &sc, true).unwrap();
-        let c = radio.static_config();
-        // 6 other robots may link, plus one restarted agent's publisher slot.
-        assert_eq!(c.max_subscribers(), 7);
-        assert_eq!(c.max_publishers(), 2);
-        assert_eq!(c.max_nodes(), 7 + 1 + 1 + 1);
-        assert_eq!(c.subscriber_max_buffer_size(), 6);
+        let air = transport::air_service(&world, &sc, true).unwrap();
+        let c = air.static_config();
+        // Every agent subscribes, plus two restarted agents' dead predecessors.
+        assert_eq!(c.max_subscribers(), 7 + 2);
+        assert_eq!(c.max_publishers(), 1);
+        assert_eq!(c.max_nodes(), 7 + 2 + 2);
+        assert_eq!(c.subscriber_max_buffer_size(), 1);
+        // The sample being read and the two zero-copy views may hold.
         assert_eq!(c.subscriber_max_borrowed_samples(), 3);
         assert_eq!(c.history_size(), 0);
-        let opened = transport::radio_service(&agent, 2, &sc, false).unwrap();
-        assert_eq!(opened.static_config().max_subscribers(), 7);
+        let opened = transport::air_service(&agent, &sc, false).unwrap();
+        assert_eq!(opened.static_config().max_subscribers(), 9);
+        let act = transport::act_service(&world, 2, true).unwrap();
+        assert_eq!(act.static_config().subscriber_max_buffer_size(), 2);
 
         // Creating it twice fails, naming it.
-        let e = transport::radio_service(&world, 2, &sc, true).unwrap_err();
+        let e = transport::act_service(&world, 2, true).unwrap_err();
         assert!(matches!(e, TransportError::Create { .. }), "{e}");
         assert_eq!(e.robot(), Some(2));
 

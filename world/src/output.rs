@@ -72,7 +72,7 @@ pub struct Summary {
 pub struct RunOutputs {
     pub dir: Option<PathBuf>,
     rec: Option<RecordingWriter<File>>,
-    /// The recording holds the mission's layer per tick (version 3).
+    /// The recording holds the mission's layer per tick (version 5).
     layer: bool,
 }
 
@@ -107,7 +107,7 @@ impl RunOutputs {
     }
 
     /// Writes tick record `t` of `world` (which has applied it: its mission's layer is the
-    /// tick's, for a version-3 recording).
+    /// tick's, for a version-5 recording).
     pub fn push(&mut self, t: &TickRecord, world: &World) -> std::io::Result<()> {
         match self.rec.as_mut() {
             Some(r) if self.layer => r.push_with_layer(t, Some(&world.mission.live_layer())),

@@ -9,7 +9,8 @@ use std::io::Write;
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
 use swarm::barrier::TickBarrier;
-use swarm::frames::{Action, Control, Sense, CONTROL_ROBOT_DIED, CONTROL_STOP};
+use swarm::frames::{Action, AirHeader, Control, Sense, CONTROL_ROBOT_DIED, CONTROL_STOP};
+use swarm::mailbox::Air;
 use swarm::scenario::Scenario;
 use swarm::transport::{self, Result};
 
@@ -25,10 +26,50 @@ pub struct WorldArgs {
 
 struct Robot {
     sense: Publisher<ipc::Service, Sense, ()>,
-    act: Subscriber<ipc::Service, Action, ()>,
+    act: Subscriber<ipc::Service, [u8], Action>,
     _sense_svc: transport::SenseService,
     _act_svc: transport::ActService,
-    _radio_svc: transport::RadioService,
+}
+
+/// Publishes the messages due at tick `k` as one air sample (`swarm::air`), before the tick
+/// is released: every agent reads its list in it.
+fn publish_air(
+    publisher: &Publisher<ipc::Service, [u8], AirHeader>,
+    world: &World,
+    k: u64,
+) -> Result<()> {
+    let len = swarm::air::air_len(world.air(), world.n);
+    let sample = publisher
+        .loan_slice_uninit(len)
+        .map_err(|e| format!("air loan of {len} bytes: {e:?}"))?;
+    // SAFETY: the slot is shared memory of the publisher's data segment, mapped from tmpfs:
+    // its bytes are always initialised, and every u8 value is valid; write_air writes all
+    // `len` of them.
+    let mut sample = unsafe { sample.assume_init() };
+    let h = swarm::air::write_air(world.air(), world.n, k, sample.payload_mut());
+    *sample.user_header_mut() = h;
+    sample.send().map_err(|e| format!("air send: {e:?}"))?;
+    Ok(())
+}
+
+/// Robot i's latest action and its messages (appended to `sent`; `World::apply` judges
+/// both). A message area that does not parse leaves the action without messages (the world
+/// then refuses its radio report).
+fn take_action(act: &Subscriber<ipc::Service, [u8], Action>, sent: &mut Air) -> Option<Action> {
+    let mut latest = None;
+    while let Ok(Some(s)) = act.receive() {
+        latest = Some(s);
+    }
+    let s = latest?;
+    let a = *s.user_header();
+    let used = (a.radio_bytes as usize).min(s.payload().len());
+    if let Some(msgs) = swarm::air::act_messages(&s.payload()[..used]) {
+        use swarm::wire::RadioTx;
+        for (h, p) in msgs {
+            sent.transmit(&h, &mut |b| b.copy_from_slice(p));
+        }
+    }
+    Some(a)
 }
 
 /// What the control channel said.
@@ -150,7 +191,6 @@ pub fn run(args: &WorldArgs) -> Result<i32> {
     for i in 0..n {
         let sense_svc = transport::sense_service(&node, i, true)?;
         let act_svc = transport::act_service(&node, i, true)?;
-        let radio_svc = transport::radio_service(&node, i, sc, true)?;
         let sense = sense_svc
             .publisher_builder()
             .max_loaned_samples(1)
@@ -166,9 +206,10 @@ pub fn run(args: &WorldArgs) -> Result<i32> {
             act,
             _sense_svc: sense_svc,
             _act_svc: act_svc,
-            _radio_svc: radio_svc,
         });
     }
+    let air_svc = transport::air_service(&node, sc, true)?;
+    let air_pub = transport::air_publisher(&air_svc, sc)?;
     let status_svc = transport::status_service(&node, true)?;
     let status_pub = status_svc
         .publisher_builder()
@@ -231,6 +272,7 @@ pub fn run(args: &WorldArgs) -> Result<i32> {
     let t_loop = Instant::now();
     let mut tick_ns = Vec::with_capacity(sc.run.max_ticks.min(10_000_000) as usize);
     let mut actions: Vec<Option<Action>> = vec![None; n as usize];
+    let mut sent = Air::default();
     let deadline = Duration::from_millis(sc.runtime.ack_deadline_ms);
     // Stopped during start-up (Ctrl-C before every agent attached): no tick runs, so no
     // robot that was still starting is declared dead at tick 0 (issue 14 item 8).
@@ -283,6 +325,7 @@ pub fn run(args: &WorldArgs) -> Result<i32> {
             let sample = unsafe { sample.assume_init() };
             sample.send().map_err(|e| format!("sense send: {e:?}"))?;
         }
+        publish_air(&air_pub, &world, k)?;
         barrier.release_with(k, world.alive_count(), bell);
         // The deadline runs from the last ack of any robot, not from the release: when many
         // agents are slow but working (1,000 agents making their first radio links on 2 cores
@@ -322,16 +365,15 @@ pub fn run(args: &WorldArgs) -> Result<i32> {
                 drivers.order_kills(&world, &barrier);
             }
         }
+        sent.clear();
         for i in 0..n as usize {
             actions[i] = None;
             if !world.alive[i] {
                 continue;
             }
-            while let Ok(Some(a)) = robots[i].act.receive() {
-                actions[i] = Some(*a);
-            }
+            actions[i] = take_action(&robots[i].act, &mut sent);
         }
-        let rec = world.apply(&actions);
+        let rec = world.apply(&actions, &sent);
         outputs.push(&rec, &world)?;
         tick_ns.push(t_tick.elapsed().as_nanos() as u64);
         if let Ok(s) = status_pub.loan_uninit() {

@@ -1,7 +1,7 @@
 //! What each robot senses: obstacle / wall boundary points within the sensing radius (a set,
 //! in a fixed order) and the robots within radio link range (by id).
 
-use swarm::frames::{Nearby, Sense, MAX_NEARBY, MAX_NEIGHBOURS, MAX_OBSTACLE_POINTS};
+use swarm::frames::{Nearby, Sense, MAX_NEARBY, MAX_OBSTACLE_POINTS};
 use swarm::geometry::sample_boundary;
 use swarm::radio::within_radius;
 use swarm::scenario::Scenario;
@@ -159,8 +159,6 @@ pub fn static_points(sc: &Scenario) -> Vec<[f64; 2]> {
 #[derive(Default)]
 pub struct SenseScratch {
     near: Vec<(f64, u32)>,
-    /// One flag per robot, all clear between calls: on the robot's previous list.
-    listed_before: Vec<bool>,
 }
 
 /// Fills the obstacle-point list of `out`: static points and dead robots within the sensing
@@ -195,77 +193,6 @@ pub fn fill_obstacles(
         };
     }
     out.n_obstacle_points = n as u32;
-}
-
-/// Fills the neighbour list of robot `me`: live robots within `range`, by robot id, at most
-/// `cap`.
-///
-/// When more than `cap` robots are within `range` (a radio's neighbour table is full) the
-/// list is sticky: robots of the previous list (`prev`) still within range keep their places
-/// and only the free ones go to the nearest others (ties by id). Ranking all of them nearest first instead
-/// made the last places change every tick in a dense swarm, and each change cost the agent a
-/// radio link made and one dropped. When all fit, the list is every robot within range.
-/// `prev` becomes the new list.
-#[allow(clippy::too_many_arguments)]
-pub fn fill_neighbours(
-    me: usize,
-    pos: &[[f64; 3]],
-    alive: &[bool],
-    range: f64,
-    cap: usize,
-    prev: &mut Vec<u32>,
-    scratch: &mut SenseScratch,
-    out: &mut Sense,
-) {
-    scratch.near.clear();
-    let q = [pos[me][0], pos[me][1]];
-    // (squared distance, id): the distance itself is needed only when the list is full. A
-    // square below range^2 by far more than sqrt's rounding is in range without the sqrt;
-    // near the edge `within_radius` decides, as for every other radius test.
-    let inside = range * range * (1.0 - 1e-9);
-    for (j, p) in pos.iter().enumerate() {
-        if j == me || !alive[j] {
-            continue;
-        }
-        let (dx, dy) = (q[0] - p[0], q[1] - p[1]);
-        let s = dx * dx + dy * dy;
-        if s < inside || within_radius(q, [p[0], p[1]], range).is_some() {
-            scratch.near.push((s, j as u32));
-        }
-    }
-    // `near` is in robot-id order here, the order of the list. No nearest-first sort when
-    // everything fits: the transport keeps its links by id, and that sort was ~10 % of an
-    // in-process search tick.
-    let cap = cap.min(MAX_NEIGHBOURS);
-    if scratch.near.len() > cap {
-        // Full: the previous ones still in range first, then the nearest others.
-        if scratch.listed_before.len() < pos.len() {
-            scratch.listed_before.resize(pos.len(), false);
-        }
-        let before = &mut scratch.listed_before;
-        for &j in prev.iter() {
-            if let Some(b) = before.get_mut(j as usize) {
-                *b = true;
-            }
-        }
-        // By distance as `within_radius` gives it (the sqrt of the same square).
-        scratch
-            .near
-            .sort_unstable_by_key(|&(s, j)| (!before[j as usize], s.sqrt().to_bits(), j));
-        for &j in prev.iter() {
-            if let Some(b) = before.get_mut(j as usize) {
-                *b = false;
-            }
-        }
-        scratch.near.truncate(cap);
-        scratch.near.sort_unstable_by_key(|&(_, j)| j);
-    }
-    prev.clear();
-    for (k, &(_, j)) in scratch.near.iter().enumerate() {
-        out.neighbours[k] = j;
-        prev.push(j);
-    }
-    out.n_neighbours = scratch.near.len() as u32;
 }
 
 /// Fills the `nearby` list of robot `me`: live robots within `range` as its own sensors see
@@ -343,33 +270,6 @@ mod tests {
                 assert_eq!(got, want, "cell {cell} q {q:?}");
             }
         }
-    }
-
-    #[test]
-    fn a_full_neighbour_list_keeps_its_members_while_they_are_in_range() {
-        // Robot 0 at the origin, robots 1..=5 on the x axis at 10, 20, .., 50.
-        let mut pos: Vec<[f64; 3]> = (0..6).map(|i| [10.0 * i as f64, 0.0, 0.0]).collect();
-        let alive = vec![true; 6];
-        let (mut prev, mut scratch, mut out) =
-            (Vec::new(), SenseScratch::default(), Sense::zeroed());
-        let mut list = |pos: &[[f64; 3]], prev: &mut Vec<u32>| {
-            fill_neighbours(0, pos, &alive, 45.0, 3, prev, &mut scratch, &mut out);
-            out.neighbours().to_vec()
-        };
-        // Not full: everyone in range, by id.
-        assert_eq!(list(&pos, &mut prev), vec![1, 2, 3]);
-        assert_eq!(prev, vec![1, 2, 3]);
-        // Robot 5 moves nearest of all: the list is full, 1, 2, 3 keep their places.
-        pos[5] = [5.0, 0.0, 0.0];
-        assert_eq!(list(&pos, &mut prev), vec![1, 2, 3]);
-        // Robot 2 leaves the range: its place goes to the nearest other (5).
-        pos[2] = [500.0, 0.0, 0.0];
-        assert_eq!(list(&pos, &mut prev), vec![1, 3, 5]);
-        // A fresh list (no previous one) takes the nearest.
-        assert_eq!(list(&pos, &mut Vec::new()), vec![1, 3, 5]);
-        pos[4] = [1.0, 0.0, 0.0];
-        assert_eq!(list(&pos, &mut Vec::new()), vec![1, 4, 5]);
-        assert_eq!(list(&pos, &mut prev), vec![1, 3, 5]);
     }
 
     #[test]

@@ -2,18 +2,19 @@
 
 use crate::body::{bounding_box, BodySummary, Statics};
 use crate::kinematics::{self, Limit};
+use crate::medium::{Medium, MediumParams, TickAir};
 use crate::metrics::Coverage;
 use crate::mission::{self, Mission, MissionError};
 use crate::placement::{place_robots, PlacementError};
 use crate::sensing::{
-    fill_nearby, fill_neighbours, fill_obstacles, grid_cell, static_points, PointGrid, SenseScratch,
+    fill_nearby, fill_obstacles, grid_cell, static_points, PointGrid, SenseScratch,
 };
-use std::collections::VecDeque;
 use swarm::frames::{
-    Action, Sense, WorldStatus, BROADCAST, MAX_SENT, RUN_RUNNING, RUN_STOPPING, STATE_MASK,
+    Action, RadioHeader, Sense, WorldStatus, MAX_SENT, RUN_RUNNING, RUN_STOPPING, STATE_MASK,
 };
 use swarm::geometry::{polygon_hit, v2, Vec2};
-use swarm::radio::{distance, RadioCounters};
+use swarm::mailbox::Air;
+use swarm::radio::RadioCounters;
 use swarm::recording::{Event, RejectReason, TickExtra, TickRecord};
 use swarm::scenario::Scenario;
 
@@ -51,12 +52,6 @@ pub struct Fault {
     pub restarted_tick: Option<u64>,
 }
 
-/// Messages sent at one tick whose outcome at the receivers is not in yet.
-struct InFlight {
-    tick: u64,
-    in_range: u64,
-}
-
 pub struct World {
     pub sc: Scenario,
     pub n: usize,
@@ -72,9 +67,10 @@ pub struct World {
     obstacle_boxes: Vec<[f64; 4]>,
     dead_points: Vec<[f64; 2]>,
     scratch: SenseScratch,
-    /// Each robot's last neighbour list (kept sticky when it is full: see fill_neighbours).
-    listed: Vec<Vec<u32>>,
-    in_flight: VecDeque<InFlight>,
+    /// The radio: decides every (message, receiver) pair and holds the delay.
+    medium: Medium,
+    /// The messages due at the current tick (taken from the medium by `begin_tick`).
+    due: Option<TickAir>,
     pub radio: RadioCounters,
     pub faults: Vec<Fault>,
     pub rejected: [u64; 6],
@@ -188,8 +184,8 @@ impl World {
                 .collect(),
             dead_points: Vec::new(),
             scratch: SenseScratch::default(),
-            listed: vec![Vec::new(); n],
-            in_flight: VecDeque::new(),
+            medium: Medium::new(sc, MediumParams::from_scenario(sc)),
+            due: None,
             radio: RadioCounters::default(),
             faults: Vec::new(),
             rejected: [0; 6],
@@ -235,10 +231,8 @@ impl World {
     /// agent reads is written, lists up to their counts).
     pub fn sense(&mut self, i: usize, out: &mut Sense) {
         self.sense_mission(i, out);
-        let mut listed = std::mem::take(&mut self.listed[i]);
         let mut scratch = std::mem::take(&mut self.scratch);
-        self.sense_geometry(i, &mut listed, &mut scratch, out);
-        self.listed[i] = listed;
+        self.sense_geometry(i, &mut scratch, out);
         self.scratch = scratch;
     }
 
@@ -262,28 +256,11 @@ impl World {
         self.mission.sense(i as u32, [p[0], p[1]], out);
     }
 
-    /// The rest of [`World::sense`]: the neighbour list (`listed`: robot i's last one, see
-    /// [`World::take_neighbour_lists`]) and the obstacle points. Reads only this tick's ground
-    /// truth, so it may run for several robots at once (the in-process executor's threads).
-    pub fn sense_geometry(
-        &self,
-        i: usize,
-        listed: &mut Vec<u32>,
-        scratch: &mut SenseScratch,
-        out: &mut Sense,
-    ) {
+    /// The rest of [`World::sense`]: the obstacle points and the robots nearby. Reads only
+    /// this tick's ground truth, so it may run for several robots at once (the in-process
+    /// executor's threads).
+    pub fn sense_geometry(&self, i: usize, scratch: &mut SenseScratch, out: &mut Sense) {
         let p = self.poses[i];
-        let link_range = self.sc.radio.comm_radius + self.sc.radio.link_margin;
-        fill_neighbours(
-            i,
-            &self.poses,
-            &self.alive,
-            link_range,
-            self.sc.radio.max_links as usize,
-            listed,
-            scratch,
-            out,
-        );
         fill_obstacles(
             &self.grid,
             &self.dead_points,
@@ -315,18 +292,6 @@ impl World {
                 out.n_nearby = keep.len() as u32;
             }
         }
-    }
-
-    /// Hands out every robot's last neighbour list, for callers of
-    /// [`World::sense_geometry`]; [`World::sense`] needs them back
-    /// ([`World::put_neighbour_lists`]).
-    pub fn take_neighbour_lists(&mut self) -> Vec<Vec<u32>> {
-        std::mem::take(&mut self.listed)
-    }
-
-    pub fn put_neighbour_lists(&mut self, lists: Vec<Vec<u32>>) {
-        assert_eq!(lists.len(), self.n, "one neighbour list per robot");
-        self.listed = lists;
     }
 
     /// Marks a robot dead from the current tick on: it stands still as an obstacle.
@@ -363,8 +328,10 @@ impl World {
 
     /// Applies the scheduled kills of the current tick (faults.kill_at): the robot is dead from
     /// exactly this tick, whenever its process receives the SIGKILL.
+    /// Takes the radio messages due at this tick from the medium ([`World::air`]).
     pub fn begin_tick(&mut self) {
         let k = self.tick;
+        self.due = self.medium.due(k);
         while let Some(&[t, r]) = self.kills.get(self.next_kill) {
             if t > k {
                 break;
@@ -374,6 +341,12 @@ impl World {
                 self.mark_dead(r as u32, "scheduled SIGKILL (chaos)", Some(k), None);
             }
         }
+    }
+
+    /// The radio messages due at the current tick (sent at tick - 1 - delay_ticks), if any
+    /// were: every agent's inbox is its list in it.
+    pub fn air(&self) -> Option<&TickAir> {
+        self.due.as_ref()
     }
 
     /// Whether `robot` has a scheduled kill at the current tick that `begin_tick` has not
@@ -525,72 +498,78 @@ impl World {
     }
 
     /// Applies the actions of the current tick (index = robot; None = no action arrived) and
-    /// advances to the next tick. Returns the tick's record.
-    pub fn apply(&mut self, actions: &[Option<Action>]) -> TickRecord {
+    /// the radio messages the robots sent with them (`sent`, any order; a robot's are taken
+    /// only with a valid action of its own), and advances to the next tick. Returns the
+    /// tick's record.
+    pub fn apply(&mut self, actions: &[Option<Action>], sent: &Air) -> TickRecord {
         let k = self.tick;
         let mut events = std::mem::take(&mut self.pending_events);
         let mut radio = RadioCounters::default();
-        let live = self.alive_count() as u64;
-        let mut in_range_sent = 0u64;
-        // Radio accounting first, on the positions of tick k (those the senders reported).
-        for i in 0..self.n {
-            let Some(a) = actions.get(i).copied().flatten() else {
-                continue;
-            };
-            if a.robot as usize != i || a.tick != k {
-                continue;
-            }
-            // Outcomes at this robot of messages now due.
-            radio.delivered += a.radio_delivered as u64;
-            radio.dropped_loss += a.radio_dropped_loss as u64;
-            radio.malformed += a.radio_malformed as u64;
-            let n_sent = a.n_sent as usize;
-            if n_sent > MAX_SENT.min(self.sc.radio.max_messages_per_tick as usize) {
-                self.reject(&mut events, i, RejectReason::BadRadioReport);
-                continue;
-            }
-            let me = [self.poses[i][0], self.poses[i][1]];
-            for &dest in &a.sent_to[..n_sent] {
-                if dest == BROADCAST {
-                    radio.offered += live.saturating_sub(1);
-                    let within = (0..self.n)
-                        .filter(|&j| j != i && self.alive[j])
-                        .filter(|&j| {
-                            distance(me, [self.poses[j][0], self.poses[j][1]])
-                                <= self.sc.radio.comm_radius
-                        })
-                        .count() as u64;
-                    in_range_sent += within;
-                    radio.dropped_range += live.saturating_sub(1) - within;
+        // The messages due now: each receiver's list, delivered or malformed as it reports, or
+        // lost with it when it is dead or sent no action.
+        let radio_ok = |i: usize, a: &Option<Action>| matches!(a, Some(a) if a.robot as usize == i && a.tick == k);
+        if let Some(due) = self.due.take() {
+            for i in 0..due.robots().min(self.n) {
+                let listed = due.deliveries(i as u32).len() as u64;
+                if listed == 0 {
+                    continue;
+                }
+                let a = actions.get(i).copied().flatten();
+                if self.alive[i] && radio_ok(i, &a) {
+                    let bad = (a.expect("checked").radio_malformed as u64).min(listed);
+                    radio.malformed += bad;
+                    radio.delivered += listed - bad;
                 } else {
-                    radio.offered += 1;
-                    let j = dest as usize;
-                    if j < self.n
-                        && j != i
-                        && self.alive[j]
-                        && distance(me, [self.poses[j][0], self.poses[j][1]])
-                            <= self.sc.radio.comm_radius
-                    {
-                        in_range_sent += 1;
-                    } else {
-                        radio.dropped_range += 1;
-                    }
+                    radio.receiver_dead += listed;
                 }
             }
         }
-        // Messages sent at k - 1 - delay are due now: what no receiver reported went unlinked.
-        let delay = self.sc.radio.delay_ticks as u64;
-        self.in_flight.push_back(InFlight {
-            tick: k,
-            in_range: in_range_sent,
-        });
-        if let Some(front) = self.in_flight.front() {
-            if front.tick + 1 + delay == k {
-                let f = self.in_flight.pop_front().expect("front");
-                let reported = radio.delivered + radio.dropped_loss + radio.malformed;
-                radio.dropped_unlinked = f.in_range.saturating_sub(reported);
+        // The messages sent now: a live robot's, with its own valid action, as many as it
+        // says it sent (at most radio.max_messages_per_tick). The world's ground truth fills
+        // in sender, tick and position.
+        let mut counts = vec![0usize; self.n];
+        for (h, _) in sent.messages() {
+            if let Some(c) = counts.get_mut(h.sender as usize) {
+                *c += 1;
             }
         }
+        let mut ok = vec![false; self.n];
+        for i in 0..self.n {
+            let a = actions.get(i).copied().flatten();
+            if !self.alive[i] || !radio_ok(i, &a) {
+                continue;
+            }
+            let n_sent = a.expect("checked").n_sent as usize;
+            if n_sent > MAX_SENT.min(self.sc.radio.max_messages_per_tick as usize)
+                || n_sent != counts[i]
+            {
+                self.reject(&mut events, i, RejectReason::BadRadioReport);
+                continue;
+            }
+            ok[i] = true;
+        }
+        let mut owned: Vec<(RadioHeader, &[u8])> = Vec::with_capacity(sent.len());
+        for (h, payload) in sent.messages() {
+            let i = h.sender as usize;
+            if i < self.n && ok[i] {
+                let mut h = *h;
+                h.tick = k;
+                h.sender_pos = [self.poses[i][0], self.poses[i][1]];
+                owned.push((h, payload));
+            }
+        }
+        let c = self.medium.transmit(
+            k,
+            owned.iter().map(|(h, p)| (h, *p)),
+            &self.poses,
+            &self.alive,
+        );
+        radio.offered = c.offered;
+        radio.dropped_range = c.dropped_range;
+        radio.dropped_occluded = c.dropped_occluded;
+        radio.dropped_bandwidth = c.dropped_bandwidth;
+        radio.dropped_loss = c.dropped_loss;
+        radio.in_flight = self.medium.in_flight();
         // Motion.
         for i in 0..self.n {
             if !self.alive[i] {
@@ -695,9 +674,10 @@ impl World {
         });
     }
 
-    /// Closes the radio books at the end of the run: what is still in flight.
+    /// Closes the radio books at the end of the run: what is still in flight (the air
+    /// taken for a tick that never ran included).
     pub fn finish_radio(&mut self) {
-        self.radio.in_flight = self.in_flight.drain(..).map(|f| f.in_range).sum();
+        self.radio.in_flight = self.medium.in_flight() + self.due.as_ref().map_or(0, |a| a.pairs());
     }
 
     /// Why the run ends after this tick, if it does: the mission is complete, or every robot
@@ -727,6 +707,10 @@ impl World {
             delivered: self.radio.delivered,
             dropped_range: self.radio.dropped_range,
             dropped_loss: self.radio.dropped_loss,
+            dropped_other: self.radio.dropped_occluded
+                + self.radio.dropped_bandwidth
+                + self.radio.receiver_dead
+                + self.radio.malformed,
             rejected_actions: self.rejected.iter().sum(),
         }
     }
@@ -752,7 +736,7 @@ mod tests {
         acts[3].as_mut().unwrap().robot = 77;
         acts[4].as_mut().unwrap().n_sent = 1000;
         let before = w.poses.clone();
-        let rec = w.apply(&acts);
+        let rec = w.apply(&acts, &Air::default());
         assert_eq!(w.rejected, [2, 1, 1, 0, 1, 0]);
         assert_eq!(rec.events.len(), 5);
         assert_eq!(&w.poses[..4], &before[..4]);
@@ -770,7 +754,7 @@ mod tests {
         let mut acts: Vec<Option<Action>> = (0..5).map(|i| Some(Action::idle(0, i))).collect();
         acts[0].as_mut().unwrap().cmd = [10.0, 0.0];
         acts[1].as_mut().unwrap().cmd = [-10.0, 0.0];
-        w.apply(&acts);
+        w.apply(&acts, &Air::default());
         // The block's left edge crosses y = 260 at x = 294.545...: the robot stops 0.5 short.
         assert!(
             (w.poses[0][0] - (300.0 - 600.0 / 110.0 - 0.5)).abs() < 1e-9,
@@ -817,17 +801,17 @@ mod tests {
                 Some(a)
             })
             .collect();
-        w.apply(&acts);
+        w.apply(&acts, &Air::default());
         assert_eq!(&w.poses[1][..2], &[50.0, 50.0]);
         let mut s = Sense::zeroed();
         w.sense(0, &mut s);
         assert!(s.obstacle_points().contains(&[50.0, 50.0]));
-        assert!(!s.neighbours().contains(&1));
         assert_eq!(w.faults.len(), 1);
     }
 
     #[test]
-    fn broadcast_accounting_splits_offered_into_range_and_reported() {
+    fn the_counts_of_a_broadcast_add_up_from_send_to_due_tick() {
+        use swarm::wire::RadioTx;
         let mut w = world();
         for i in 0..5 {
             w.poses[i] = [10.0 + i as f64 * 100.0, 10.0, 0.0];
@@ -835,25 +819,57 @@ mod tests {
         let mut acts: Vec<Option<Action>> = (0..5).map(|i| Some(Action::idle(0, i))).collect();
         let a0 = acts[0].as_mut().unwrap();
         a0.n_sent = 1;
-        a0.sent_to[0] = BROADCAST;
-        let rec = w.apply(&acts);
+        a0.sent_to[0] = swarm::frames::BROADCAST;
+        let mut air = Air::default();
+        let h = RadioHeader {
+            sender: 0,
+            len: 3,
+            ..Default::default()
+        };
+        air.transmit(&h, &mut |b| b.copy_from_slice(&[1, 2, 3]));
+        w.begin_tick();
+        let rec = w.apply(&acts, &air);
         // Robot 0 at x=10 reaches x=110, 210, 310 (<= 300 away) but not x=410.
         assert_eq!(rec.radio.offered, 4);
         assert_eq!(rec.radio.dropped_range, 1);
-        // Next tick: two receivers report delivery, one a loss; nobody the fourth.
-        let mut acts: Vec<Option<Action>> = (0..5).map(|i| Some(Action::idle(1, i))).collect();
-        acts[1].as_mut().unwrap().radio_delivered = 1;
-        acts[2].as_mut().unwrap().radio_delivered = 1;
-        acts[3].as_mut().unwrap().radio_dropped_loss = 1;
-        let rec = w.apply(&acts);
+        assert_eq!(rec.radio.in_flight, 3);
+        // Next tick: robot 3 died, robot 2 could not decode, robot 1 got it.
+        w.mark_dead(3, "test", None, None);
+        w.begin_tick();
+        let due = w.air().expect("due at tick 1");
         assert_eq!(
-            (
-                rec.radio.delivered,
-                rec.radio.dropped_loss,
-                rec.radio.dropped_unlinked
-            ),
-            (2, 1, 0)
+            (1..5).map(|r| due.deliveries(r).len()).collect::<Vec<_>>(),
+            vec![1, 1, 1, 0]
         );
+        let mut acts: Vec<Option<Action>> = (0..5).map(|i| Some(Action::idle(1, i))).collect();
+        acts[2].as_mut().unwrap().radio_malformed = 1;
+        acts[3] = None;
+        let rec = w.apply(&acts, &Air::default());
+        let r = rec.radio;
+        assert_eq!(
+            (r.delivered, r.malformed, r.receiver_dead, r.in_flight),
+            (1, 1, 1, 0)
+        );
+        assert_eq!(w.radio.offered, w.radio.accounted());
+    }
+
+    #[test]
+    fn a_robot_whose_messages_disagree_with_its_action_is_refused_its_radio() {
+        use swarm::wire::RadioTx;
+        let mut w = world();
+        let mut air = Air::default();
+        let h = RadioHeader {
+            sender: 1,
+            len: 1,
+            ..Default::default()
+        };
+        air.transmit(&h, &mut |b| b[0] = 9);
+        // Robot 1 says it sent nothing, but a message of its is there.
+        let acts: Vec<Option<Action>> = (0..5).map(|i| Some(Action::idle(0, i))).collect();
+        w.begin_tick();
+        let rec = w.apply(&acts, &air);
+        assert_eq!(rec.radio.offered, 0);
+        assert_eq!(w.rejected[reason_index(RejectReason::BadRadioReport)], 1);
     }
 
     #[test]
@@ -921,7 +937,7 @@ mod tests {
         for k in 0..40 {
             let mut act = Action::idle(w.tick, 0);
             act.cmd = [v, w_max];
-            w.apply(&[Some(act)]);
+            w.apply(&[Some(act)], &Air::default());
             let p = w.poses[0];
             let r = ((p[0] - centre[0]).powi(2) + (p[1] - centre[1]).powi(2)).sqrt();
             assert!((r - big_r).abs() < 1e-9, "tick {k}: {r} vs {big_r}");
@@ -932,7 +948,7 @@ mod tests {
         let before = w.poses[0];
         let mut act = Action::idle(w.tick, 0);
         act.cmd = [v, w_max * 1.01];
-        w.apply(&[Some(act)]);
+        w.apply(&[Some(act)], &Air::default());
         assert_eq!(w.poses[0], before);
         assert_eq!(w.rejected[reason_index(RejectReason::TurnTooFast)], 1);
     }
@@ -955,7 +971,7 @@ mod tests {
         w.poses[2] = [53.0, 50.0, 0.0];
         let mut acts: Vec<Option<Action>> = (0..3).map(|i| Some(Action::idle(0, i))).collect();
         acts[0].as_mut().unwrap().cmd = [10.0, 0.0];
-        let rec = w.apply(&acts);
+        let rec = w.apply(&acts, &Air::default());
         let edge_x = 300.0 - 600.0 / 110.0;
         let gap = edge_x - w.poses[0][0];
         // The distance to the slanted edge is the horizontal gap times cos of its slope.

@@ -244,15 +244,13 @@ fn measure(sc: &Scenario, prefix: &str, tick: u64) -> Result<Row, String> {
     }
     let k = agents.len() as f64;
     let mean = |f: &dyn Fn(&Proc) -> u64| agents.iter().map(|p| f(p) as f64).sum::<f64>() / k;
-    // Links: subscribers of every robot's radio service.
+    // Subscriptions per agent: the air's subscribers (one per agent since the shared medium;
+    // the link design had one per radio link).
     let config = transport::run_config(prefix).map_err(|e| e.to_string())?;
     let node = transport::node(&config, "bench-memory").map_err(|e| e.to_string())?;
-    let mut subs = 0usize;
-    for i in 0..n {
-        if let Ok(svc) = transport::radio_service(&node, i, sc, false) {
-            subs += svc.dynamic_config().number_of_subscribers();
-        }
-    }
+    let subs = transport::air_service(&node, sc, false)
+        .map(|svc| svc.dynamic_config().number_of_subscribers())
+        .unwrap_or(0);
     drop(node);
     let links = subs as f64 / n as f64;
     Ok(Row {

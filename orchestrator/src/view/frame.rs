@@ -17,7 +17,7 @@ pub struct Frame<'a> {
     /// The tick's radio outcome (the recording holds counts for the whole swarm, not who
     /// heard whom).
     pub radio: &'a RadioCounters,
-    /// The mission's marks at the end of the tick (version-3 recordings; else empty).
+    /// The mission's marks at the end of the tick (version-5 recordings; else empty).
     pub layer: &'a [Mark],
     /// EntityDone events up to and including this tick.
     pub done: u32,

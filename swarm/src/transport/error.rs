@@ -191,12 +191,12 @@ mod tests {
     #[test]
     fn names_the_service_robot_and_cause() {
         let e = TransportError::Open {
-            service: ServiceId::Radio(7),
+            service: ServiceId::Act(7),
             source: PublishSubscribeOpenError::DoesNotExist,
         };
         assert_eq!(
             e.to_string(),
-            "open service robot/7/radio: PublishSubscribeOpenError::DoesNotExist"
+            "open service robot/7/act: PublishSubscribeOpenError::DoesNotExist"
         );
         assert_eq!(e.robot(), Some(7));
         let cause = e.source().expect("iceoryx2's error is the source");

@@ -17,6 +17,7 @@ pub type EventService = iceoryx2::service::port_factory::event::PortFactory<ipc:
 
 pub const STATUS_NAME: &str = "world/state";
 pub const CONTROL_NAME: &str = "run/control";
+pub const AIR_NAME: &str = "radio/air";
 
 /// One iceoryx2 service of a run.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -25,8 +26,8 @@ pub enum ServiceId {
     Sense(u32),
     /// `robot/<i>/act`: robot i's Action frames.
     Act(u32),
-    /// `robot/<i>/radio`: robot i's radio messages.
-    Radio(u32),
+    /// `radio/air`: the world's one publication a tick of the messages due.
+    Air,
     /// `world/state`: the world's status for the orchestrator.
     Status,
     /// `run/control`: the orchestrator's commands to the world.
@@ -41,7 +42,7 @@ impl ServiceId {
         match self {
             ServiceId::Sense(r) => format!("robot/{r}/sense"),
             ServiceId::Act(r) => format!("robot/{r}/act"),
-            ServiceId::Radio(r) => format!("robot/{r}/radio"),
+            ServiceId::Air => AIR_NAME.to_string(),
             ServiceId::Status => STATUS_NAME.to_string(),
             ServiceId::Control => CONTROL_NAME.to_string(),
             ServiceId::Named(n) => n.clone(),
@@ -51,7 +52,7 @@ impl ServiceId {
     /// The robot the service belongs to, if it is one robot's.
     pub fn robot(&self) -> Option<u32> {
         match self {
-            ServiceId::Sense(r) | ServiceId::Act(r) | ServiceId::Radio(r) => Some(*r),
+            ServiceId::Sense(r) | ServiceId::Act(r) => Some(*r),
             _ => None,
         }
     }
@@ -82,8 +83,8 @@ impl From<&str> for ServiceId {
             ServiceId::Sense(r)
         } else if let Some(r) = robots("act") {
             ServiceId::Act(r)
-        } else if let Some(r) = robots("radio") {
-            ServiceId::Radio(r)
+        } else if name == AIR_NAME {
+            ServiceId::Air
         } else if name == STATUS_NAME {
             ServiceId::Status
         } else if name == CONTROL_NAME {
@@ -252,7 +253,7 @@ mod tests {
         for id in [
             ServiceId::Sense(3),
             ServiceId::Act(12),
-            ServiceId::Radio(4095),
+            ServiceId::Air,
             ServiceId::Status,
             ServiceId::Control,
             ServiceId::from("lat/down"),

@@ -12,39 +12,8 @@
 //! P(Bad at t + n | Good at t) = pi_B (1 - (1 - p - r)^n), so a link costs nothing on the ticks
 //! nobody uses it and the draws depend only on (seed, link, tick): the same in both executors.
 
-use serde::{Deserialize, Serialize};
 use std::collections::HashMap;
-
-/// The scenario's `[radio.burst]`.
-#[derive(Serialize, Deserialize, Clone, Copy, Debug, PartialEq)]
-#[serde(deny_unknown_fields)]
-pub struct BurstParams {
-    /// p: probability per tick of Good -> Bad.
-    pub p_good_bad: f64,
-    /// r: probability per tick of Bad -> Good (mean burst length 1 / r ticks).
-    pub p_bad_good: f64,
-    /// Loss probability while Good.
-    pub loss_good: f64,
-    /// Loss probability while Bad.
-    pub loss_bad: f64,
-}
-
-impl BurstParams {
-    /// pi_B, the long-run share of Bad ticks.
-    pub fn bad_share(&self) -> f64 {
-        let s = self.p_good_bad + self.p_bad_good;
-        if s > 0.0 {
-            self.p_good_bad / s
-        } else {
-            0.0
-        }
-    }
-    /// The long-run loss rate pi_G loss_good + pi_B loss_bad.
-    pub fn long_run_loss(&self) -> f64 {
-        let b = self.bad_share();
-        (1.0 - b) * self.loss_good + b * self.loss_bad
-    }
-}
+pub use swarm::radio::BurstParams;
 
 /// Uniform draw in [0, 1) from (seed, a, b, c), SplitMix64-mixed.
 fn draw(seed: u64, a: u64, b: u64, c: u64) -> f64 {

@@ -10,9 +10,10 @@
 //! [`TickAir`]: every message of the send tick once, behind its header, and per receiver the
 //! indices of those that reach it, in (sender, seq) order.
 //!
-//! This module is the model only: the executors do not use it yet (the per-robot links still
-//! carry the radio); the design and what remains are in DESIGN-NOTES, "The radio as one
-//! medium".
+//! Both executors use it through [`crate::World`]: the world transmits each tick's messages in
+//! `World::apply` and hands out the air due at the next tick (`World::air`); the multi-process
+//! world publishes it as one `radio/air` sample (`swarm::air`), the in-process executor's
+//! mailbox decodes it once. DESIGN-NOTES, "The radio as one medium", has the measurements.
 
 pub mod burst;
 pub mod occlusion;
@@ -20,6 +21,7 @@ pub mod occlusion;
 use burst::{BurstParams, Links};
 use occlusion::Occluders;
 use std::collections::VecDeque;
+pub use swarm::air::TickAir;
 use swarm::frames::{RadioHeader, BROADCAST};
 use swarm::radio::{decide, Verdict};
 use swarm::scenario::{RadioParams, Scenario};
@@ -54,9 +56,9 @@ impl MediumParams {
     pub fn from_scenario(sc: &Scenario) -> MediumParams {
         MediumParams {
             radio: sc.radio.clone(),
-            bandwidth_bytes_per_tick: 0,
-            burst: None,
-            occlusion: false,
+            bandwidth_bytes_per_tick: sc.radio.bandwidth_bytes_per_tick,
+            burst: sc.radio.burst,
+            occlusion: sc.radio.occlusion,
         }
     }
 }
@@ -64,36 +66,6 @@ impl MediumParams {
 /// Bytes a message takes on the air: its header and its payload.
 pub fn air_bytes(h: &RadioHeader) -> u64 {
     std::mem::size_of::<RadioHeader>() as u64 + h.len as u64
-}
-
-/// One tick's transmissions as the air carries them.
-#[derive(Debug, Default, Clone, PartialEq)]
-pub struct TickAir {
-    /// The send tick.
-    pub tick: u64,
-    /// Every message sent at the tick, in (sender, seq) order, with its payload's range in
-    /// `bytes`.
-    pub messages: Vec<(RadioHeader, std::ops::Range<usize>)>,
-    pub bytes: Vec<u8>,
-    /// Receiver r's messages are `index[start[r]..start[r + 1]]` (indices into `messages`).
-    pub start: Vec<u32>,
-    pub index: Vec<u32>,
-}
-
-impl TickAir {
-    /// The messages that reach `robot`.
-    pub fn deliveries(&self, robot: u32) -> &[u32] {
-        let r = robot as usize;
-        match (self.start.get(r), self.start.get(r + 1)) {
-            (Some(&a), Some(&b)) => &self.index[a as usize..b as usize],
-            _ => &[],
-        }
-    }
-    /// Message `i`'s header and payload.
-    pub fn message(&self, i: u32) -> Option<(&RadioHeader, &[u8])> {
-        let (h, r) = self.messages.get(i as usize)?;
-        Some((h, &self.bytes[r.clone()]))
-    }
 }
 
 pub struct Medium {

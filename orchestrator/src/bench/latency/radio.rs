@@ -1,11 +1,15 @@
-//! The runtime's radio path: `AgentRuntime::step` encodes the behaviour's message into a
-//! slot loaned from the sender's radio service (`ShmTx`, as the agent does), the receiver takes
-//! the sample off its link and `AgentRuntime::ingest` decodes it out of shared memory (or, for
-//! `BlobPing`, holds a view into it). Three message types: the payload as serde encodes a
-//! `Vec<u8>`, as one byte string, and as a `swarm::Blob`.
+//! The runtime's radio path through the shared medium: the child (robot 1, an agent) encodes
+//! its echo with `AgentRuntime::step` into its act sample (`ActTx`, as the agent does) and
+//! sends it (hop 1, with the wake-up of the world through the barrier); the parent is the
+//! world (it takes the act sample's messages, `Medium::transmit`, writes the air sample and
+//! publishes it) and robot 0, whose own air subscriber receives the sample and decodes its
+//! list out of shared memory (`transport::air_inbox`; `BlobPing` holds a view). Hop 2 is thus
+//! iceoryx2's publish and receive without a second process wake-up. Three message types: the
+//! payload as serde encodes a `Vec<u8>`, as one byte string, and as a `swarm::Blob`.
 
 use super::{open_barrier, wait_parent, Mode, Parent};
 use crate::bench::{now_ns, tick, BenchError, BenchResult, ByteBuf, ChildArgs};
+use iceoryx2::port::publisher::Publisher;
 use iceoryx2::port::subscriber::Subscriber;
 use iceoryx2::prelude::*;
 use serde::de::DeserializeOwned;
@@ -13,11 +17,16 @@ use serde::{Deserialize, Serialize};
 use std::cell::{Cell, RefCell};
 use std::marker::PhantomData;
 use std::rc::Rc;
+use std::sync::atomic::AtomicUsize;
 use std::sync::Arc;
-use swarm::frames::RadioHeader;
+use swarm::air::ActTx;
+use swarm::frames::AirHeader;
+use swarm::mailbox::Air;
 use swarm::scenario::Scenario;
-use swarm::transport::{self, RadioSample, RadioService, ServiceId, ShmTx, TransportError};
-use swarm::{AgentRuntime, Behaviour, Blob, Command, Outbox, Received, Sense};
+use swarm::transport::{self, AirSample, ServiceId, TransportError};
+use swarm::wire::RadioTx;
+use swarm::{Action, AgentRuntime, Behaviour, Blob, Command, Outbox, Received, Sense};
+use world::medium::{Medium, MediumParams};
 
 /// A radio message of the latency bench: the sender's time stamp and the payload.
 pub(super) trait Payload: Serialize + DeserializeOwned + Clone + 'static {
@@ -158,26 +167,72 @@ impl<M: Payload> Behaviour for LatBehaviour<M> {
     }
 }
 
-fn sense_for(robot: u32, other: u32, x: f64) -> Box<Sense> {
+fn sense_for(robot: u32, x: f64) -> Box<Sense> {
     let mut s = Sense::zeroed();
     s.robot = robot;
     s.pos = [x, 0.0];
     s.alive_robots = 2;
-    s.neighbours[0] = other;
-    s.n_neighbours = 1;
     s
 }
 
-/// The parent: sends a ping through its runtime each round, takes the child's echo off its
-/// radio link and records the echo's one-hop latency.
+/// The world's side of the cell: robot 1's act subscription, the air publisher, the medium.
+struct World {
+    act: Subscriber<ipc::Service, [u8], Action>,
+    air: Publisher<ipc::Service, [u8], AirHeader>,
+    medium: Medium,
+    poses: Vec<[f64; 3]>,
+}
+
+impl World {
+    /// Puts `sent` (messages of tick k) on the medium and publishes what is due at k + 1.
+    fn carry(&mut self, k: u64, sent: &Air) -> BenchResult<()> {
+        self.medium
+            .transmit(k, sent.messages(), &self.poses, &[true, true]);
+        let due = self.medium.due(k + 1);
+        let len = swarm::air::air_len(due.as_ref(), 2);
+        let sample = self
+            .air
+            .loan_slice_uninit(len)
+            .map_err(|source| TransportError::Loan {
+                service: ServiceId::Air,
+                source,
+            })?;
+        // SAFETY: shared memory is always initialised bytes; write_air writes all of them.
+        let mut sample = unsafe { sample.assume_init() };
+        let h = swarm::air::write_air(due.as_ref(), 2, k + 1, sample.payload_mut());
+        *sample.user_header_mut() = h;
+        sample.send().map_err(|source| TransportError::Send {
+            service: ServiceId::Air,
+            source,
+        })?;
+        Ok(())
+    }
+}
+
+/// The parent: world and robot 0. Each round robot 0 sends a ping through the medium to the
+/// child; the child's echo comes back in its act sample, goes through the medium into the
+/// air, and robot 0 decodes it from the air sample: the echo's latency is recorded.
 pub(super) fn parent<M: Payload>(p: &Parent) -> BenchResult<Vec<u64>> {
     let sc = latency_scenario(p.size);
     let config = transport::run_config(p.prefix)?;
     let node = transport::node(&config, "bench-lat-0")?;
-    let svc0 = transport::radio_service(&node, 0, &sc, true)?;
-    let svc1 = transport::radio_service(&node, 1, &sc, true)?;
-    let publisher = transport::radio_publisher(&svc0, &sc)?;
-    let sub = subscriber(&svc1, &sc, 1)?;
+    let _act0 = transport::act_service(&node, 0, true)?;
+    let act1 = transport::act_service(&node, 1, true)?;
+    let air_svc = transport::air_service(&node, &sc, true)?;
+    let mut world = World {
+        act: act1
+            .subscriber_builder()
+            .buffer_size(2)
+            .create()
+            .map_err(|source| TransportError::Subscriber {
+                service: ServiceId::Act(1),
+                source,
+            })?,
+        air: transport::air_publisher(&air_svc, &sc)?,
+        medium: Medium::new(&sc, MediumParams::from_scenario(&sc)),
+        poses: vec![[0.0, 0.0, 0.0], [10.0, 0.0, 0.0]],
+    };
+    let sub = air_subscriber(&air_svc)?;
     let child = p.spawn()?;
     let fire = Rc::new(Cell::new(false));
     let recv_at = Rc::new(Cell::new(0));
@@ -194,49 +249,65 @@ pub(super) fn parent<M: Payload>(p: &Parent) -> BenchResult<Vec<u64>> {
             _m: PhantomData,
         },
     );
-    let mut tx = ShmTx {
-        publisher: &publisher,
-        failures: 0,
-    };
-    let mut sense = sense_for(0, 1, 0.0);
-    let (live, held) = (Arc::default(), transport::radio_held_per_link(&sc));
-    // Tick 0: the link to robot 1 (it carries messages sent after tick 0).
-    rt.begin(&sense);
-    rt.step(&sense, &mut tx);
-    rt.update_links(&sense);
+    let mut sense = sense_for(0, 0.0);
+    let (live, held) = (Arc::default(), transport::air_held(&sc));
+    let mut inbox: Vec<Received<M>> = Vec::new();
+    let mut sent = Air::default();
     let mut done = 1;
     let r = (|| -> BenchResult<()> {
         for r in 0..p.total {
-            let t = 2 * r + 1;
+            // Tick 2r: robot 0 pings (delivering the last echo, decoded below).
+            let t = 2 * r;
             sense.tick = t;
-            rt.begin(&sense);
+            sent.clear();
             fire.set(true);
-            rt.step(&sense, &mut tx); // delivers the previous echo, sends the ping
+            rt.step_owned(&sense, &inbox, 0, &mut sent);
             fire.set(false);
+            inbox.clear();
+            world.carry(t, &sent)?;
             if p.mode == Mode::Block {
                 p.barrier.ack(0, r);
             }
-            sense.tick = t + 1;
-            rt.begin(&sense);
+            // Tick 2r + 1: the child's echo, through the medium, then robot 0's air.
             p.wait(&mut done, || {
-                let Some(m) = receive(&sub, 1)? else {
+                let Some(a) = world
+                    .act
+                    .receive()
+                    .map_err(|source| TransportError::Receive {
+                        service: ServiceId::Act(1),
+                        source,
+                    })?
+                else {
                     return Ok(None);
                 };
-                transport::take_radio(&mut rt, m, &live, held);
+                sent.clear();
+                let used = (a.user_header().radio_bytes as usize).min(a.payload().len());
+                for (h, q) in swarm::air::act_messages(&a.payload()[..used]).unwrap_or_default() {
+                    sent.transmit(&h, &mut |b| b.copy_from_slice(q));
+                }
+                drop(a);
+                world.carry(t + 1, &sent)?;
+                let Some(s) = receive(&sub)? else {
+                    return Err(BenchError::Lost {
+                        delivered: r,
+                        expected: p.total,
+                    });
+                };
+                transport::air_inbox(s, 0, rt.zero_copy(), &live, held, &mut inbox);
                 recv_at.set(now_ns());
                 Ok(Some(()))
             })?;
         }
-        sense.tick = 2 * p.total + 1;
-        rt.begin(&sense);
-        rt.step(&sense, &mut tx); // delivers the last echo
+        sense.tick = 2 * p.total;
+        rt.step_owned(&sense, &inbox, 0, &mut Air::default()); // delivers the last echo
+        inbox.clear();
         Ok(())
     })();
     tick::reap_children(vec![child]);
     r?;
-    if tx.failures > 0 || rt.stats.oversize_sends > 0 {
+    if rt.stats.oversize_sends > 0 {
         return Err(BenchError::SendFailures {
-            failed: tx.failures,
+            failed: 0,
             oversize: rt.stats.oversize_sends,
         });
     }
@@ -250,17 +321,17 @@ pub(super) fn parent<M: Payload>(p: &Parent) -> BenchResult<Vec<u64>> {
     Ok(v)
 }
 
-/// The child: takes each ping off its link and echoes it through its runtime with a fresh
-/// stamp.
+/// The child, robot 1: takes each ping from the air and echoes it through its runtime, with
+/// a fresh stamp, in its act sample.
 pub(super) fn child<M: Payload>(a: &ChildArgs, mode: Mode) -> BenchResult<()> {
     let sc = latency_scenario(a.size);
     let barrier = open_barrier(a)?;
     let config = transport::run_config(&a.prefix)?;
     let node = transport::node(&config, "bench-lat-1")?;
-    let svc0 = transport::radio_service(&node, 0, &sc, false)?;
-    let svc1 = transport::radio_service(&node, 1, &sc, false)?;
-    let sub = subscriber(&svc0, &sc, 0)?;
-    let publisher = transport::radio_publisher(&svc1, &sc)?;
+    let act_svc = transport::act_service(&node, 1, false)?;
+    let act = transport::act_publisher(&act_svc, &sc)?;
+    let air_svc = transport::air_service(&node, &sc, false)?;
+    let sub = air_subscriber(&air_svc)?;
     let mut rt = AgentRuntime::new(
         &sc,
         1,
@@ -273,36 +344,48 @@ pub(super) fn child<M: Payload>(a: &ChildArgs, mode: Mode) -> BenchResult<()> {
             _m: PhantomData,
         },
     );
-    let mut tx = ShmTx {
-        publisher: &publisher,
-        failures: 0,
-    };
-    let mut sense = sense_for(1, 0, 10.0);
-    let (live, held) = (Arc::default(), transport::radio_held_per_link(&sc));
-    rt.begin(&sense);
-    rt.step(&sense, &mut tx);
-    rt.update_links(&sense);
+    let mut sense = sense_for(1, 10.0);
+    let live: Arc<AtomicUsize> = Arc::default();
+    let held = transport::air_held(&sc);
+    let area = transport::act_slice_len(&sc);
+    let mut inbox: Vec<Received<M>> = Vec::new();
     barrier.mark_ready(1);
     for r in 0..a.rounds {
         let t = 2 * r + 1;
         sense.tick = t;
-        rt.begin(&sense);
         wait_parent(&barrier, mode, || {
-            let Some(m) = receive(&sub, 0)? else {
+            let Some(s) = receive(&sub)? else {
                 return Ok(None);
             };
-            transport::take_radio(&mut rt, m, &live, held);
+            if s.user_header().tick != t {
+                return Ok(None);
+            }
+            transport::air_inbox(s, 1, rt.zero_copy(), &live, held, &mut inbox);
             Ok(Some(()))
         })?;
-        sense.tick = t + 1;
-        rt.begin(&sense);
-        let act = rt.step(&sense, &mut tx); // the echo
-        if act.n_sent != 1 {
+        let sample = act
+            .loan_slice_uninit(area)
+            .map_err(|source| TransportError::Loan {
+                service: ServiceId::Act(1),
+                source,
+            })?;
+        // SAFETY: shared memory is always initialised bytes; the world reads what ActTx writes.
+        let mut sample = unsafe { sample.assume_init() };
+        let mut tx = ActTx::new(sample.payload_mut());
+        let mut action = rt.step_owned(&sense, &inbox, 0, &mut tx); // the echo
+        action.radio_bytes = tx.used as u32;
+        inbox.clear();
+        if action.n_sent != 1 {
             return Err(BenchError::Echo {
                 round: r,
-                sent: act.n_sent,
+                sent: action.n_sent,
             });
         }
+        *sample.user_header_mut() = action;
+        sample.send().map_err(|source| TransportError::Send {
+            service: ServiceId::Act(1),
+            source,
+        })?;
         if mode == Mode::Block {
             barrier.release(r + 1, 1);
         }
@@ -310,29 +393,28 @@ pub(super) fn child<M: Payload>(a: &ChildArgs, mode: Mode) -> BenchResult<()> {
     Ok(())
 }
 
-/// A subscription to `svc`, robot `of`'s radio.
-fn subscriber(
-    svc: &RadioService,
-    sc: &Scenario,
-    of: u32,
-) -> BenchResult<Subscriber<ipc::Service, [u8], RadioHeader>> {
+/// A subscription to the air.
+fn air_subscriber(
+    svc: &transport::AirService,
+) -> BenchResult<Subscriber<ipc::Service, [u8], AirHeader>> {
     Ok(svc
         .subscriber_builder()
-        .buffer_size(transport::radio_buffer(sc))
+        .buffer_size(1)
         .create()
         .map_err(|source| TransportError::Subscriber {
-            service: ServiceId::Radio(of),
+            service: ServiceId::Air,
             source,
         })?)
 }
 
-/// The next sample on the link to robot `of`'s radio, if there is one.
-fn receive(
-    sub: &Subscriber<ipc::Service, [u8], RadioHeader>,
-    of: u32,
-) -> BenchResult<Option<RadioSample>> {
-    Ok(sub.receive().map_err(|source| TransportError::Receive {
-        service: ServiceId::Radio(of),
+/// The latest air sample, if there is a new one.
+fn receive(sub: &Subscriber<ipc::Service, [u8], AirHeader>) -> BenchResult<Option<AirSample>> {
+    let mut latest = None;
+    while let Some(s) = sub.receive().map_err(|source| TransportError::Receive {
+        service: ServiceId::Air,
         source,
-    })?)
+    })? {
+        latest = Some(s);
+    }
+    Ok(latest)
 }

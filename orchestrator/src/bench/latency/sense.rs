@@ -4,7 +4,8 @@
 
 use super::{open_barrier, wait_parent, Mode, Parent};
 use crate::bench::{now_ns, tick, BenchResult, ChildArgs};
-use swarm::frames::{Action, MAX_NEIGHBOURS};
+use swarm::frames::Action;
+use swarm::scenario::Scenario;
 use swarm::transport::{self, ServiceId, TransportError};
 
 /// Robot 0's services, which the cell uses.
@@ -26,30 +27,26 @@ pub(super) fn parent(p: &Parent) -> BenchResult<Vec<u64>> {
             service: SENSE,
             source,
         })?;
-    let act = act_svc
-        .publisher_builder()
-        .create()
-        .map_err(|source| TransportError::Publisher {
-            service: ACT,
-            source,
-        })?;
+    let act = transport::act_publisher(&act_svc, &Scenario::default())?;
     let child = p.spawn()?;
     let mut ns = Vec::with_capacity(p.total as usize);
     let mut done = 1;
     let mut check = 0usize;
     let r = (|| -> BenchResult<()> {
         for r in 0..p.total {
-            act.loan_uninit()
+            let cue = act
+                .loan_slice_uninit(8)
                 .map_err(|source| TransportError::Loan {
                     service: ACT,
                     source,
-                })?
-                .write_payload(Action::idle(r, 0))
-                .send()
-                .map_err(|source| TransportError::Send {
-                    service: ACT,
-                    source,
                 })?;
+            // SAFETY: shared memory is always initialised bytes; nobody reads the slice.
+            let mut cue = unsafe { cue.assume_init() };
+            *cue.user_header_mut() = Action::idle(r, 0);
+            cue.send().map_err(|source| TransportError::Send {
+                service: ACT,
+                source,
+            })?;
             if p.mode == Mode::Block {
                 p.barrier.ack(0, r);
             }
@@ -63,7 +60,7 @@ pub(super) fn parent(p: &Parent) -> BenchResult<Vec<u64>> {
                 };
                 // Read in place: the stamp, and the lists' lengths as an agent would.
                 let stamp = s.tick;
-                check += s.neighbours().len() + s.obstacle_points().len();
+                check += s.nearby().len() + s.obstacle_points().len();
                 ns.push(now_ns().saturating_sub(stamp));
                 Ok(Some(()))
             })?;
@@ -131,7 +128,7 @@ pub(super) fn child(a: &ChildArgs, mode: Mode) -> BenchResult<()> {
         s.pos = [r as f64, 1.0];
         s.heading = 0.5;
         s.vel = [1.0, 0.0];
-        s.alive_robots = MAX_NEIGHBOURS as u32;
+        s.alive_robots = 128;
         s.fill_every_list(r as f64);
         // SAFETY: every byte written above.
         let sample = unsafe { sample.assume_init() };
