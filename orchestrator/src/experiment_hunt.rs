@@ -116,7 +116,7 @@ fn example_3a(sc: &Scenario, out: &Path, md: &mut String) -> Result<(), String> 
                     .filter_map(|x| x.as_u64())
                     .collect()
             })
-            .last()
+            .next_back()
     };
     let _ = writeln!(md, "## Example 3-A (`{}`)\n", sc.run.behaviour);
     let _ = writeln!(

@@ -688,10 +688,10 @@ mod tests {
     /// Robots at the 3 hunting points of evader 1 (r_s around it), reporting them.
     fn ringed(m: &mut HuntMission, centre: Vec2, n: usize, offset: f64) -> Vec<[f64; 3]> {
         let mut poses = vec![[0.0, 0.0, 0.0]; m.bodies];
-        for k in 0..n {
+        for (k, pose) in poses.iter_mut().enumerate().take(n) {
             let a = std::f64::consts::TAU * k as f64 / n as f64;
             let pt = centre + m.p.r_s * Vec2::new(a.cos(), a.sin());
-            poses[k] = [pt.x + offset, pt.y, 0.0];
+            *pose = [pt.x + offset, pt.y, 0.0];
             m.observe(k as u32, [1.0, pt.x, pt.y, 0.0]);
         }
         poses
@@ -717,10 +717,10 @@ mod tests {
         // Three robots bunched on one side (largest gap > pi) do not enclose it.
         let mut m = HuntMission::new(&sc);
         let mut poses = vec![[0.0; 3]; m.bodies];
-        for k in 0..3 {
+        for (k, pose) in poses.iter_mut().enumerate().take(3) {
             let a = 0.3 * k as f64;
             let pt = c + m.p.r_s * Vec2::new(a.cos(), a.sin());
-            poses[k] = [pt.x, pt.y, 0.0];
+            *pose = [pt.x, pt.y, 0.0];
             m.observe(k as u32, [1.0, pt.x, pt.y, 0.0]);
         }
         assert_eq!(m.captured_now(0, &poses, &alive), None);
