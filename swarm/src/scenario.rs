@@ -24,6 +24,10 @@ pub struct Scenario {
     pub roam: RoamParams,
     pub faults: FaultParams,
     pub search: SearchParams,
+    /// The `[cbca]` section (thesis 003 chapter 4: CBCA's parameters, target and robot rows),
+    /// read and validated by the agent crate's `cbca` behaviour. Left out when empty.
+    #[serde(default, skip_serializing_if = "toml::Table::is_empty")]
+    pub cbca: toml::Table,
 }
 
 #[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
