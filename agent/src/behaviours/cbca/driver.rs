@@ -119,7 +119,7 @@ impl Driver {
                     flags |= TARGET_SENSING.captured_flag;
                 }
                 s.entities[e] = Entity {
-                    id: id as u32,
+                    id: id as u32 + 1,
                     kind: TARGET_SENSING.kind,
                     flags,
                     reserved: 0,
@@ -203,12 +203,38 @@ impl Driver {
             .all(|(r, &a)| !a || r.phase() == super::robot::Phase::Executing)
     }
 
+    /// Every target captured, and every live robot's path empty (its holds over).
     pub fn all_finished(&self) -> bool {
-        self.robots
-            .iter()
-            .zip(&self.alive)
-            .filter(|(_, &a)| a)
-            .all(|(r, _)| r.kernel().done().len() == self.targets.len())
+        self.targets.iter().all(|t| t.captured_at.is_some())
+            && self
+                .robots
+                .iter()
+                .zip(&self.alive)
+                .all(|(r, &a)| !a || r.path().is_empty())
+    }
+
+    /// The communication components of the live robots now (comm_radius), 0-based.
+    pub fn components(&self) -> Vec<Vec<usize>> {
+        let r = self.sc.radio.comm_radius;
+        let graph: Vec<Vec<usize>> = (0..self.pos.len())
+            .map(|i| {
+                (0..self.pos.len())
+                    .filter(|&j| {
+                        j != i && self.alive[i] && self.alive[j] && dist(self.pos[i], self.pos[j]) <= r
+                    })
+                    .collect()
+            })
+            .collect();
+        crate::cbca::grouping::components(&graph)
+            .into_iter()
+            .filter(|g| self.alive[g[0]])
+            .collect()
+    }
+
+    /// Kills robot i (its process dies: it stops sending, the links drop it).
+    pub fn kill(&mut self, i: usize) {
+        self.alive[i] = false;
+        self.in_flight.retain(|(from, _, _)| *from as usize != i);
     }
 
     /// Each task's winners as robot `i` believes them (1-based labels for messages).

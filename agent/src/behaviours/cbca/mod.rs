@@ -25,12 +25,11 @@ pub use robot::{Cbca, TargetSensing};
 /// The registry's name of this behaviour.
 pub const NAME: &str = "cbca";
 
-/// How targets appear in the Sense frame: entity kind and the flag of a captured target. The
-/// hunt mission (world) writes them; until its section names them, these are the values it
-/// uses.
+/// How targets appear in the Sense frame (the hunt mission's entity contract): kind
+/// `ENTITY_EVADER` = 1, id the thesis's 1-based T_j, the captured flag 1 << 4.
 pub const TARGET_SENSING: TargetSensing = TargetSensing {
     kind: 1,
-    captured_flag: 4,
+    captured_flag: 1 << 4,
 };
 
 /// The `[cbca]` section, parsed.

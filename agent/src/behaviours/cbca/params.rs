@@ -51,6 +51,10 @@ pub struct BehaviourParams {
     /// ... but no longer than this many ticks (a member may never come: lost messages, a
     /// death not yet known). [chosen] 400 (20 time units).
     pub max_wait_ticks: u64,
+    /// A goal counts as reached within this distance (km): the go-to slows down near its goal
+    /// and would otherwise approach it for ever. [chosen] 0.05 km, the hunt kernels'
+    /// capture tolerance.
+    pub arrive_tolerance_km: f64,
     /// Radius of the ring the members close on (km). [chosen] 0.3 km, the hunt kernels' r_s.
     pub ring_radius_km: f64,
     /// Loyalty (4.18)-(4.22) on; false is the "no loyalty" ablation (a robot switches whenever
@@ -72,6 +76,7 @@ impl Default for BehaviourParams {
             prior: Prior::DetectionPlusNearest,
             wait_radius_km: 1.6,
             max_wait_ticks: 400,
+            arrive_tolerance_km: 0.05,
             ring_radius_km: 0.3,
             loyalty: true,
             goto_gain: 0.5,

@@ -166,6 +166,10 @@ impl Cbca {
     pub fn phase(&self) -> Phase {
         self.phase
     }
+    /// The convergence detector's verdict at the last tick.
+    pub fn is_settled(&self) -> bool {
+        self.was_settled
+    }
     pub fn utility(&self) -> f64 {
         self.utility
     }
@@ -217,10 +221,10 @@ impl Cbca {
             if e.kind != self.sensing.kind || e.flags & swarm::frames::ENTITY_HAS_POS == 0 {
                 continue;
             }
-            let j = e.id as usize;
-            if j >= self.tasks.len() {
+            // Entity ids are the thesis's 1-based T_j.
+            let Some(j) = (e.id as usize).checked_sub(1).filter(|&j| j < self.tasks.len()) else {
                 continue;
-            }
+            };
             if e.flags & self.sensing.captured_flag != 0 {
                 captured.insert(j);
             }
@@ -228,9 +232,9 @@ impl Cbca {
                 continue;
             }
             self.sightings.insert(
-                e.id,
+                j as u32,
                 Sighting {
-                    task: e.id,
+                    task: j as u32,
                     pos: e.pos,
                     tick: now,
                 },
@@ -477,7 +481,9 @@ impl Cbca {
                 now
             }
         };
-        if d > self.p.wait_radius_km && !self.ready.contains(&(j as u32, self.id)) {
+        if d > self.p.wait_radius_km + self.p.arrive_tolerance_km
+            && !self.ready.contains(&(j as u32, self.id))
+        {
             // Towards the waiting ring.
             let k = (d - self.p.wait_radius_km) / d;
             let goal = [s.pos[0] + (target[0] - s.pos[0]) * k, s.pos[1] + (target[1] - s.pos[1]) * k];
@@ -512,7 +518,8 @@ impl Cbca {
     fn finish(&mut self, j: TaskId, now: u64) {
         self.hold = None;
         let t = &self.tasks[j];
-        let elapsed = now as f64 / self.p.ticks_per_time_unit;
+        // t_(p_i) - t_o of (4.12): t_o is the tick the robot committed to its plan.
+        let elapsed = now.saturating_sub(self.commit_tick) as f64 / self.p.ticks_per_time_unit;
         let prm = self.kernel.params();
         let earned = prm.w1 * t.value * (-t.beta * elapsed).exp() - prm.w2 * self.kernel.robot().gamma * self.leg;
         self.utility += earned;
