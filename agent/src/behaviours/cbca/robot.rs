@@ -546,7 +546,7 @@ impl Cbca {
         for r in inbox {
             self.take(r, now);
         }
-        if self.phase == Phase::Executing && self.dirty && self.hold.is_none() {
+        if self.phase == Phase::Executing && self.hold.is_none() {
             // New bids start where the robot is now.
             self.kernel.set_position(Vec2::new(s.pos[0], s.pos[1]));
         }
@@ -563,7 +563,9 @@ impl Cbca {
                         path: self.kernel.plan().path.clone(),
                     });
                 }
-                Phase::Executing if self.dirty && self.hold.is_none() => self.review(now),
+                // Every new settlement while executing: something changed (a merge, a
+                // death, a target learnt or finished), so the path is reviewed.
+                Phase::Executing if self.hold.is_none() => self.review(now),
                 Phase::Executing => {}
             }
             self.kernel.pin(self.p.commit_bonus);
