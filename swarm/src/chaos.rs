@@ -11,7 +11,8 @@ pub fn schedule(sc: &Scenario) -> Vec<[u64; 2]> {
     let mut out: Vec<[u64; 2]> = sc.faults.kill_at.clone();
     let p = sc.faults.chaos_rate / 100.0;
     if p > 0.0 {
-        let n = sc.run.robots as u64;
+        // Stations (bodiless agents, `run.stations`) are never killed at random.
+        let n = sc.bodies() as u64;
         let mut rng =
             crate::streams::rng(sc.run.seed, crate::streams::WORLD, crate::streams::CHAOS);
         let drop = sc.faults.on_fault == FaultPolicy::Drop;
@@ -41,7 +42,7 @@ pub fn schedule(sc: &Scenario) -> Vec<[u64; 2]> {
             out.push([tick, r]);
         }
     }
-    let k = (sc.faults.kill_fraction * sc.run.robots as f64).round() as usize;
+    let k = (sc.faults.kill_fraction * sc.bodies() as f64).round() as usize;
     if k > 0 {
         // Distinct robots, each at a uniform tick of the window (its own stream: adding a
         // fraction does not move the chaos_rate kills).
@@ -51,7 +52,7 @@ pub fn schedule(sc: &Scenario) -> Vec<[u64; 2]> {
             crate::streams::KILL_FRACTION,
         );
         let [t0, t1] = sc.faults.kill_window;
-        let mut robots: Vec<u64> = (0..sc.run.robots as u64).collect();
+        let mut robots: Vec<u64> = (0..sc.bodies() as u64).collect();
         for j in 0..k.min(robots.len()) {
             let pick = rng.gen_range(j..robots.len());
             robots.swap(j, pick);

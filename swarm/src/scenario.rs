@@ -4,6 +4,7 @@ use serde::{Deserialize, Serialize};
 use std::fmt;
 use std::path::Path;
 
+pub use crate::sections::hunt::HuntSection;
 pub use crate::sections::roam::{RoamParams, ROAM_BEACON_OVERHEAD};
 pub use crate::sections::search::{SearchParams, SEARCH_MODES};
 
@@ -24,6 +25,9 @@ pub struct Scenario {
     pub roam: RoamParams,
     pub faults: FaultParams,
     pub search: SearchParams,
+    /// The hunting thesis's section (docs/hunting.md); absent: no hunt.
+    #[serde(default, skip_serializing_if = "HuntSection::is_empty")]
+    pub hunt: HuntSection,
     /// The `[cbca]` section (thesis 003 chapter 4: CBCA's parameters, target and robot rows),
     /// read and validated by the agent crate's `cbca` behaviour. Left out when empty.
     #[serde(default, skip_serializing_if = "toml::Table::is_empty")]
@@ -40,7 +44,14 @@ pub struct RunParams {
     /// names it only when it was set.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub mission: Option<String>,
+    /// Agent processes, stations included.
     pub robots: u32,
+    /// The last `stations` of the `robots` agents are stations: agents with no body (no
+    /// motion, no collisions, not sensed by robots' own sensors, not counted by the mission),
+    /// that only talk on the radio (the hunt's auctioneer). Left out of a resolved scenario
+    /// when 0.
+    #[serde(default, skip_serializing_if = "is_zero_u32")]
+    pub stations: u32,
     #[serde(with = "crate::toml_u64")]
     pub seed: u64,
     pub max_ticks: u64,
@@ -107,6 +118,10 @@ impl Kinematics {
 
 fn is_zero(x: &f64) -> bool {
     *x == 0.0
+}
+
+fn is_zero_u32(x: &u32) -> bool {
+    *x == 0
 }
 
 #[derive(Serialize, Deserialize, Clone, Copy, Debug, PartialEq, Eq)]
@@ -357,6 +372,16 @@ impl Scenario {
         Scenario::parse(&text, &source)
     }
 
+    /// Robots with a body: agents 0..bodies() (the stations come after them).
+    pub fn bodies(&self) -> u32 {
+        self.run.robots.saturating_sub(self.run.stations)
+    }
+
+    /// Whether agent `id` is a station (no body; see `run.stations`).
+    pub fn is_station(&self, id: u32) -> bool {
+        id >= self.bodies() && id < self.run.robots
+    }
+
     pub fn to_toml(&self) -> String {
         toml::to_string_pretty(self).expect("scenario serialises")
     }
@@ -368,6 +393,16 @@ impl Scenario {
     pub fn validate(&self, key_source: &dyn Fn(&str) -> String) -> Result<(), ConfigError> {
         let c = Check { key_source };
         c.range_u("run.robots", self.run.robots as u64, 1, MAX_ROBOTS as u64)?;
+        c.range_u(
+            "run.stations",
+            self.run.stations as u64,
+            0,
+            self.run.robots as u64 - 1,
+        )
+        .map_err(|mut e| {
+            e.message += " (stations are among run.robots, and one robot at least has a body)";
+            e
+        })?;
         c.range_u("run.max_ticks", self.run.max_ticks, 1, 100_000_000)?;
         c.range_f("arena.width", self.arena.width, 0.0, 1e7, true)?;
         c.range_f("arena.height", self.arena.height, 0.0, 1e7, true)?;

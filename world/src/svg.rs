@@ -72,6 +72,27 @@ fn draw_mark<DB: DrawingBackend>(
             (radius * to_px).round().max(1.0) as u32,
             rgb(*colour).stroke_width(1),
         ))?,
+        Mark::Triangle {
+            heading, px, fill, ..
+        } => {
+            // Screen y grows downwards: the arena heading turns the other way.
+            let l = *px as f64;
+            let pt = |a: f64, r: f64| {
+                (
+                    c.0 + (r * a.cos()).round() as i32,
+                    c.1 - (r * a.sin()).round() as i32,
+                )
+            };
+            let tri = vec![
+                pt(*heading, l * 0.6),
+                pt(heading + 2.5, l * 0.45),
+                pt(heading - 2.5, l * 0.45),
+            ];
+            root.draw(&Polygon::new(tri.clone(), rgb(*fill).filled()))?;
+            let mut outline = tri.clone();
+            outline.push(tri[0]);
+            root.draw(&PathElement::new(outline, BLACK.stroke_width(1)))?;
+        }
         Mark::Path { colour, .. } => root.draw(&PathElement::new(
             path.to_vec(),
             rgb(*colour).stroke_width(2),
@@ -212,9 +233,10 @@ pub fn write_svg(world: &World, path: &Path) -> Result<(), String> {
     let to_px = (SIZE as f64 - 20.0) / w;
     for mark in world.mission.layer() {
         let (at, pts) = match &mark {
-            Mark::Disc { at, .. } | Mark::Ring { at, .. } | Mark::Circle { at, .. } => {
-                (*at, vec![])
-            }
+            Mark::Disc { at, .. }
+            | Mark::Ring { at, .. }
+            | Mark::Circle { at, .. }
+            | Mark::Triangle { at, .. } => (*at, vec![]),
             Mark::Path { points, .. } => {
                 (points.first().copied().unwrap_or([0.0; 2]), points.clone())
             }

@@ -60,6 +60,9 @@ struct InFlight {
 pub struct World {
     pub sc: Scenario,
     pub n: usize,
+    /// Agents with a body: 0..bodies; the rest (`run.stations`) are stations, which only
+    /// talk on the radio (no motion, not sensed as robots, not counted by the mission).
+    pub bodies: usize,
     pub tick: u64,
     pub poses: Vec<[f64; 3]>,
     pub vel: Vec<[f64; 2]>,
@@ -131,7 +134,15 @@ impl World {
             swarm::streams::WORLD,
             swarm::streams::PLACEMENT,
         );
-        let start = place_robots(sc, &mut rng)?;
+        let mission = mission::create(sc)?;
+        let (start, headings): (Vec<[f64; 2]>, Vec<f64>) = match mission.start_poses(sc) {
+            Some(poses) => poses.iter().map(|p| ([p[0], p[1]], p[2])).unzip(),
+            None => {
+                let start = place_robots(sc, &mut rng)?;
+                let zeros = vec![0.0; start.len()];
+                (start, zeros)
+            }
+        };
         let n = start.len();
         let grid = PointGrid::new(
             static_points(sc),
@@ -143,8 +154,13 @@ impl World {
         Ok(World {
             sc: sc.clone(),
             n,
+            bodies: sc.bodies() as usize,
             tick: 0,
-            poses: start.iter().map(|p| [p[0], p[1], 0.0]).collect(),
+            poses: start
+                .iter()
+                .zip(&headings)
+                .map(|(p, h)| [p[0], p[1], *h])
+                .collect(),
             vel: vec![[0.0; 2]; n],
             alive: vec![true; n],
             grid,
@@ -176,7 +192,7 @@ impl World {
             traj_every,
             kills: swarm::chaos::schedule(sc),
             next_kill: 0,
-            mission: mission::create(sc)?,
+            mission,
             statics: Statics::new(sc),
             body: (sc.robot.radius > 0.0).then(|| BodySummary::new(sc.robot.radius)),
         })
@@ -261,7 +277,7 @@ impl World {
             out,
         );
         out.n_nearby = 0;
-        if self.sc.robot.neighbour_sensing_radius > 0.0 {
+        if self.sc.robot.neighbour_sensing_radius > 0.0 && i < self.bodies {
             fill_nearby(
                 i,
                 &self.poses,
@@ -271,6 +287,17 @@ impl World {
                 scratch,
                 out,
             );
+            if self.bodies < self.n {
+                // Stations have no body: a robot's own sensors do not see them.
+                let keep: Vec<_> = out
+                    .nearby()
+                    .iter()
+                    .copied()
+                    .filter(|q| (q.robot as usize) < self.bodies)
+                    .collect();
+                out.nearby[..keep.len()].copy_from_slice(&keep);
+                out.n_nearby = keep.len() as u32;
+            }
         }
     }
 
@@ -301,7 +328,9 @@ impl World {
         }
         self.alive[i] = false;
         self.vel[i] = [0.0; 2];
-        self.dead_points.push([self.poses[i][0], self.poses[i][1]]);
+        if i < self.bodies {
+            self.dead_points.push([self.poses[i][0], self.poses[i][1]]);
+        }
         self.faults.push(Fault {
             robot,
             tick: happened.unwrap_or(self.tick).min(self.tick),
@@ -550,6 +579,15 @@ impl World {
                 self.vel[i] = [0.0; 2];
                 continue;
             };
+            if i >= self.bodies {
+                // A station does not move: its command is ignored, its state and its report
+                // are taken.
+                if a.robot as usize == i && a.tick == k {
+                    self.states[i] = (a.events & STATE_MASK) as u8;
+                    self.mission.observe(i as u32, a.report);
+                }
+                continue;
+            }
             if let Err(r) = self.validate(i, &a) {
                 self.reject(&mut events, i, r);
                 self.vel[i] = [0.0; 2];
@@ -585,7 +623,11 @@ impl World {
         self.mission
             .update(k, &self.poses, &self.alive, &mut events);
         let extra = self.body.as_mut().map(|summary| {
-            let f = crate::body::figures(&self.statics, &self.poses, self.sc.robot.radius);
+            let f = crate::body::figures(
+                &self.statics,
+                &self.poses[..self.bodies],
+                self.sc.robot.radius,
+            );
             summary.add(&f);
             TickExtra { body: Some(f) }
         });
@@ -638,7 +680,7 @@ impl World {
     pub fn end_reason(&self) -> Option<&'static str> {
         if self.mission.complete() {
             Some(self.mission.end_reason())
-        } else if self.alive_count() == 0 {
+        } else if !self.alive[..self.bodies].iter().any(|a| *a) {
             Some("all robots dead")
         } else {
             None
@@ -919,5 +961,37 @@ mod tests {
         let mut w = World::new(&Scenario::roam()).unwrap();
         w.sense(0, &mut s);
         assert!(s.nearby().is_empty());
+    }
+
+    #[test]
+    fn a_station_has_no_body_but_is_on_the_radio() {
+        let sc = Scenario::parse(
+            include_str!("../../configs/hunt-example-3a.toml"),
+            "hunt-example-3a.toml",
+        )
+        .unwrap();
+        let mut w = World::new(&sc).unwrap();
+        assert_eq!((w.n, w.bodies), (16, 15));
+        // The robots start at Table 3.2's positions, the auctioneer at its own.
+        assert_eq!(&w.poses[0][..2], &[1.54, 6.88]);
+        assert_eq!(&w.poses[15][..2], &[5.0, 5.0]);
+        // A robot next to the station: the station is on its radio list, not in its sensors.
+        w.poses[0] = [5.1, 5.0, 0.0];
+        let mut s = Sense::zeroed();
+        w.sense(0, &mut s);
+        assert!(s.neighbours().contains(&15));
+        assert!(s.nearby().iter().all(|q| q.robot != 15));
+        // Its command is ignored (even one over the limits), its state is recorded.
+        let mut acts: Vec<Option<Action>> = (0..16).map(|i| Some(Action::idle(0, i))).collect();
+        acts[15].as_mut().unwrap().cmd = [1e9, 7.0];
+        acts[15].as_mut().unwrap().events = 255;
+        let rec = w.apply(&acts);
+        assert_eq!(&w.poses[15][..2], &[5.0, 5.0]);
+        assert_eq!(rec.states[15], 255);
+        assert_eq!(w.rejected.iter().sum::<u64>(), 0);
+        // Dead, it leaves no obstacle point; the run ends only when every body is dead.
+        w.mark_dead(15, "test", None, None);
+        assert!(w.dead_points.is_empty());
+        assert_eq!(w.end_reason(), None);
     }
 }

@@ -55,7 +55,7 @@ macro_rules! registry {
     };
 }
 
-registry!(roam, faulty, search, cbca);
+registry!(roam, faulty, search, hunt, cbca);
 
 /// For behaviours whose commands are velocities (vx, vy): refuses unicycle kinematics.
 pub fn require_holonomic(sc: &Scenario, c: &Check, behaviour: &str) -> Result<(), ConfigError> {

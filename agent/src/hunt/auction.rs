@@ -929,6 +929,7 @@ mod tests {
         // meet L_j and E_j, and every robot the auctioneer counts in a coalition either learned
         // it or never bid again.
         use crate::hunt::scenario::tests::example_3a;
+        use crate::hunt::scenario::HuntKernels;
         use rand::{Rng, SeedableRng};
         let h = example_3a();
         let tasks = h.tasks_at(0.0);

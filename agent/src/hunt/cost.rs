@@ -64,6 +64,7 @@ pub fn auctioneer_cost(reward: f64, distance: f64) -> f64 {
 mod tests {
     use super::*;
     use crate::hunt::scenario::tests::example_3a;
+    use crate::hunt::scenario::HuntKernels;
 
     fn close(a: f64, b: f64, tol: f64) -> bool {
         (a - b).abs() < tol

@@ -9,6 +9,7 @@ use crate::hunt::model::{coalition_covers, Robot, Task, TaskId};
 use crate::hunt::params::HuntParams;
 use crate::hunt::replan::{apply_swaps, assist, free_robots, new_target, Hunt, World};
 use crate::hunt::scenario::tests::example_3a;
+use crate::hunt::scenario::HuntKernels;
 use std::collections::{BTreeMap, BTreeSet};
 
 /// Phi_1..Phi_4 of Fig. 3.3(b).

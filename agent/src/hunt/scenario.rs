@@ -1,157 +1,30 @@
 //! The `[hunt]` section of a scenario file: the robots (`[[hunt.robots]]`, Table 3.2), the
-//! evaders (`[[hunt.evaders]]`, Table 3.1) and the tunables (`[hunt.params]`). The lead adds it
-//! to the scenario struct; `configs/hunt-example-3a.toml` is Example 3-A.
+//! evaders (`[[hunt.evaders]]`, Table 3.1) and the tunables (`[hunt.params]`). The section's
+//! types live in `swarm::sections::hunt` (the world's mission reads them too); here they become
+//! kernel types. `configs/hunt-example-3a.toml` is Example 3-A.
 
-use crate::hunt::model::{Resources, Robot, RobotId, Task, TaskId};
-use crate::hunt::params::HuntParams;
-use serde::{Deserialize, Serialize};
-use std::collections::BTreeSet;
+use crate::hunt::model::{Robot, Task};
 use swarm::geometry::Vec2;
+pub use swarm::sections::hunt::{
+    AuctioneerSpec, EvaderSpec, HuntConfigError, HuntSection, RobotSpec,
+};
 
-/// A scenario's `[hunt]` section is malformed.
-#[derive(Debug, thiserror::Error)]
-pub enum HuntConfigError {
-    #[error("hunt section does not parse: {0}")]
-    Parse(#[from] toml::de::Error),
-    #[error("robot id {0} appears twice")]
-    DuplicateRobot(RobotId),
-    #[error("evader id {0} appears twice")]
-    DuplicateEvader(TaskId),
-    #[error("{what} {id}: {field} = {value} is out of range")]
-    OutOfRange {
-        what: &'static str,
-        id: u32,
-        field: &'static str,
-        value: f64,
-    },
+/// The section's rows as kernel types.
+pub trait HuntKernels {
+    /// The robots, in the section's order (world robot k is `robots()[k]`).
+    fn robots(&self) -> Vec<Robot>;
+    /// The tasks (targets) present at time `t` minutes.
+    fn tasks_at(&self, t: f64) -> Vec<Task>;
+    /// Every task, whenever it appears.
+    fn tasks(&self) -> Vec<Task>;
 }
 
-/// One `[[hunt.robots]]` row (Table 3.2 plus the columns the thesis does not print).
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct RobotSpec {
-    pub id: RobotId,
-    /// (x_i, y_i), km.
-    pub position: [f64; 2],
-    /// Initial heading, rad.
-    #[serde(default)]
-    pub heading: f64,
-    /// g_i for T1..T_n (Table 3.2).
-    pub matching: Vec<f64>,
-    /// E_i', exactly 6 entries (2.4).
-    #[serde(deserialize_with = "six_resources")]
-    pub resources: Resources,
-    /// v_i, km/min.
-    pub speed: f64,
-    /// w_max, rad/min.
-    pub turn_rate: f64,
-    /// d^c_max,i (2.5), km; absent = unlimited.
-    #[serde(default)]
-    pub max_mileage: Option<f64>,
-}
-
-/// One `[[hunt.evaders]]` row (Table 3.1 plus the columns the thesis does not print).
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct EvaderSpec {
-    pub id: TaskId,
-    /// (x_j, y_j), km.
-    pub position: [f64; 2],
-    /// L_j.
-    pub required_robots: usize,
-    /// z_jmax.
-    pub reward_cap: f64,
-    /// E_j, exactly 6 entries (2.3).
-    #[serde(deserialize_with = "six_resources")]
-    pub resources: Resources,
-    /// v_j, km/min.
-    pub speed: f64,
-    /// Speed-capability threshold on the robots, km/min.
-    #[serde(default)]
-    pub min_robot_speed: f64,
-    /// When the target appears, minutes (T5 appears mid-run in Example 3-A). 0 = at the start.
-    #[serde(default)]
-    pub appears_at: f64,
-}
-
-/// The `[hunt]` section.
-#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct HuntSection {
-    #[serde(default)]
-    pub params: HuntParams,
-    #[serde(default)]
-    pub robots: Vec<RobotSpec>,
-    #[serde(default)]
-    pub evaders: Vec<EvaderSpec>,
-}
-
-#[derive(Deserialize)]
-struct File {
-    hunt: HuntSection,
-}
-
-impl HuntSection {
-    /// Parse the `[hunt]` section of a whole scenario file (other sections are ignored) and
-    /// validate it.
-    pub fn from_scenario_toml(text: &str) -> Result<Self, HuntConfigError> {
-        let f: File = toml::from_str(text)?;
-        f.hunt.validate()?;
-        Ok(f.hunt)
+impl HuntKernels for HuntSection {
+    fn robots(&self) -> Vec<Robot> {
+        self.robots.iter().map(robot_of).collect()
     }
 
-    /// Ids unique, speeds, caps and counts in range.
-    pub fn validate(&self) -> Result<(), HuntConfigError> {
-        let mut seen = BTreeSet::new();
-        for r in &self.robots {
-            if !seen.insert(r.id) {
-                return Err(HuntConfigError::DuplicateRobot(r.id));
-            }
-            positive("robot", r.id, "speed", r.speed)?;
-            positive("robot", r.id, "turn_rate", r.turn_rate)?;
-            if r.resources.iter().any(|x| *x < 0.0)
-                || r.matching.iter().any(|g| !(0.0..=1.0).contains(g))
-            {
-                return Err(HuntConfigError::OutOfRange {
-                    what: "robot",
-                    id: r.id,
-                    field: "resources/matching",
-                    value: f64::NAN,
-                });
-            }
-        }
-        let mut seen = BTreeSet::new();
-        for e in &self.evaders {
-            if !seen.insert(e.id) {
-                return Err(HuntConfigError::DuplicateEvader(e.id));
-            }
-            positive("evader", e.id, "speed", e.speed)?;
-            positive("evader", e.id, "reward_cap", e.reward_cap)?;
-            positive("evader", e.id, "required_robots", e.required_robots as f64)?;
-        }
-        Ok(())
-    }
-
-    /// The robots as kernel types.
-    pub fn robots(&self) -> Vec<Robot> {
-        self.robots
-            .iter()
-            .map(|r| Robot {
-                id: r.id,
-                position: Vec2::new(r.position[0], r.position[1]),
-                heading: r.heading,
-                resources: r.resources,
-                matching: r.matching.clone(),
-                speed: r.speed,
-                turn_rate: r.turn_rate,
-                max_mileage: r.max_mileage.unwrap_or(f64::INFINITY),
-                travelled: 0.0,
-            })
-            .collect()
-    }
-
-    /// The tasks (targets) present at time `t` minutes, as kernel types.
-    pub fn tasks_at(&self, t: f64) -> Vec<Task> {
+    fn tasks_at(&self, t: f64) -> Vec<Task> {
         self.evaders
             .iter()
             .filter(|e| e.appears_at <= t)
@@ -159,21 +32,28 @@ impl HuntSection {
             .collect()
     }
 
-    /// Every task, whenever it appears.
-    pub fn tasks(&self) -> Vec<Task> {
+    fn tasks(&self) -> Vec<Task> {
         self.evaders.iter().map(task_of).collect()
     }
 }
 
-/// A resource row must have exactly z = 6 entries (serde's fixed arrays ignore extra ones).
-fn six_resources<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Resources, D::Error> {
-    let v = Vec::<f64>::deserialize(d)?;
-    Resources::try_from(v.as_slice()).map_err(|_| {
-        serde::de::Error::invalid_length(v.len(), &"exactly 6 resource entries (eq. 2.4)")
-    })
+/// A `[[hunt.robots]]` row as a kernel robot.
+pub fn robot_of(r: &RobotSpec) -> Robot {
+    Robot {
+        id: r.id,
+        position: Vec2::new(r.position[0], r.position[1]),
+        heading: r.heading,
+        resources: r.resources,
+        matching: r.matching.clone(),
+        speed: r.speed,
+        turn_rate: r.turn_rate,
+        max_mileage: r.max_mileage.unwrap_or(f64::INFINITY),
+        travelled: 0.0,
+    }
 }
 
-fn task_of(e: &EvaderSpec) -> Task {
+/// A `[[hunt.evaders]]` row as a kernel task.
+pub fn task_of(e: &EvaderSpec) -> Task {
     Task {
         id: e.id,
         position: Vec2::new(e.position[0], e.position[1]),
@@ -182,24 +62,6 @@ fn task_of(e: &EvaderSpec) -> Task {
         reward_cap: e.reward_cap,
         speed: e.speed,
         min_robot_speed: e.min_robot_speed,
-    }
-}
-
-fn positive(
-    what: &'static str,
-    id: u32,
-    field: &'static str,
-    value: f64,
-) -> Result<(), HuntConfigError> {
-    if value > 0.0 && value.is_finite() {
-        Ok(())
-    } else {
-        Err(HuntConfigError::OutOfRange {
-            what,
-            id,
-            field,
-            value,
-        })
     }
 }
 

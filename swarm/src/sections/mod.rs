@@ -2,5 +2,6 @@
 //! both read. One file per section; the section's validation lives with its owners (the
 //! behaviour in the agent crate, the mission in the world crate).
 
+pub mod hunt;
 pub mod roam;
 pub mod search;

@@ -56,6 +56,14 @@ pub enum Mark {
         radius: f64,
         colour: [u8; 3],
     },
+    /// A filled isosceles triangle `px` pixels long pointing along `heading` (rad, arena
+    /// frame): a unicycle robot.
+    Triangle {
+        at: [f64; 2],
+        heading: f64,
+        px: u32,
+        fill: [u8; 3],
+    },
     /// A polyline.
     Path {
         points: Vec<[f64; 2]>,
@@ -83,6 +91,12 @@ pub struct RunFacts {
 pub trait Mission: Send + Sync {
     /// The registry's name.
     fn name(&self) -> &'static str;
+    /// Where the agents start, (x, y, heading) for each of `run.robots` (stations included),
+    /// when the mission's scenario places them (the hunt's tables); None: the world draws
+    /// them in `arena.start_region`.
+    fn start_poses(&self, _sc: &Scenario) -> Option<Vec<[f64; 3]>> {
+        None
+    }
     /// Writes what robot `robot` at `pos` senses of the mission's entities into
     /// `out.entities` (and `n_entities`, which the core sets to 0 before). Called for the live
     /// robots in id order each tick, so a mission may draw sensor noise from its own stream.
@@ -140,7 +154,7 @@ macro_rules! missions {
     };
 }
 
-missions!(roam, search);
+missions!(roam, search, hunt);
 
 /// The scenario's mission: `run.mission`, or the one its behaviour implies, or roam.
 pub fn entry_for(sc: &Scenario) -> Option<&'static MissionEntry> {

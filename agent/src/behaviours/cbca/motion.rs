@@ -23,15 +23,26 @@ pub struct Mover {
     v_max: f64,
     gain: f64,
     apf: HuntParams,
+    /// In a hunt world: this robot's speed (km/min), turn rate (rad/min) and the minutes a
+    /// tick (`[hunt]` rows and params), as the hunt behaviour drives its unicycles.
+    hunt: Option<(f64, f64, f64)>,
 }
 
 impl Mover {
-    pub fn new(sc: &Scenario, p: &BehaviourParams) -> Self {
+    pub fn new(sc: &Scenario, robot: u32, p: &BehaviourParams) -> Self {
+        let hunt = sc.hunt.robots.get(robot as usize).map(|r| {
+            (r.speed, r.turn_rate, sc.hunt.params.minutes_per_tick)
+        });
         Self {
             kinematics: sc.robot.kinematics,
             v_max: sc.robot.v_max,
             gain: p.goto_gain,
-            apf: HuntParams::default(),
+            apf: if hunt.is_some() {
+                sc.hunt.params.clone()
+            } else {
+                HuntParams::default()
+            },
+            hunt,
         }
     }
 
@@ -60,8 +71,17 @@ impl Mover {
                     .map(|q| Vec2::new(q.pos[0], q.pos[1]))
                     .collect();
                 let f = apf::total_force(&x, &g, &others, &self.apf);
-                let c = apf::to_command(&f, s.heading, self.v_max, w_max, 1.0, &self.apf);
-                [c.v, c.w]
+                match self.hunt {
+                    Some((v, w, dt)) => {
+                        let c = apf::to_command(&f, s.heading, v, w, dt, &self.apf);
+                        // km/min and rad/min to the world's per-tick units.
+                        [c.v.max(0.0) * dt, c.w * dt]
+                    }
+                    None => {
+                        let c = apf::to_command(&f, s.heading, self.v_max, w_max, 1.0, &self.apf);
+                        [c.v, c.w]
+                    }
+                }
             }
         }
     }
@@ -81,7 +101,7 @@ mod tests {
     fn holonomic_go_is_capped_at_v_max_and_slows_near_the_goal() {
         let mut sc = Scenario::default();
         sc.robot.v_max = 0.05;
-        let m = Mover::new(&sc, &BehaviourParams::default());
+        let m = Mover::new(&sc, 0, &BehaviourParams::default());
         let s = Sense::zeroed();
         let c = m.go(&s, [3.0, 4.0]);
         assert!(((c[0] * c[0] + c[1] * c[1]).sqrt() - 0.05).abs() < 1e-12);

@@ -102,6 +102,8 @@ pub struct Cbca {
     hold: Option<(TaskId, u64)>,
     /// Since when the robot waits at the ring of which target.
     waiting: Option<(TaskId, u64)>,
+    /// It is closing on its capture point (after the joint arrival, or holding).
+    closing: bool,
     /// Realised utility: finished tasks' scores, plus compensation received, less paid.
     utility: f64,
     /// Distance travelled since the last finished task (km) and the tick it finished.
@@ -133,12 +135,20 @@ impl Cbca {
             id: robot,
             kernel,
             tasks,
-            p: sec.behaviour.clone(),
+            p: {
+                let mut p = sec.behaviour.clone();
+                if !sc.hunt.robots.is_empty() {
+                    // The mission judges capture on its circle r_s and its tolerance.
+                    p.ring_radius_km = sc.hunt.params.r_s;
+                    p.arrive_tolerance_km = sc.hunt.params.capture_tolerance;
+                }
+                p
+            },
             detection_radius: params.detection_radius_km,
             comm_reach: sc.radio.comm_radius + sc.radio.link_margin,
             v_max: sc.robot.v_max,
             sensing: sec.sensing,
-            mover: Mover::new(sc, &sec.behaviour),
+            mover: Mover::new(sc, robot, &sec.behaviour),
             phase: Phase::Planning,
             heard: BTreeMap::new(),
             prev_links: Vec::new(),
@@ -152,6 +162,7 @@ impl Cbca {
             commit_tick: 0,
             hold: None,
             waiting: None,
+            closing: false,
             utility: 0.0,
             leg: 0.0,
             last_pos: None,
@@ -228,9 +239,6 @@ impl Cbca {
             if e.flags & self.sensing.captured_flag != 0 {
                 captured.insert(j);
             }
-            if dist(s.pos, e.pos) > self.detection_radius {
-                continue;
-            }
             self.sightings.insert(
                 j as u32,
                 Sighting {
@@ -239,6 +247,10 @@ impl Cbca {
                     tick: now,
                 },
             );
+            // Tracked wherever sensed; learnt as a task within the detection radius (sec. 4.3).
+            if dist(s.pos, e.pos) > self.detection_radius {
+                continue;
+            }
             let mut t = self.tasks[j].clone();
             t.position = e.pos;
             if self.kernel.learn_task(t) {
@@ -442,6 +454,7 @@ impl Cbca {
 
     /// (7) Motion and the hunt of the first target of the path.
     fn act(&mut self, s: &Sense, now: u64, captured: &BTreeSet<TaskId>) -> [f64; 2] {
+        self.closing = self.hold.is_some();
         if self.phase != Phase::Executing {
             return self.mover.stop();
         }
@@ -462,6 +475,7 @@ impl Cbca {
         if captured.contains(&j) {
             let ticks = (self.tasks[j].hold_time * self.p.ticks_per_time_unit).ceil() as u64;
             self.hold = Some((j, now + ticks));
+            self.closing = true;
             self.events.push(Event::Captured { tick: now, task: j });
             return self.mover.go(s, self.capture_goal(j, s.pos).unwrap_or(s.pos));
         }
@@ -492,6 +506,7 @@ impl Cbca {
         }
         self.ready.insert((j as u32, self.id));
         if assembled || now.saturating_sub(since) >= self.p.max_wait_ticks {
+            self.closing = true;
             let goal = self.capture_goal(j, s.pos).unwrap_or(target);
             self.mover.go(s, goal)
         } else {
@@ -576,15 +591,23 @@ impl Cbca {
             out.broadcast(m);
         }
         let cmd = self.act(s, now, &captured);
-        let first = self.kernel.plan().path.first().map(|&j| j as f64 + 1.0).unwrap_or(0.0);
+        // The hunt mission's report contract (swarm::sections::hunt): [T_j hunted, the point
+        // it heads for (x, y; NaN before the ring), REPORT_AT_POINT when there]; the display
+        // state is the task.
+        let task = match self.phase {
+            Phase::Executing => self.hold.map(|(j, _)| j).or(self.kernel.plan().path.first().copied()),
+            Phase::Planning => None,
+        };
+        let point = task.filter(|_| self.closing).and_then(|j| self.capture_goal(j, s.pos));
+        let at = point.is_some_and(|q| dist(q, s.pos) <= self.p.arrive_tolerance_km);
         Command {
             cmd,
-            events: 0,
+            events: task.map_or(0, |j| (j as u32 + 1).min(254)),
             report: [
-                self.utility,
-                first,
-                if self.phase == Phase::Executing { 1.0 } else { 0.0 },
-                self.counters.first_settled.map(|t| t as f64).unwrap_or(-1.0),
+                task.map_or(0.0, |j| j as f64 + 1.0),
+                point.map_or(f64::NAN, |q| q[0]),
+                point.map_or(f64::NAN, |q| q[1]),
+                if at { swarm::sections::hunt::REPORT_AT_POINT } else { 0.0 },
             ],
         }
     }
