@@ -134,6 +134,8 @@ impl Driver {
     }
 
     /// One tick for every live robot.
+    // Robot i's Sense, inbox and move are three arrays indexed alike.
+    #[allow(clippy::needless_range_loop)]
     pub fn step(&mut self) {
         let sent = std::mem::take(&mut self.in_flight);
         let mut next = Vec::new();
