@@ -33,6 +33,10 @@ pub struct Scenario {
     /// The hunting thesis's section (docs/hunting.md); absent: no hunt.
     #[serde(default, skip_serializing_if = "HuntSection::is_empty")]
     pub hunt: HuntSection,
+    /// The `[cbca]` section (thesis 003 chapter 4: CBCA's parameters, target and robot rows),
+    /// read and validated by the agent crate's `cbca` behaviour. Left out when empty.
+    #[serde(default, skip_serializing_if = "toml::Table::is_empty")]
+    pub cbca: toml::Table,
 }
 
 #[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]

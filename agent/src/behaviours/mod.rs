@@ -55,7 +55,7 @@ macro_rules! registry {
     };
 }
 
-registry!(roam, faulty, search, formation, hunt);
+registry!(roam, faulty, search, formation, hunt, cbca);
 
 /// For behaviours whose commands are velocities (vx, vy): refuses unicycle kinematics.
 pub fn require_holonomic(sc: &Scenario, c: &Check, behaviour: &str) -> Result<(), ConfigError> {
@@ -95,6 +95,11 @@ mod tests {
         );
         for name in BEHAVIOURS {
             let mut sc = Scenario::default();
+            if *name == cbca::NAME {
+                // CBCA needs its rows (one a robot): its runnable scenario.
+                let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../configs/hunt-cbca.toml");
+                sc = Scenario::load(std::path::Path::new(path)).unwrap();
+            }
             sc.run.behaviour = name.to_string();
             validate(&sc, "t.toml").unwrap();
         }

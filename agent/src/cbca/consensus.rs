@@ -136,6 +136,8 @@ pub struct CbcaRobot {
     book: TaskBook,
     detector: ConvergenceDetector,
     iteration: u64,
+    /// Targets the group has finished (captured and held): never bid on again.
+    done: std::collections::BTreeSet<TaskId>,
 }
 
 /// The Peers view of a robot's infos.
@@ -180,6 +182,7 @@ impl CbcaRobot {
             plan: Plan::default(),
             detector: ConvergenceDetector::default(),
             iteration: 0,
+            done: Default::default(),
             me,
             params,
         }
@@ -224,7 +227,10 @@ impl CbcaRobot {
 
     /// A target robot i detects itself (sec. 4.2.2).
     pub fn learn_task(&mut self, task: Task) -> bool {
-        if self.book.contains_key(&task.id) || task.id >= self.winners.n_tasks() {
+        if self.book.contains_key(&task.id)
+            || task.id >= self.winners.n_tasks()
+            || self.done.contains(&task.id)
+        {
             return false;
         }
         self.book.insert(task.id, task);
@@ -410,12 +416,105 @@ impl CbcaRobot {
         out
     }
 
+    /// E_m' as robot i knows it (its own, or what it heard).
+    pub fn known_resources(&self, m: RobotId) -> Option<Resources> {
+        self.resources_of(m)
+    }
+
     fn resources_of(&self, m: RobotId) -> Option<Resources> {
         if m == self.me.id {
             Some(self.me.resources)
         } else {
             InfoPeers(&self.infos).resources(m)
         }
+    }
+
+    /// The robot's position from now on (t_o of the bids Algorithm 1 places next): the runtime
+    /// moves it at a re-plan, so that new bids start where the robot is.
+    pub fn set_position(&mut self, position: swarm::geometry::Vec2) {
+        self.me.position = position;
+    }
+
+    /// A neighbour's state digest heard without its full state (a beacon).
+    pub fn hear_digest(&mut self, from: RobotId, digest: u64) {
+        if from != self.me.id {
+            self.detector.note_heard(from, digest, self.iteration);
+        }
+    }
+
+    /// The robot commits to its plan: its bids on the tasks of b_i are raised by `bonus` (once),
+    /// so that a robot arriving later may join a coalition with room but cannot push a
+    /// committed member out; the member leaves only by its own loyalty decision (4.22) or when
+    /// a committed rival with a larger original bid claims the place (a merge of two groups
+    /// that both took the task). Returns whether anything changed.
+    pub fn pin(&mut self, bonus: f64) -> bool {
+        let mut changed = false;
+        for &j in &self.plan.bundle {
+            if let Some(b) = self.winners.get(self.me.id, j) {
+                if b < bonus {
+                    self.winners.set(self.me.id, j, b + bonus);
+                    changed = true;
+                }
+            }
+        }
+        changed
+    }
+
+    /// Drops every task of b_i (a switch after the loyalty test).
+    pub fn release_all(&mut self) -> Vec<TaskId> {
+        let r = self.release_from(0);
+        self.sync_own_info();
+        r
+    }
+
+    /// Target j is finished (captured and held): it leaves the book, Z and every plan, and a
+    /// robot that executed it has one place fewer of its l_i (4.2).
+    pub fn complete(&mut self, j: TaskId) -> bool {
+        if j >= self.winners.n_tasks() || !self.done.insert(j) {
+            return false;
+        }
+        if let Some(pos) = self.plan.bundle.iter().position(|&t| t == j) {
+            self.plan.bundle.remove(pos);
+            self.plan.path.retain(|&t| t != j);
+            self.me.max_tasks = self.me.max_tasks.saturating_sub(1);
+        }
+        for m in 0..self.winners.n_robots() {
+            self.winners.clear(m, j);
+        }
+        for info in self.infos.iter_mut().flatten() {
+            info.path.retain(|&t| t != j);
+        }
+        self.book.remove(&j);
+        self.sync_own_info();
+        true
+    }
+
+    /// The finished targets.
+    pub fn done(&self) -> &std::collections::BTreeSet<TaskId> {
+        &self.done
+    }
+
+    /// S_i(p_i) (4.13) of the current path from the current position.
+    pub fn path_score(&self) -> f64 {
+        super::score::path_score(&self.me, &self.plan.path, &self.book, &self.params).total
+    }
+
+    /// The path Algorithm 1 would give this robot if it dropped its own plan now, with the
+    /// others' bids as it believes them (p_i' of sec. 4.2.5), and S_i(p_i').
+    pub fn proposal(&self) -> (Vec<TaskId>, f64) {
+        let mut c = self.clone();
+        c.release_all();
+        let peers = InfoPeers(&c.infos);
+        build_bundle(
+            &c.me,
+            &mut c.plan,
+            &mut c.winners,
+            &c.book,
+            &peers,
+            &c.params,
+        );
+        let s = super::score::path_score(&c.me, &c.plan.path, &c.book, &c.params).total;
+        (c.plan.path.clone(), s)
     }
 
     /// Robot m is gone (its agent process died; the runtime's liveness check says so): clear its

@@ -54,13 +54,16 @@ fn validate(sc: &Scenario, c: &Check) -> Result<(), ConfigError> {
             "needs [[hunt.robots]] and [[hunt.evaders]] rows (configs/hunt-auction.toml)".into(),
         ));
     }
-    let want = h.robots.len() as u64 + 1;
-    if sc.run.robots as u64 != want || sc.run.stations != 1 {
+    // The auction runs an auctioneer station; a decentralised behaviour (cbca) runs none.
+    let want = h.robots.len() as u64 + u64::from(sc.run.behaviour == "hunt");
+    let stations = u32::from(sc.run.behaviour == "hunt");
+    if sc.run.robots as u64 != want || sc.run.stations != stations {
         return Err(c.err(
             "run.robots",
             format!(
                 "= {} with run.stations = {}: a hunt runs one agent per [[hunt.robots]] row \
-                 ({}) plus the auctioneer, so run.robots = {want} and run.stations = 1",
+                 ({}) plus, for the auction (behaviour hunt), the auctioneer: run.robots = \
+                 {want} and run.stations = {stations}",
                 sc.run.robots,
                 sc.run.stations,
                 h.robots.len()
@@ -439,8 +442,10 @@ impl Mission for HuntMission {
             .iter()
             .map(|r| [r.position[0], r.position[1], r.heading])
             .collect();
-        let a = sc.hunt.auctioneer.position;
-        v.push([a[0], a[1], 0.0]);
+        if sc.run.stations > 0 {
+            let a = sc.hunt.auctioneer.position;
+            v.push([a[0], a[1], 0.0]);
+        }
         Some(v)
     }
     fn sense(&mut self, robot: u32, pos: [f64; 2], out: &mut Sense) {

@@ -1,0 +1,85 @@
+//! The runtime parameters of the CBCA behaviour (`[cbca.behaviour]`): what the kernels'
+//! `CbcaParams` (`[cbca.params]`) do not cover because it concerns ticks, motion and the radio.
+//! The thesis gives none of them (it runs CBCA as rounds in MATLAB); each is a documented
+//! choice.
+
+use serde::{Deserialize, Serialize};
+
+/// Which targets a robot knows before it hears anything (grouping's prior information,
+/// sec. 4.2.2, `cbca::grouping::PriorInfo`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Prior {
+    /// The targets it detects itself (within `cbca.params.detection_radius_km`).
+    Detection,
+    /// Detection, and each target nobody detects at the start goes to the robot nearest to it
+    /// (from the scenario's start rows, which every robot reads): Example 1's T3 is within
+    /// 1.2 km of nobody, and the thesis still hunts it.
+    DetectionPlusNearest,
+    /// Every target (CBCA without grouping: with a radio that reaches everyone).
+    All,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct BehaviourParams {
+    /// Ticks per CBCA time unit (the unit of hold times and of the decay beta_j t). [chosen] 20,
+    /// with robots at 0.05 km a tick: one time unit is 1 km of travel, as the kernels assume
+    /// (`cbca.params.robot_speed` = 1 km per time unit).
+    pub ticks_per_time_unit: f64,
+    /// While settled, a beacon (digest and gossip, no state) every this many ticks. [chosen] 5.
+    pub beacon_period: u64,
+    /// A robot heard within this many ticks is a current neighbour for the convergence
+    /// detector. [chosen] 20: four beacon periods, so a neighbour stays one under loss 0.5
+    /// with probability 1 - 0.5^4.
+    pub neighbour_window: u64,
+    /// The convergence detector's quiet period, in ticks (it replaces
+    /// `cbca.params.quiet_iterations`, which counts the round drivers' iterations): a robot's
+    /// state unchanged this long and every current neighbour's last digest equal to it.
+    /// [chosen] 10: a neighbour sending every tick is unheard for 10 ticks with probability
+    /// 0.5^10 = 0.1 % under loss 0.5.
+    pub quiet_ticks: u64,
+    /// Added once to a robot's bids on the tasks it committed to (`CbcaRobot::pin`). [chosen]
+    /// 1e6, above any score of the thesis's tables (V_a <= 600).
+    pub commit_bonus: f64,
+    /// Prior information of the grouping (see [`Prior`]).
+    pub prior: Prior,
+    /// Joint arrival: a coalition member waits this far from its target (km) until every member
+    /// is there. [chosen] 1.6 km, just outside the evaders' 1.5 km sensing radius, so the
+    /// target does not flee from a lone early robot.
+    pub wait_radius_km: f64,
+    /// ... but no longer than this many ticks (a member may never come: lost messages, a
+    /// death not yet known). [chosen] 400 (20 time units).
+    pub max_wait_ticks: u64,
+    /// A goal counts as reached within this distance (km): the go-to slows down near its goal
+    /// and would otherwise approach it for ever. [chosen] 0.05 km, the hunt kernels'
+    /// capture tolerance.
+    pub arrive_tolerance_km: f64,
+    /// Radius of the ring the members close on (km). [chosen] 0.3 km, the hunt kernels' r_s.
+    pub ring_radius_km: f64,
+    /// Loyalty (4.18)-(4.22) on; false is the "no loyalty" ablation (a robot switches whenever
+    /// the new plan scores more).
+    pub loyalty: bool,
+    /// Speed / distance gain of the holonomic go-to (1/tick): v = min(v_max, gain d). [chosen]
+    /// 0.5: a robot slows down in the last 2 v_max of its goal.
+    pub goto_gain: f64,
+}
+
+impl Default for BehaviourParams {
+    fn default() -> Self {
+        Self {
+            ticks_per_time_unit: 20.0,
+            beacon_period: 5,
+            neighbour_window: 20,
+            quiet_ticks: 10,
+            commit_bonus: 1e6,
+            prior: Prior::DetectionPlusNearest,
+            wait_radius_km: 1.6,
+            max_wait_ticks: 400,
+            arrive_tolerance_km: 0.05,
+            ring_radius_km: 0.3,
+            loyalty: true,
+            goto_gain: 0.5,
+        }
+    }
+}
