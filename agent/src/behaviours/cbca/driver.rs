@@ -102,15 +102,21 @@ impl Driver {
         s.tick = self.tick;
         s.robot = i as u32;
         s.pos = self.pos[i];
-        let reach = self.sc.radio.comm_radius + self.sc.radio.link_margin;
+        // The proximity sensor (Sense `nearby`), as the world fills it.
+        let reach = self.sc.robot.neighbour_sensing_radius;
         let mut k = 0;
         for j in 0..self.pos.len() {
-            if j != i && self.alive[j] && dist(self.pos[i], self.pos[j]) <= reach {
-                s.neighbours[k] = j as u32;
+            if j != i && self.alive[j] && dist(self.pos[i], self.pos[j]) <= reach && k < swarm::frames::MAX_NEARBY {
+                s.nearby[k] = swarm::frames::Nearby {
+                    robot: j as u32,
+                    reserved: 0,
+                    pos: self.pos[j],
+                    vel: [0.0, 0.0],
+                };
                 k += 1;
             }
         }
-        s.n_neighbours = k as u32;
+        s.n_nearby = k as u32;
         let mut e = 0;
         for (id, t) in self.targets.iter().enumerate().take(MAX_ENTITIES) {
             if dist(self.pos[i], t.pos) <= self.sc.robot.sensing_radius {
@@ -233,7 +239,7 @@ impl Driver {
             .collect()
     }
 
-    /// Kills robot i (its process dies: it stops sending, the links drop it).
+    /// Kills robot i (its process dies: it stops sending, the proximity sensors lose it).
     pub fn kill(&mut self, i: usize) {
         self.alive[i] = false;
         self.in_flight.retain(|(from, _, _)| *from as usize != i);

@@ -145,7 +145,7 @@ impl Cbca {
                 p
             },
             detection_radius: params.detection_radius_km,
-            comm_reach: sc.radio.comm_radius + sc.radio.link_margin,
+            comm_reach: sc.robot.neighbour_sensing_radius,
             v_max: sc.robot.v_max,
             sensing: sec.sensing,
             mover: Mover::new(sc, robot, &sec.behaviour),
@@ -198,10 +198,13 @@ impl Cbca {
         self.kernel.converged(&neighbours)
     }
 
-    /// (1) A robot that was linked last tick, is not now, and was last heard where it could
-    /// not have left the link range (comm_radius + link_margin) in the time since, has died.
+    /// (1) A robot that the proximity sensor saw last tick (Sense `nearby`: live robots within
+    /// `robot.neighbour_sensing_radius`), does not see now, and was last heard where it could
+    /// not have left that range in the time since, has died. (The link design's list of
+    /// robots in radio reach is gone with the shared medium; a radio gives no such oracle.)
     fn detect_deaths(&mut self, s: &Sense, now: u64) {
-        let links: Vec<u32> = s.neighbours[..s.n_neighbours as usize].to_vec();
+        let mut links: Vec<u32> = s.nearby().iter().map(|n| n.robot).collect();
+        links.sort_unstable();
         for m in std::mem::take(&mut self.prev_links) {
             if links.binary_search(&m).is_ok() || self.gone.contains(&m) {
                 continue;
