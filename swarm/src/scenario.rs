@@ -4,9 +4,9 @@ use serde::{Deserialize, Serialize};
 use std::fmt;
 use std::path::Path;
 
+pub use crate::sections::formation::FormationSection;
 pub use crate::sections::hunt::HuntSection;
 pub use crate::sections::roam::{RoamParams, ROAM_BEACON_OVERHEAD};
-pub use crate::sections::formation::FormationSection;
 pub use crate::sections::search::{SearchParams, SEARCH_MODES};
 
 /// The default scenario, embedded so that `orchestrator up` needs no file.

@@ -58,7 +58,7 @@ pub fn scenario(example: u32) -> Scenario {
     sc.robot.v_max = 0.05;
     sc.robot.sensing_radius = 1.2;
     sc.radio.comm_radius = 1.5;
-    sc.radio.link_margin = 0.1;
+    sc.robot.neighbour_sensing_radius = 1.5; // as configs/hunt-cbca.toml
     sc.radio.max_message_bytes = 8192;
     sc
 }
