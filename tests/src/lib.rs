@@ -200,3 +200,28 @@ pub fn assert_left_nothing(out: &Path) {
 pub fn stderr(o: &Output) -> String {
     String::from_utf8_lossy(&o.stderr).into_owned()
 }
+
+/// Runs the repository's scenario file `config` (relative to configs/) once with real
+/// processes and once in-process, each into its own fresh folder (`<tag>-p`, `<tag>-i`),
+/// asserting that both succeed. Returns (processes' folder, in-process folder).
+pub fn up_in_both_executors(config: &str, tag: &str) -> (PathBuf, PathBuf) {
+    let sc = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../configs")
+        .join(config);
+    let a = tmp_dir(&format!("{tag}-p"));
+    let b = tmp_dir(&format!("{tag}-i"));
+    for (dir, exec) in [(&a, "processes"), (&b, "inprocess")] {
+        let o = up(
+            &["--scenario", sc.to_str().unwrap(), "--executor", exec],
+            dir,
+        );
+        assert!(o.status.success(), "{exec}: {}", stderr(&o));
+    }
+    (a, b)
+}
+
+/// Whether two run folders hold byte-identical recording.bin files.
+pub fn same_recording(a: &Path, b: &Path) -> bool {
+    let rec = |d: &Path| std::fs::read(d.join("recording.bin")).expect("recording.bin");
+    rec(a) == rec(b)
+}

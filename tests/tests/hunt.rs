@@ -2,21 +2,11 @@
 //! iceoryx2 capture every evader, and the in-process executor records the same run.
 
 use e2e::*;
-use std::path::PathBuf;
 
 #[test]
 fn auctioneer_and_robots_in_processes_capture_every_evader_as_in_process() {
     let _g = serial();
-    let sc = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../configs/hunt-auction.toml");
-    let a = tmp_dir("hunt-p");
-    let b = tmp_dir("hunt-i");
-    for (dir, exec) in [(&a, "processes"), (&b, "inprocess")] {
-        let o = up(
-            &["--scenario", sc.to_str().unwrap(), "--executor", exec],
-            dir,
-        );
-        assert!(o.status.success(), "{exec}: {}", stderr(&o));
-    }
+    let (a, b) = up_in_both_executors("hunt-auction.toml", "hunt");
     let s = summary(&a);
     assert_eq!(s["end"], "all evaders captured", "{s}");
     let m = &s["mission"]["hunt"];
@@ -32,7 +22,6 @@ fn auctioneer_and_robots_in_processes_capture_every_evader_as_in_process() {
         assert!(z > 0.0 && z <= e["reward_cap"].as_f64().unwrap(), "{e}");
     }
     assert!(m["auction_rounds"].as_u64().unwrap() >= 1);
-    let rec = |d: &PathBuf| std::fs::read(d.join("recording.bin")).expect("recording.bin");
-    assert!(rec(&a) == rec(&b), "the executors differ");
+    assert!(same_recording(&a, &b), "the executors differ");
     assert_left_nothing(&a);
 }

@@ -49,55 +49,32 @@ impl Template {
         best
     }
 
+    /// A 9-point letter of the scenario section's built-ins (`swarm::sections::formation`,
+    /// the one place the letters are drawn).
+    fn builtin(name: &str) -> Self {
+        Self {
+            name: name.into(),
+            points: swarm::sections::formation::builtin_template(name, 9)
+                .expect("the built-in letters have 9 points"),
+        }
+    }
+
     /// The letter C, as spec 7 step 2 suggests: 9 points on a 270 degree arc of radius 3.7
     /// opening to +x (from 45 to 315 degrees), chord spacing 2 * 3.7 * sin(16.875 deg) = 2.148.
     pub fn letter_c() -> Self {
-        let radius = 3.7;
-        let points = (0..9)
-            .map(|k| {
-                let angle = (45.0 + 33.75 * k as f64).to_radians();
-                [radius * angle.cos(), radius * angle.sin()]
-            })
-            .collect();
-        Self {
-            name: "C".into(),
-            points,
-        }
+        Self::builtin("C")
     }
 
     /// The letter n (section 3.4): two stems of 3 points 2.2 apart, 5.6 apart, joined by a
     /// half-circle arch of radius 2.8 whose 3 inner points are 45 degrees apart (chord 2.14).
     pub fn letter_n() -> Self {
-        let mut points = vec![[0.0, 0.0], [0.0, 2.2], [0.0, 4.4]];
-        for k in 1..4 {
-            let angle = (180.0 - 45.0 * k as f64).to_radians();
-            points.push([2.8 + 2.8 * angle.cos(), 4.4 + 2.8 * angle.sin()]);
-        }
-        points.extend([[5.6, 4.4], [5.6, 2.2], [5.6, 0.0]]);
-        Self {
-            name: "n".into(),
-            points,
-        }
+        Self::builtin("n")
     }
 
     /// The letter r (section 3.4): a stem of 5 points 2.2 apart and a shoulder of 4 points
     /// arching right from its top (spacings 2.24, 2.21, 2.15, 2.26).
     pub fn letter_r() -> Self {
-        let points = vec![
-            [0.0, 0.0],
-            [0.0, 2.2],
-            [0.0, 4.4],
-            [0.0, 6.6],
-            [0.0, 8.8],
-            [2.0, 9.8],
-            [4.2, 10.0],
-            [6.2, 9.2],
-            [7.8, 7.6],
-        ];
-        Self {
-            name: "r".into(),
-            points,
-        }
+        Self::builtin("r")
     }
 
     /// The default templates by name ("C", "n", "r").

@@ -109,7 +109,7 @@ pub const LETTER_SPACING: f64 = 2.148;
 /// 3.7 opening to +x that spec 7 suggests (chord 2.148); for more robots a thick C, arcs of
 /// radius 3.7, 5.9, 8.1, ... (2.2 apart) filled from the inside, each with points about
 /// LETTER_SPACING apart (the outermost one spread over the whole arc). "n" and "r": the
-/// 9-point letters of section 3.4 (agent/src/formation/template.rs draws the same points).
+/// 9-point letters of section 3.4 (agent/src/formation/template.rs uses these).
 pub fn builtin_template(name: &str, n: usize) -> Result<Vec<[f64; 2]>, String> {
     match name {
         "C" => Ok(letter_c(n)),
