@@ -159,6 +159,50 @@ impl Peers for InfoPeers<'_> {
     }
 }
 
+/// What the DAG tests (4.6) of robot i see: each other robot's known path restricted to the
+/// tasks i believes it wins. A path is relayed with its robot's stamp, but robot i changes Z
+/// itself when it outbids m (rule B, or Algorithm 1 displacing m): m's relayed path then
+/// still lists the task i took from it. Testing that stale path made two robots take and drop
+/// the same task in turn forever (proptest seed 6322006625875567134: R3 outbid R1 on T1, saw
+/// R1's old path [T1, T2] against its own [T2, T1], dropped T1, R1 took it back, ...).
+struct BelievedPeers<'a> {
+    infos: &'a [Option<RobotInfo>],
+    paths: Vec<Vec<TaskId>>,
+}
+
+impl<'a> BelievedPeers<'a> {
+    fn new(me: RobotId, infos: &'a [Option<RobotInfo>], winners: &Winners) -> Self {
+        let paths = (0..infos.len())
+            .map(|m| {
+                let view = InfoPeers(infos);
+                let known = view.path(m);
+                if m == me {
+                    known.to_vec()
+                } else {
+                    known
+                        .iter()
+                        .copied()
+                        .filter(|&j| winners.is_winner(m, j))
+                        .collect()
+                }
+            })
+            .collect();
+        Self { infos, paths }
+    }
+}
+
+impl Peers for BelievedPeers<'_> {
+    fn resources(&self, m: RobotId) -> Option<Resources> {
+        InfoPeers(self.infos).resources(m)
+    }
+    fn path(&self, m: RobotId) -> &[TaskId] {
+        self.paths.get(m).map(|p| p.as_slice()).unwrap_or(&[])
+    }
+    fn count(&self) -> usize {
+        self.infos.len()
+    }
+}
+
 impl CbcaRobot {
     /// Robot `me` among `n_robots` robots and `n_tasks` targets (the sizes of Z), knowing the
     /// targets in `known` at the start.
@@ -219,7 +263,7 @@ impl CbcaRobot {
     }
     /// The whole peer view (for the "why" reports of a driver).
     pub fn peers(&self) -> impl Peers + '_ {
-        InfoPeers(&self.infos)
+        BelievedPeers::new(self.me.id, &self.infos, &self.winners)
     }
     pub fn params(&self) -> &CbcaParams {
         &self.params
@@ -287,15 +331,8 @@ impl CbcaRobot {
         self.iteration += 1;
         let mut dropped = Vec::new();
         loop {
-            let paths: Vec<Vec<TaskId>> = (0..self.infos.len())
-                .map(|m| {
-                    if m == self.me.id {
-                        self.plan.path.clone()
-                    } else {
-                        self.known_path(m).to_vec()
-                    }
-                })
-                .collect();
+            let mut paths = BelievedPeers::new(self.me.id, &self.infos, &self.winners).paths;
+            paths[self.me.id] = self.plan.path.clone();
             if dag::cycle_closer(&paths) != Some(self.me.id) || self.plan.bundle.is_empty() {
                 break;
             }
@@ -303,7 +340,7 @@ impl CbcaRobot {
             dropped.extend(self.release_from(last));
         }
         let added = {
-            let peers = InfoPeers(&self.infos);
+            let peers = BelievedPeers::new(self.me.id, &self.infos, &self.winners);
             build_bundle(
                 &self.me,
                 &mut self.plan,
@@ -504,7 +541,7 @@ impl CbcaRobot {
     pub fn proposal(&self) -> (Vec<TaskId>, f64) {
         let mut c = self.clone();
         c.release_all();
-        let peers = InfoPeers(&c.infos);
+        let peers = BelievedPeers::new(c.me.id, &c.infos, &c.winners);
         build_bundle(
             &c.me,
             &mut c.plan,
