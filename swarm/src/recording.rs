@@ -101,6 +101,9 @@ pub enum Event {
     EntityDone { entity: u32, robot: u32 },
     /// Behaviour-declared event flags.
     Declared { robot: u32, flags: u32 },
+    /// Real-time mode (`runtime.realtime_hz`): the robot's action for this tick missed its
+    /// deadline; it kept its last command. (Last variant: older recordings read unchanged.)
+    DeadlineMissed { robot: u32 },
 }
 
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
