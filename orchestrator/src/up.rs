@@ -93,6 +93,10 @@ pub struct UpArgs {
     /// Port of --view (0: any free port).
     #[arg(long, default_value_t = 0, requires = "view")]
     pub view_port: u16,
+    /// Record which messages each robot was handed every tick (sender, seq, size), for the
+    /// viewer's "heard this tick" [scenario: runtime.record_deliveries].
+    #[arg(long)]
+    pub record_deliveries: bool,
 }
 
 #[derive(Copy, Clone, Debug, PartialEq, Eq, ValueEnum)]
@@ -182,6 +186,7 @@ const FLAG_KEYS: &[(&str, &str)] = &[
     ("faults.max_restarts", "--max-restarts"),
     ("runtime.tick_hz", "--tick-hz"),
     ("runtime.realtime_hz", "--realtime"),
+    ("runtime.record_deliveries", "--record-deliveries"),
 ];
 
 /// The scenario with the flags applied and validated.
@@ -260,6 +265,11 @@ pub fn resolve(a: &UpArgs) -> Result<Scenario, ConfigError> {
     }
     if let Some(v) = a.realtime {
         set("runtime.realtime_hz", &mut || sc.runtime.realtime_hz = v);
+    }
+    if a.record_deliveries {
+        set("runtime.record_deliveries", &mut || {
+            sc.runtime.record_deliveries = true
+        });
     }
     if let Some(v) = a.max_restarts {
         set("faults.max_restarts", &mut || sc.faults.max_restarts = v);

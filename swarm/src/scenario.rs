@@ -237,6 +237,11 @@ pub struct RuntimeParams {
     /// so its recording's header) names its rate.
     #[serde(default, skip_serializing_if = "is_zero")]
     pub realtime_hz: f64,
+    /// Record the messages each robot was handed every tick (recording version 6: sender,
+    /// seq and size of each), for the viewer's "heard this tick". Off by default: a run that
+    /// leaves it off records what it did before (and its resolved scenario does not list it).
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub record_deliveries: bool,
 }
 
 impl RuntimeParams {

@@ -544,6 +544,13 @@ impl World {
         // The messages due now: each receiver's list, delivered or malformed as it reports, or
         // lost with it when it is dead or sent no action.
         let radio_ok = |i: usize, a: &Option<Action>| matches!(a, Some(a) if a.robot as usize == i && a.tick == k);
+        let deliveries = self.sc.runtime.record_deliveries.then(|| {
+            crate::heard::deliveries(self.due.as_ref(), self.n, |i| {
+                let a = actions.get(i).copied().flatten();
+                (self.alive[i] && radio_ok(i, &a))
+                    .then(|| a.map_or(0, |a| a.radio_malformed as u32))
+            })
+        });
         if let Some(due) = self.due.take() {
             for i in 0..due.robots().min(self.n) {
                 let listed = due.deliveries(i as u32).len() as u64;
@@ -698,6 +705,7 @@ impl World {
             radio,
             extra,
             layer: None,
+            deliveries,
         }
     }
 
@@ -729,7 +737,10 @@ impl World {
 
     /// The recording version this run writes: 2 (a TickExtra a tick) when robots have a body.
     pub fn recording_version(&self) -> u32 {
-        if !self.mission.live_layer().is_empty() {
+        if self.sc.runtime.record_deliveries {
+            // 6: who heard whom per tick (opt-in), after the layer (empty for roam).
+            swarm::recording::RECORDING_VERSION_DELIVERIES
+        } else if !self.mission.live_layer().is_empty() {
             // 3: the mission's marks per tick too (the viewer draws them).
             swarm::recording::RECORDING_VERSION_LAYER
         } else if self.body.is_some() {
