@@ -538,6 +538,7 @@ pub fn run(
     file: &Path,
     out: Option<&Path>,
     executor: crate::up::Executor,
+    runs: Option<u32>,
 ) -> Result<i32, String> {
     let text = std::fs::read_to_string(file)
         .map_err(|e| format!("{}: cannot read: {e}", file.display()))?;
@@ -549,6 +550,11 @@ pub fn run(
             file.display(),
             x.kind
         ));
+    }
+    // `--runs N`: N seeds a sweep point and a live row instead of the file's.
+    if let Some(n) = runs {
+        x.seeds = n.into();
+        x.variant_seeds = n.into();
     }
     x.scenario = file.parent().unwrap_or(Path::new(".")).join(&x.scenario);
     let mut base = Scenario::load(&x.scenario).map_err(|e| e.to_string())?;
