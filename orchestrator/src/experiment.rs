@@ -231,7 +231,7 @@ fn run(a: ExperimentArgs) -> Result<i32, String> {
         return crate::experiment_formation::run(&a.file, a.quiet);
     }
     if crate::experiment_hunt::is_hunt(&a.file) {
-        return crate::experiment_hunt::run(&a.file, a.out.as_deref());
+        return crate::experiment_hunt::run(&a.file, a.out.as_deref(), a.executor, a.runs);
     }
     if crate::experiment_cbca::is_cbca(&a.file) {
         return crate::experiment_cbca::run(&a.file, a.out.as_deref());

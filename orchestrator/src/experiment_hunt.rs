@@ -1,24 +1,30 @@
 //! `orchestrator experiment FILE` for a file with `kind = "hunt"` (configs/hunt-experiment.toml;
 //! docs/hunting.md section 7): the thesis's chapter 3 experiments.
 //!
-//! 1. **Example 3-A**, a full run of its scenario (in-process): the initial coalitions and those
-//!    after T5 beside the thesis's, every later coalition change (swaps, assistance), the
-//!    reward paid per task beside Table 3.3 and its cap, and the reward iterations of the
-//!    initial auction (Fig. 3.6) as `reward-iterations.svg`.
+//! 1. **Example 3-A**, a full run of its scenario (in-process, or with real processes under
+//!    `--executor processes`, which then also runs it in-process and says whether both gave
+//!    the same results): the initial coalitions and those after T5 beside the thesis's, every
+//!    later coalition change (swaps, assistance), the reward paid per task beside Table 3.3
+//!    and its cap, and the reward iterations of the initial auction (Fig. 3.6) as
+//!    `reward-iterations.svg`.
 //! 2. **Figs. 3.7-3.10 as tables**: the improved and the parallel auction on seeded random
 //!    instances (`agent::hunt::instance`), C (3.13) and Y (3.14), mean and standard deviation
 //!    over `seeds` seeds a point, and whether the thesis's orderings hold.
-//! 3. **Beyond the thesis**: runs of the scenario under each variant (radio loss, robots
-//!    killed): messages, auction rounds, capture rate and time.
+//! 3. **Live, and beyond the thesis**: runs of the scenario with each auction of `auctions`
+//!    (the improved one and the parallel baseline, over the radio: `hunt.params.auction`)
+//!    under each variant (radio loss, robots killed): C and Y of the auctions as made,
+//!    messages, auction rounds, capture rate and time.
 
 use agent::hunt::auction::run_auction;
 use agent::hunt::instance::{random_instance, InstanceParams};
 use agent::hunt::parallel_auction::run_parallel_auction;
 use agent::hunt::scenario::HuntKernels;
 use serde::Deserialize;
+use serde_json::Value;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use swarm::scenario::Scenario;
+use swarm::sections::hunt::AuctionKind;
 
 /// The experiment file of the hunt.
 #[derive(Debug, Clone, Deserialize)]
@@ -39,6 +45,79 @@ pub struct HuntExperiment {
     /// Runs a variant of the scenario (seeds 1..=variant_seeds).
     pub variant_seeds: u64,
     pub variants: Vec<crate::experiment::Variant>,
+    /// The live auctions every variant runs with (`hunt.params.auction`); default: the
+    /// scenario's own only.
+    #[serde(default)]
+    pub auctions: Vec<AuctionKind>,
+}
+
+/// How the experiment's runs are made: the executor, and the run id the processes' run ids
+/// are made from (one a run, so each has its own /dev/shm names).
+struct Runner {
+    executor: crate::up::Executor,
+    base_id: String,
+    made: std::cell::Cell<u32>,
+}
+
+impl Runner {
+    /// Runs the scenario and returns its summary as JSON.
+    fn run(&self, sc: &Scenario, tag: &str) -> Result<Value, String> {
+        match self.executor {
+            crate::up::Executor::Inprocess => in_process(sc, tag),
+            crate::up::Executor::Processes => {
+                self.made.set(self.made.get() + 1);
+                let id = format!("{}-h{}", self.base_id, self.made.get());
+                with_processes(sc, &id)
+            }
+        }
+    }
+}
+
+fn in_process(sc: &Scenario, tag: &str) -> Result<Value, String> {
+    let s = crate::inprocess::run(sc, None, tag, 1, &mut |_| {}).map_err(|e| e.to_string())?;
+    serde_json::to_value(&s).map_err(|e| e.to_string())
+}
+
+/// One OS process per agent (the auctioneer too) and the world, as `orchestrator up` runs
+/// them; the summary is read back from the run folder, which is then removed.
+fn with_processes(sc: &Scenario, run_id: &str) -> Result<Value, String> {
+    let dir = std::env::temp_dir().join(format!("swarm-hunt-{run_id}"));
+    let summary = crate::processes::run(crate::processes::ProcessRun {
+        sc,
+        run_id,
+        run_dir: &dir,
+        live: false,
+        on_status: &mut |_| {},
+    })
+    .and_then(|_| {
+        let text = std::fs::read_to_string(dir.join("summary.json"));
+        text.map_err(|e| format!("{}: {e}", dir.display()))
+    })
+    .and_then(|t| serde_json::from_str(&t).map_err(|e| e.to_string()));
+    let _ = std::fs::remove_dir_all(&dir);
+    summary
+}
+
+/// What a run's summary says that must not depend on the executor (not the timings, the
+/// executor's name or the run id).
+fn outcome_of(s: &Value) -> Value {
+    let keys = [
+        "end",
+        "ticks",
+        "messages",
+        "rejected_actions",
+        "blocked_moves",
+        "distance_travelled",
+        "alive_at_end",
+        "mission",
+    ];
+    keys.iter().map(|k| (k.to_string(), s[*k].clone())).collect()
+}
+
+/// The robot ids of a JSON array (a coalition).
+fn ids(v: &Value) -> Vec<u64> {
+    v.as_array()
+        .map_or(Vec::new(), |a| a.iter().filter_map(Value::as_u64).collect())
 }
 
 /// Whether the experiment file is a hunt's.
@@ -84,14 +163,8 @@ fn set(v: &[u64]) -> String {
     format!("{{{}}}", names.join(", "))
 }
 
-/// Runs the scenario in-process and returns its summary as JSON.
-fn run_one(sc: &Scenario, tag: &str) -> Result<serde_json::Value, String> {
-    let s = crate::inprocess::run(sc, None, tag, 1, &mut |_| {}).map_err(|e| e.to_string())?;
-    serde_json::to_value(&s).map_err(|e| e.to_string())
-}
-
-fn example_3a(sc: &Scenario, out: &Path, md: &mut String) -> Result<(), String> {
-    let s = run_one(sc, "hunt-example-3a")?;
+fn example_3a(sc: &Scenario, run: &Runner, out: &Path, md: &mut String) -> Result<(), String> {
+    let s = run.run(sc, "hunt-example-3a")?;
     let m = &s["mission"]["hunt"];
     let t5 = sc
         .hunt
@@ -107,25 +180,43 @@ fn example_3a(sc: &Scenario, out: &Path, md: &mut String) -> Result<(), String> 
         changes
             .iter()
             .filter(|c| c["task"] == task && c["tick"].as_u64().unwrap_or(0) < before)
-            .filter(|c| !c["members"].as_array().unwrap().is_empty())
-            .map(|c| {
-                c["members"]
-                    .as_array()
-                    .unwrap()
-                    .iter()
-                    .filter_map(|x| x.as_u64())
-                    .collect()
-            })
+            .map(|c| ids(&c["members"]))
+            .filter(|m| !m.is_empty())
             .next_back()
     };
     let _ = writeln!(md, "## Example 3-A (`{}`)\n", sc.run.behaviour);
+    let how = match run.executor {
+        crate::up::Executor::Inprocess => "in-process",
+        crate::up::Executor::Processes => "with real processes (one a robot, the auctioneer, the world)",
+    };
     let _ = writeln!(
         md,
-        "One run of the scenario, in-process (the same recording as the processes). End: {}, {} ticks ({:.1} min).\n",
+        "One run of the scenario (seed {}), {how}. End: {}, {} ticks ({:.1} min).\n",
+        sc.run.seed,
         s["end"],
         s["ticks"],
         s["ticks"].as_f64().unwrap_or(0.0) * sc.hunt.params.minutes_per_tick
     );
+    if run.executor == crate::up::Executor::Processes {
+        let again = in_process(sc, "hunt-example-3a-inprocess")?;
+        let (a, b) = (outcome_of(&s), outcome_of(&again));
+        let differ: Vec<&String> = a
+            .as_object()
+            .into_iter()
+            .flatten()
+            .filter(|(k, v)| b[k.as_str()] != **v)
+            .map(|(k, _)| k)
+            .collect();
+        let _ = writeln!(
+            md,
+            "The same scenario and seed in-process: {}.\n",
+            if differ.is_empty() {
+                "the same results (end, ticks, messages, rejected actions, moves, every mission metric)".to_string()
+            } else {
+                format!("DIFFERENT in {differ:?}")
+            }
+        );
+    }
     let _ = writeln!(md, "| coalition | thesis, initial (Fig. 3.3b) | ours, initial | thesis, after T5 | ours, after T5 (tick {t5}) |\n|---|---|---|---|---|");
     for j in 1..=5u32 {
         let th0 = THESIS_INITIAL
@@ -147,12 +238,7 @@ fn example_3a(sc: &Scenario, out: &Path, md: &mut String) -> Result<(), String> 
         "\nEvery coalition change the robots reported (the robots' own view: swaps, assistance, splits):\n"
     );
     for c in &changes {
-        let v: Vec<u64> = c["members"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .filter_map(|x| x.as_u64())
-            .collect();
+        let v = ids(&c["members"]);
         let _ = writeln!(
             md,
             "- tick {} ({:.2} min): T{} = {}",
@@ -171,12 +257,7 @@ fn example_3a(sc: &Scenario, out: &Path, md: &mut String) -> Result<(), String> 
         let th = TABLE_3_3.iter().find(|x| x.0 == id);
         let z = e["reward_paid"].as_f64();
         let cap = e["reward_cap"].as_f64().unwrap_or(0.0);
-        let by: Vec<u64> = e["captured_by"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .filter_map(|x| x.as_u64())
-            .collect();
+        let by = ids(&e["captured_by"]);
         let _ = writeln!(
             md,
             "| T{id} | {} | {} | {cap} | {} | {} | {} |",
@@ -344,59 +425,107 @@ fn sweeps(x: &HuntExperiment, p: &agent::hunt::HuntParams, md: &mut String) {
     );
 }
 
+/// One row of the live table: the means over the seeds of a (auction, variant).
+#[derive(Default)]
+struct LiveRow {
+    captured: Vec<f64>,
+    all: usize,
+    times: Vec<f64>,
+    cost: Vec<f64>,
+    utility: Vec<f64>,
+    paid: Vec<f64>,
+    offered: Vec<f64>,
+    delivered: Vec<f64>,
+    rounds: Vec<f64>,
+    killed: Vec<f64>,
+}
+
+impl LiveRow {
+    fn add(&mut self, s: &Value) {
+        let m = &s["mission"]["hunt"];
+        self.captured.push(m["captured"].as_f64().unwrap_or(0.0));
+        if let Some(t) = m["all_captured_minutes"].as_f64() {
+            self.all += 1;
+            self.times.push(t);
+        }
+        self.cost.extend(m["auction_cost"].as_f64());
+        self.utility.extend(m["auction_utility"].as_f64());
+        let paid = m["per_evader"].as_array().into_iter().flatten();
+        self.paid
+            .push(paid.filter_map(|e| e["reward_paid"].as_f64()).sum::<f64>());
+        self.offered
+            .push(s["messages"]["offered"].as_f64().unwrap_or(0.0));
+        self.delivered
+            .push(s["messages"]["delivered"].as_f64().unwrap_or(0.0));
+        self.rounds.push(m["auction_rounds"].as_f64().unwrap_or(0.0));
+        self.killed
+            .push(s["faults"].as_array().map_or(0, |f| f.len()) as f64);
+    }
+}
+
 fn variants(
     x: &HuntExperiment,
     base: &Scenario,
     file: &str,
+    run: &Runner,
     md: &mut String,
 ) -> Result<(), String> {
+    let auctions = if x.auctions.is_empty() {
+        vec![base.hunt.params.auction]
+    } else {
+        x.auctions.clone()
+    };
     let _ = writeln!(
         md,
-        "## Beyond the thesis: radio loss and robots killed ({} seeds a variant, the scenario above)\n",
+        "## Live: the auctions over the radio, with radio loss and robots killed ({} seeds a row, the scenario above)\n",
         x.variant_seeds
     );
-    let _ = writeln!(md, "| variant | runs | captured (mean of 5) | all captured | time to the last capture, min (mean over runs that captured all) | messages offered | delivered | auction rounds | robots killed |\n|---|---|---|---|---|---|---|---|---|");
-    for v in &x.variants {
-        let mut captured = Vec::new();
-        let mut all = 0;
-        let mut times = Vec::new();
-        let mut offered = Vec::new();
-        let mut delivered = Vec::new();
-        let mut rounds = Vec::new();
-        let mut killed = Vec::new();
-        for seed in 1..=x.variant_seeds {
-            let mut sc = base.clone();
-            sc.run.seed = seed;
-            v.apply(&mut sc);
-            crate::prepare::prepare_from(&mut sc, file).map_err(|e| e.to_string())?;
-            let s = run_one(&sc, &format!("hunt-{}-{seed}", v.name))?;
-            let m = &s["mission"]["hunt"];
-            captured.push(m["captured"].as_f64().unwrap_or(0.0));
-            if let Some(t) = m["all_captured_minutes"].as_f64() {
-                all += 1;
-                times.push(t);
+    let _ = writeln!(md, "C and Y are those of the auctioneer's auctions as it made the awards (3.13, 3.14; all its auctions: the initial one and the new target's). Reward paid: the sum over the tasks of the last z_j the auctioneer reported (assistance raises it).\n");
+    let _ = writeln!(md, "| auction | variant | runs | captured (mean of {}) | all captured | time to the last capture, min (mean over runs that captured all) | C | Y | reward paid | messages offered | delivered | auction rounds | robots killed |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|", base.hunt.evaders.len());
+    for auction in &auctions {
+        for v in &x.variants {
+            let mut row = LiveRow::default();
+            for seed in 1..=x.variant_seeds {
+                let mut sc = base.clone();
+                sc.run.seed = seed;
+                sc.hunt.params.auction = *auction;
+                v.apply(&mut sc);
+                crate::prepare::prepare_from(&mut sc, file).map_err(|e| e.to_string())?;
+                let tag: String = format!("hunt-{auction:?}-{}-{seed}", v.name)
+                    .chars()
+                    .map(|c| if c.is_ascii_alphanumeric() { c } else { '-' })
+                    .collect();
+                row.add(&run.run(&sc, &tag)?);
             }
-            offered.push(s["messages"]["offered"].as_f64().unwrap_or(0.0));
-            delivered.push(s["messages"]["delivered"].as_f64().unwrap_or(0.0));
-            rounds.push(m["auction_rounds"].as_f64().unwrap_or(0.0));
-            killed.push(s["faults"].as_array().map_or(0, |f| f.len()) as f64);
+            let ms = |v: &[f64]| {
+                if v.is_empty() {
+                    "-".to_string()
+                } else {
+                    let (m, sd) = mean_sd(v);
+                    format!("{m:.0} ± {sd:.0}")
+                }
+            };
+            let _ = writeln!(
+                md,
+                "| {auction:?} | {} | {} | {:.2} | {} | {} | {} | {} | {} | {:.0} | {:.0} | {:.1} | {:.1} |",
+                v.name,
+                x.variant_seeds,
+                mean_sd(&row.captured).0,
+                row.all,
+                if row.times.is_empty() {
+                    "-".to_string()
+                } else {
+                    format!("{:.1} ± {:.1}", mean_sd(&row.times).0, mean_sd(&row.times).1)
+                },
+                ms(&row.cost),
+                ms(&row.utility),
+                ms(&row.paid),
+                mean_sd(&row.offered).0,
+                mean_sd(&row.delivered).0,
+                mean_sd(&row.rounds).0,
+                mean_sd(&row.killed).0
+            );
         }
-        let _ = writeln!(
-            md,
-            "| {} | {} | {:.2} | {all} | {} | {:.0} | {:.0} | {:.1} | {:.1} |",
-            v.name,
-            x.variant_seeds,
-            mean_sd(&captured).0,
-            if times.is_empty() {
-                "-".to_string()
-            } else {
-                format!("{:.1} ± {:.1}", mean_sd(&times).0, mean_sd(&times).1)
-            },
-            mean_sd(&offered).0,
-            mean_sd(&delivered).0,
-            mean_sd(&rounds).0,
-            mean_sd(&killed).0
-        );
     }
     let _ = writeln!(
         md,
@@ -405,7 +534,12 @@ fn variants(
     Ok(())
 }
 
-pub fn run(file: &Path, out: Option<&Path>) -> Result<i32, String> {
+pub fn run(
+    file: &Path,
+    out: Option<&Path>,
+    executor: crate::up::Executor,
+    runs: Option<u32>,
+) -> Result<i32, String> {
     let text = std::fs::read_to_string(file)
         .map_err(|e| format!("{}: cannot read: {e}", file.display()))?;
     let mut x: HuntExperiment =
@@ -416,6 +550,11 @@ pub fn run(file: &Path, out: Option<&Path>) -> Result<i32, String> {
             file.display(),
             x.kind
         ));
+    }
+    // `--runs N`: N seeds a sweep point and a live row instead of the file's.
+    if let Some(n) = runs {
+        x.seeds = n.into();
+        x.variant_seeds = n.into();
     }
     x.scenario = file.parent().unwrap_or(Path::new(".")).join(&x.scenario);
     let mut base = Scenario::load(&x.scenario).map_err(|e| e.to_string())?;
@@ -430,9 +569,14 @@ pub fn run(file: &Path, out: Option<&Path>) -> Result<i32, String> {
         "# Hunting, thesis 003 chapter 3 (`orchestrator experiment {}`)\n\n",
         file.display()
     );
-    example_3a(&base, &out, &mut md)?;
+    let run = Runner {
+        executor,
+        base_id: crate::runid::new_run_id(),
+        made: std::cell::Cell::new(0),
+    };
+    example_3a(&base, &run, &out, &mut md)?;
     sweeps(&x, &base.hunt.params, &mut md);
-    variants(&x, &base, &name, &mut md)?;
+    variants(&x, &base, &name, &run, &mut md)?;
     std::fs::write(out.join("results.md"), &md).map_err(|e| e.to_string())?;
     println!("{md}");
     println!("results: {}", out.join("results.md").display());

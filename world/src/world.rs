@@ -16,7 +16,7 @@ use swarm::geometry::{polygon_hit, v2, Vec2};
 use swarm::mailbox::Air;
 use swarm::radio::RadioCounters;
 use swarm::recording::{Event, RejectReason, TickExtra, TickRecord};
-use swarm::scenario::Scenario;
+use swarm::scenario::{Kinematics, Scenario};
 
 /// Why a world could not be built from a (validated) scenario.
 #[derive(Debug, thiserror::Error)]
@@ -91,6 +91,9 @@ pub struct World {
     next_kill: usize,
     /// The paper's mission (entities, completion, metrics, its picture layer).
     pub mission: Box<dyn Mission>,
+    /// Each agent's own [speed, turn rate] limits per tick, when the mission gives them
+    /// (`Mission::robot_limits`); None: `robot.v_max` and the kinematics' `w_max` for all.
+    limits: Option<Vec<[f64; 2]>>,
     /// Walls and obstacles as disc bodies meet them (robot.radius > 0).
     statics: Statics,
     /// The run's worst body figures (robot.radius > 0).
@@ -176,6 +179,7 @@ impl World {
             grid_cell(sc),
         );
         let traj_every = (sc.run.max_ticks / 2000).max(1);
+        let limits = mission.robot_limits(sc);
         Ok(World {
             sc: sc.clone(),
             n,
@@ -218,6 +222,7 @@ impl World {
             kills: swarm::chaos::schedule(sc),
             next_kill: 0,
             mission,
+            limits,
             statics: Statics::new(sc),
             body: (sc.robot.radius > 0.0).then(|| BodySummary::new(sc.robot.radius)),
             realtime: sc.runtime.is_realtime(),
@@ -420,11 +425,33 @@ impl World {
         if !a.cmd[0].is_finite() || !a.cmd[1].is_finite() {
             return Err(RejectReason::NotFinite);
         }
-        let k = &self.sc.robot.kinematics;
-        match kinematics::within_limits(k, a.cmd, self.sc.robot.v_max, SPEED_TOLERANCE) {
+        let (k, v_max) = self.limits_of(i);
+        match kinematics::within_limits(&k, a.cmd, v_max, SPEED_TOLERANCE) {
             Limit::Within => Ok(()),
             Limit::TooFast => Err(RejectReason::TooFast),
             Limit::TurnTooFast => Err(RejectReason::TurnTooFast),
+        }
+    }
+
+    /// Robot i's kinematics with its own turn limit, and its own speed limit (per tick): the
+    /// mission's (`Mission::robot_limits`), else the scenario's `robot` section.
+    fn limits_of(&self, i: usize) -> (Kinematics, f64) {
+        let k = self.sc.robot.kinematics;
+        match self.limits.as_ref().and_then(|l| l.get(i)) {
+            // Never above the scenario's own limits.
+            Some(&[v, w]) => {
+                let v = v.min(self.sc.robot.v_max);
+                match k {
+                    Kinematics::Unicycle { w_max } => (
+                        Kinematics::Unicycle {
+                            w_max: w.min(w_max),
+                        },
+                        v,
+                    ),
+                    Kinematics::Holonomic => (k, v),
+                }
+            }
+            None => (k, self.sc.robot.v_max),
         }
     }
 

@@ -124,6 +124,9 @@ pub enum Finish {
     RewardsSettled,
     /// The round limit was reached.
     RoundLimit,
+    /// The parallel auction's single round is over (tasks without enough bidders stay
+    /// unassigned).
+    OneRound,
 }
 
 /// A bid the auctioneer cannot accept.

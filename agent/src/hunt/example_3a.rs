@@ -280,3 +280,66 @@ fn example_3a_replanning_after_t5() {
     }
     assert_eq!(seen.len(), 15, "nobody lost by the split");
 }
+
+/// What g_i5 must be for the thesis's split (spec 7.1, 10.1; docs/hunting.md section 13).
+/// Table 3.2 prints g_i5 = 0.1 for every robot. By (3.8) and (3.4) a robot's benefit on T5 is
+/// then z_5 g_i5 < 0.1 x 1600 = 160, yet the thesis reports U = 164.39 for R10 on T5: the
+/// printed g cannot give it. As printed, nobody in Phi4 gains by T5 (their g on T4 is 0.2, on
+/// a reward of about 1100), so (3.21) keeps Phi4 whole. With g_i5 = 0.2 for Phi4's members
+/// (their coefficient on T4, the least that makes T5 worth as much to them as T4), Phi4
+/// prefers T5 and the re-planning auction splits 3 of them off.
+#[test]
+fn example_3a_t5_split_needs_a_larger_g_on_t5_than_printed() {
+    let h = example_3a();
+    let p = HuntParams::default();
+    let phi4 = [3, 5, 10, 11, 14];
+    let run = |g5: Option<f64>| {
+        let mut robots: BTreeMap<u32, Robot> =
+            h.robots().into_iter().map(|r| (r.id, r)).collect();
+        if let Some(g) = g5 {
+            for i in phi4 {
+                robots.get_mut(&i).unwrap().matching[4] = g;
+            }
+        }
+        let tasks: BTreeMap<TaskId, Task> = h.tasks().into_iter().map(|t| (t.id, t)).collect();
+        let w = World {
+            robots: &robots,
+            tasks: &tasks,
+        };
+        let initial = run_auction(
+            &h.tasks_at(0.0),
+            &robots.values().cloned().collect::<Vec<_>>(),
+            &p,
+        );
+        let hunts: Vec<Hunt> = initial
+            .coalitions
+            .values()
+            .map(|c| Hunt {
+                task: c.award.task,
+                members: c.award.members.clone(),
+                reward: c.award.reward,
+                captured: false,
+                since: 0.0,
+            })
+            .collect();
+        let t4 = hunts.iter().find(|x| x.task == 4).unwrap().clone();
+        (new_target(&w, &hunts, 5, 5.0, &p), t4)
+    };
+    // As printed: every benefit on T5 is below 160, every Phi4 member's on T4 above it.
+    let (printed, t4) = run(None);
+    assert_eq!(t4.members, phi4.to_vec(), "Fig. 3.3(b)'s Phi4");
+    assert!(0.2 * t4.reward > 160.0, "z_4 = {}", t4.reward);
+    assert!(printed.interested.is_empty(), "{:?}", printed.interested);
+    // With g_i5 = 0.2 for Phi4: it is interested and 3 of its members split off for T5.
+    let (raised, _) = run(Some(0.2));
+    assert_eq!(raised.interested, vec![4]);
+    let a = raised.award.expect("T5 awarded");
+    assert_eq!(a.members.len(), 3);
+    assert!(a.members.iter().all(|i| phi4.contains(i)), "{:?}", a.members);
+    println!(
+        "g_i5 = 0.2 for Phi4: Phi5 = {{{}}} at z5 = {:.1} after {} rounds (thesis: {{R10, R11, R14}}, 1450)",
+        ids(&a.members),
+        a.reward,
+        raised.rounds.len()
+    );
+}

@@ -45,6 +45,10 @@ pub const STATE_AUCTIONEER: u32 = 255;
 /// capture tolerance of its point.
 pub const REPORT_LEADER: f64 = 1.0;
 pub const REPORT_AT_POINT: f64 = 2.0;
+// The auctioneer (the station) reports, one row a tick in turn: [task, z_j paid, auction
+// rounds so far, 0] for each task it has awarded, then the totals row [0, C, rounds, Y]: the
+// auctioneer's cost C (3.13) and the winners' utility Y (3.14) summed over every auction it
+// has finished.
 
 // ---------------------------------------------------------------------------------------
 // The section.
@@ -276,6 +280,18 @@ fn positive(
     }
 }
 
+/// The live auction (`HuntParams::auction`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum AuctionKind {
+    /// The thesis's improved auction (sec. 3.1-3.2): single best-task bids, reward feedback.
+    #[default]
+    Improved,
+    /// The parallel auction baseline (Otte, Kuhlman & Sofge 2020; spec 11): one round, fixed
+    /// reward, bids on every task, each task awarded independently.
+    Parallel,
+}
+
 /// Tunables of the hunt: auction (sec. 3.1-3.2), hunting points (sec. 3.2.4), APF (sec. 2.1.4),
 /// capture and the evader's escape (eq. 2.17).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -332,6 +348,12 @@ pub struct HuntParams {
     /// Parallel auction: may a robot win several tasks in the one round? Otte et al. 2020: yes.
     /// [thesis baseline] true.
     pub parallel_multiple_wins: bool,
+    /// Which auction the live auctioneer runs (the `hunt` behaviour; sec. 3.2 vs spec 11):
+    /// "improved" (the thesis's, round by round with reward feedback 3.15) or "parallel" (the
+    /// baseline: one round at `parallel_reward_fraction` z_jmax, every robot bids on every
+    /// task). [thesis] "improved". Re-planning (swaps, assistance, replacement) is the same for
+    /// both; a new target is auctioned by the same kind.
+    pub auction: AuctionKind,
     /// Hunting points: which of several robots claiming one point gets it (sec. 3.2.4 step 4).
     /// [thesis] true = the farthest, as written ("分配给距离最远的机器人").
     pub contested_point_to_farthest: bool,
@@ -414,6 +436,7 @@ impl Default for HuntParams {
             enforce_coalition_resources: true,
             parallel_reward_fraction: 0.8,
             parallel_multiple_wins: true,
+            auction: AuctionKind::Improved,
             contested_point_to_farthest: true,
             k_a: 1.0,
             k_r: 0.002,

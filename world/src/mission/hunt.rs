@@ -169,6 +169,10 @@ pub struct HuntMetrics {
     pub all_captured_minutes: Option<f64>,
     /// Rounds the auctioneer reported (all its auctions together).
     pub auction_rounds: u32,
+    /// The auctioneer's cost C (3.13) and the winners' total utility Y (3.14) over every
+    /// auction it finished, as it last reported them (None: never reported).
+    pub auction_cost: Option<f64>,
+    pub auction_utility: Option<f64>,
     /// Every change of a coalition (robots reporting a task), in tick order.
     pub coalition_changes: Vec<CoalitionChange>,
 }
@@ -205,6 +209,8 @@ pub struct HuntMission {
     /// The auctioneer's last reported reward per task (index as `evaders`).
     rewards: Vec<Option<f64>>,
     rounds: u32,
+    /// The auctioneer's last totals row: (C, Y) over its finished auctions.
+    auction_totals: Option<(f64, f64)>,
     /// Live robots' last positions (for the picture's encirclements).
     last_poses: Vec<[f64; 3]>,
     dt: f64,
@@ -248,6 +254,7 @@ impl HuntMission {
             changes: Vec::new(),
             rewards: vec![None; h.evaders.len()],
             rounds: 0,
+            auction_totals: None,
             last_poses: Vec::new(),
             dt: p.minutes_per_tick,
             p,
@@ -359,6 +366,8 @@ impl HuntMission {
                     .map_or(0.0, |t| (t + 1) as f64 * self.dt)
             }),
             auction_rounds: self.rounds,
+            auction_cost: self.auction_totals.map(|t| t.0),
+            auction_utility: self.auction_totals.map(|t| t.1),
             coalition_changes: self.changes.clone(),
             per_evader,
         }
@@ -448,6 +457,19 @@ impl Mission for HuntMission {
         }
         Some(v)
     }
+    /// Each robot's own speed and turn rate (km/min, rad/min in `[[hunt.robots]]`) times
+    /// `minutes_per_tick`; the station, which never moves, gets none (0, 0).
+    fn robot_limits(&self, sc: &Scenario) -> Option<Vec<[f64; 2]>> {
+        let dt = sc.hunt.params.minutes_per_tick;
+        let mut v: Vec<[f64; 2]> = sc
+            .hunt
+            .robots
+            .iter()
+            .map(|r| [r.speed * dt, r.turn_rate * dt])
+            .collect();
+        v.resize(sc.run.robots as usize, [0.0, 0.0]);
+        Some(v)
+    }
     fn sense(&mut self, robot: u32, pos: [f64; 2], out: &mut Sense) {
         if robot as usize >= self.bodies {
             out.n_entities = 0; // the auctioneer senses nothing: it knows what it hears
@@ -477,6 +499,9 @@ impl Mission for HuntMission {
                 if report[1].is_finite() {
                     self.rewards[j] = Some(report[1]);
                 }
+            } else if report[0] == 0.0 && report[1].is_finite() && report[3].is_finite() {
+                // The totals row: [0, C, rounds, Y].
+                self.auction_totals = Some((report[1], report[3]));
             }
             if report[2].is_finite() && report[2] >= 0.0 {
                 self.rounds = self.rounds.max(report[2] as u32);
@@ -688,6 +713,43 @@ mod tests {
         let mut bad = sc;
         bad.robot.v_max = 0.01;
         assert_eq!(check(&bad).unwrap_err().key, "robot.v_max");
+    }
+
+    #[test]
+    fn the_world_holds_each_robot_to_its_own_speed_and_turn_rate() {
+        use swarm::frames::Action;
+        use swarm::mailbox::Air;
+        let mut sc = example();
+        // R2 turns at 2 rad/min = 0.1 rad a tick, below the scenario's w_max of 0.3.
+        sc.hunt.robots[1].turn_rate = 2.0;
+        let mut w = crate::World::new(&sc).unwrap();
+        let slot = |name: &str| crate::world::REJECT_NAMES.iter().position(|n| *n == name);
+        let (too_fast, turn) = (slot("too_fast").unwrap(), slot("turn_too_fast").unwrap());
+        // R1 (agent 0) runs at 0.8 km/min = 0.04 km a tick; robot.v_max is 0.045 (R2's 0.9).
+        let step = |w: &mut crate::World, robot: u32, cmd: [f64; 2]| {
+            let mut acts: Vec<Option<Action>> = (0..sc.run.robots)
+                .map(|i| Some(Action::idle(w.tick, i)))
+                .collect();
+            acts[robot as usize].as_mut().unwrap().cmd = cmd;
+            let before = w.poses[robot as usize];
+            w.apply(&acts, &Air::default());
+            let after = w.poses[robot as usize];
+            ((after[0] - before[0]).hypot(after[1] - before[1]), after[2] - before[2])
+        };
+        let (d, _) = step(&mut w, 0, [0.04, 0.0]);
+        assert!((d - 0.04).abs() < 1e-12, "at its own limit it moves: {d}");
+        assert_eq!(w.rejected[too_fast], 0);
+        // 0.042 is under robot.v_max but over R1's own 0.04: rejected, it stands still.
+        let (d, _) = step(&mut w, 0, [0.042, 0.0]);
+        assert_eq!((d, w.rejected[too_fast]), (0.0, 1));
+        // R2 may run at 0.045 a tick (0.9 km/min), and turn 0.1 rad a tick but not 0.15.
+        let (d, dphi) = step(&mut w, 1, [0.045, 0.1]);
+        assert!((d - 0.045).abs() < 1e-12 && (dphi - 0.1).abs() < 1e-12, "{d} {dphi}");
+        let (d, dphi) = step(&mut w, 1, [0.01, 0.15]);
+        assert_eq!((d, dphi, w.rejected[turn]), (0.0, 0.0, 1));
+        // R1 still turns at the scenario's 0.3 (its own 6 rad/min).
+        let (_, dphi) = step(&mut w, 0, [0.0, 0.3]);
+        assert!((dphi - 0.3).abs() < 1e-12 && w.rejected[turn] == 1, "{dphi}");
     }
 
     /// Robots at the 3 hunting points of evader 1 (r_s around it), reporting them.

@@ -63,6 +63,14 @@ pub trait Mission: Send + Sync {
     fn start_poses(&self, _sc: &Scenario) -> Option<Vec<[f64; 3]>> {
         None
     }
+    /// Each agent's own limits, [speed, turn rate] in the world's units (per tick), for the
+    /// `run.robots` agents, when the mission's scenario gives robots their own (the hunt's
+    /// per-robot `speed` and `turn_rate`); the world rejects a command over the robot's own
+    /// limits as over `robot.v_max`. None: every robot has `robot.v_max` and the kinematics'
+    /// `w_max`.
+    fn robot_limits(&self, _sc: &Scenario) -> Option<Vec<[f64; 2]>> {
+        None
+    }
     /// Writes what robot `robot` at `pos` senses of the mission's entities into
     /// `out.entities` (and `n_entities`, which the core sets to 0 before). Called for the live
     /// robots in id order each tick, so a mission may draw sensor noise from its own stream.

@@ -17,10 +17,17 @@
 //!   timeout. Every change is broadcast as an `Assign` with a new epoch.
 //! - Each hunt's `Assign` is resent every `award_resend_ticks` (one hunt a tick, in turn), so
 //!   a robot that missed its award or a change learns it.
-//! - Its report to the world: one awarded task a tick, in turn: [task, z_j, rounds, 0].
+//! - Its report to the world: one awarded task a tick, in turn: [task, z_j, rounds, 0], then
+//!   the totals row [0, C, rounds, Y] (3.13, 3.14 over every auction finished so far).
+//! - `hunt.params.auction` = "parallel" runs the baseline instead (spec 11): one round at a
+//!   fixed reward, every robot bids on every task; a robot that wins several keeps the one it
+//!   bid most on (`one_task_each`), and assistance fills the coalitions it leaves short.
 
 use super::messages::{HuntMsg, Status};
-use crate::hunt::auction::{AuctionError, Auctioneer, Bid, RoundRecord};
+use crate::hunt::auction::{
+    Announcement, AuctionError, Auctioneer, Award, Bid, Closed, Finish, RoundRecord,
+};
+use crate::hunt::parallel_auction::{one_task_each, ParallelAuctioneer};
 use crate::hunt::model::{Robot, RobotId, Task, TaskId};
 use crate::hunt::params::HuntParams;
 use crate::hunt::replan::{self, Hunt};
@@ -29,13 +36,94 @@ use serde::Serialize;
 use std::collections::BTreeMap;
 use swarm::geometry::Vec2;
 use swarm::scenario::Scenario;
-use swarm::sections::hunt::{AuctioneerSpec, STATE_AUCTIONEER};
+use swarm::sections::hunt::{AuctionKind, AuctioneerSpec, STATE_AUCTIONEER};
 use swarm::{Command, Outbox, Received, Sense};
+
+/// The auction kernel the station runs (`hunt.params.auction`): the same calls on either.
+enum Kernel {
+    Improved(Auctioneer),
+    Parallel(ParallelAuctioneer),
+}
+
+impl Kernel {
+    fn new(tasks: &[Task], n_r: usize, p: &HuntParams) -> Kernel {
+        match p.auction {
+            AuctionKind::Improved => Kernel::Improved(Auctioneer::new(tasks, n_r, p)),
+            AuctionKind::Parallel => Kernel::Parallel(ParallelAuctioneer::new(tasks, p)),
+        }
+    }
+    fn announce(&mut self) -> Option<Announcement> {
+        match self {
+            Kernel::Improved(k) => k.announce(),
+            Kernel::Parallel(k) => k.announce(),
+        }
+    }
+    fn receive(&mut self, bid: Bid) -> Result<(), AuctionError> {
+        match self {
+            Kernel::Improved(k) => k.receive(bid),
+            Kernel::Parallel(k) => k.receive(bid),
+        }
+    }
+    /// The awards of the round closed. A parallel auction's robot that won several tasks
+    /// keeps the one it bid most on (`one_task_each`): it can hunt one target at a time.
+    fn close_round(&mut self) -> Vec<Award> {
+        match self {
+            Kernel::Improved(k) => k.close_round(),
+            Kernel::Parallel(k) => {
+                let awards = k.close_round();
+                let c = k.coalitions();
+                let utility = |r: RobotId, j: TaskId| {
+                    let c = &c[&j];
+                    let i = c.award.members.iter().position(|m| *m == r);
+                    i.map_or(f64::NEG_INFINITY, |i| c.utilities[i])
+                };
+                one_task_each(&awards, &utility)
+            }
+        }
+    }
+    fn finish(&self) -> Option<Finish> {
+        match self {
+            Kernel::Improved(k) => k.finish(),
+            Kernel::Parallel(k) => k.finish(),
+        }
+    }
+    fn closed(&self) -> Option<Closed> {
+        match self {
+            Kernel::Improved(k) => k.closed(),
+            Kernel::Parallel(k) => k.closed(),
+        }
+    }
+    fn award_of(&self, robot: RobotId) -> Option<&Award> {
+        match self {
+            Kernel::Improved(k) => k.award_of(robot),
+            Kernel::Parallel(k) => k.award_of(robot),
+        }
+    }
+    fn round(&self) -> u32 {
+        match self {
+            Kernel::Improved(k) => k.round(),
+            Kernel::Parallel(k) => k.round(),
+        }
+    }
+    fn history(&self) -> &[RoundRecord] {
+        match self {
+            Kernel::Improved(k) => k.history(),
+            Kernel::Parallel(k) => k.history(),
+        }
+    }
+    /// C (3.13) and Y (3.14) of the awards as the kernel made them.
+    fn totals(&self) -> (f64, f64) {
+        match self {
+            Kernel::Improved(k) => (k.total_cost(), k.total_utility()),
+            Kernel::Parallel(k) => (k.total_cost(), k.total_utility()),
+        }
+    }
+}
 
 /// One auction under way.
 struct Running {
     id: u32,
-    kernel: Auctioneer,
+    kernel: Kernel,
     replan_of: Vec<TaskId>,
     /// The tick the open round was announced (None: announce next).
     opened: Option<u64>,
@@ -68,6 +156,9 @@ pub struct Station {
     next_auction: u32,
     epoch: u32,
     rounds: u32,
+    /// C (3.13) and Y (3.14) summed over the awards of every auction finished so far, as the
+    /// kernel made them (a parallel robot's several wins all count, as in the sweeps).
+    totals: (f64, f64),
     resend_turn: usize,
     report_turn: usize,
     pub log: Log,
@@ -90,6 +181,7 @@ impl Station {
             next_auction: 1,
             epoch: 0,
             rounds: 0,
+            totals: (0.0, 0.0),
             resend_turn: 0,
             report_turn: 0,
             log: Log::default(),
@@ -184,7 +276,7 @@ impl Station {
         ));
         self.running = Some(Running {
             id,
-            kernel: Auctioneer::new(tasks, n_r, &self.p),
+            kernel: Kernel::new(tasks, n_r, &self.p),
             replan_of,
             opened: None,
         });
@@ -258,10 +350,13 @@ impl Station {
         self.log
             .auctions
             .push((run.id, run.kernel.history().to_vec()));
+        let (c, y) = run.kernel.totals();
+        self.totals.0 += c;
+        self.totals.1 += y;
         self.log.events.push((
             tick,
             format!(
-                "auction {} ends after {} rounds ({:?})",
+                "auction {} ends after {} rounds ({:?}); C = {c:.1}, Y = {y:.1}",
                 run.id,
                 run.kernel.round(),
                 run.kernel.finish()
@@ -500,12 +595,12 @@ impl Station {
                 }
             }
         }
-        let report = if self.hunts.is_empty() {
-            [0.0, f64::NAN, self.rounds as f64, 0.0]
-        } else {
-            let h = &self.hunts[self.report_turn % self.hunts.len()];
-            self.report_turn += 1;
-            [h.task as f64, h.reward, self.rounds as f64, 0.0]
+        // One awarded task a tick in turn, then the totals row [0, C, rounds, Y].
+        let turn = self.report_turn % (self.hunts.len() + 1);
+        self.report_turn += 1;
+        let report = match self.hunts.get(turn) {
+            Some(h) => [h.task as f64, h.reward, self.rounds as f64, 0.0],
+            None => [0.0, self.totals.0, self.rounds as f64, self.totals.1],
         };
         Command {
             cmd: [0.0, 0.0],

@@ -18,7 +18,8 @@
 
 use super::messages::{HuntMsg, Status};
 use crate::hunt::apf::{to_command, total_force};
-use crate::hunt::auction::{Announcement, Bidder};
+use crate::hunt::auction::{Announcement, Bidder, BidderState};
+use crate::hunt::parallel_auction::parallel_bids;
 use crate::hunt::cost::bid_value;
 use crate::hunt::hunting_points::{assign, hunting_points, leader_angle};
 use crate::hunt::model::{Robot, RobotId, Task, TaskId};
@@ -29,7 +30,7 @@ use swarm::frames::ENTITY_HAS_POS;
 use swarm::geometry::Vec2;
 use swarm::scenario::Scenario;
 use swarm::sections::hunt::{
-    AuctioneerSpec, ENTITY_EVADER, EVADER_CAPTURED, REPORT_AT_POINT, REPORT_LEADER, STATE_FREE,
+    AuctionKind, AuctioneerSpec, ENTITY_EVADER, EVADER_CAPTURED, REPORT_AT_POINT, REPORT_LEADER, STATE_FREE,
 };
 use swarm::{Command, Outbox, Received, Sense};
 
@@ -227,23 +228,31 @@ impl HuntRobot {
             return;
         }
         bidder.set_position(self.robot.position);
-        let Some(bid) = bidder.on_announcement(&a) else {
-            return;
+        let bids = match self.p.auction {
+            // Its single best task (sec. 3.2.3).
+            AuctionKind::Improved => bidder.on_announcement(&a).into_iter().collect(),
+            // Every task it can take (spec 11), while it is still in the auction.
+            AuctionKind::Parallel if *bidder.state() == BidderState::Bidding => {
+                parallel_bids(bidder.robot(), &a, &self.p)
+            }
+            AuctionKind::Parallel => Vec::new(),
         };
-        // A robot hunting an uncaptured target bids only in a re-planning auction that names
-        // its coalition, and only if it gains by moving (sec. 3.2.5 step 3).
-        if let Some(cur) = &self.assignment {
-            let done = self.seen.get(&cur.task).is_some_and(|(_, c)| *c);
-            if !done {
-                let gains = replan_of.contains(&cur.task)
-                    && a.tasks.iter().all(|t| t.id != cur.task)
-                    && self.utility_now(cur).is_none_or(|y| bid.utility > y);
-                if !gains {
-                    return;
+        for bid in bids {
+            // A robot hunting an uncaptured target bids only in a re-planning auction that
+            // names its coalition, and only if it gains by moving (sec. 3.2.5 step 3).
+            if let Some(cur) = &self.assignment {
+                let done = self.seen.get(&cur.task).is_some_and(|(_, c)| *c);
+                if !done {
+                    let gains = replan_of.contains(&cur.task)
+                        && a.tasks.iter().all(|t| t.id != cur.task)
+                        && self.utility_now(cur).is_none_or(|y| bid.utility > y);
+                    if !gains {
+                        continue;
+                    }
                 }
             }
+            out.send(self.station, HuntMsg::Bid { auction, bid });
         }
-        out.send(self.station, HuntMsg::Bid { auction, bid });
     }
 
     /// y_ij (3.16) on its current task at its reward, from where it and the target are now.
