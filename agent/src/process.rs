@@ -121,16 +121,15 @@ fn run_loop<B: Behaviour>(args: &AgentArgs, mut rt: AgentRuntime<B>) -> Result<i
         };
         // The world published Sense_k and the air of tick k before releasing tick k: read
         // them in place.
-        let mut latest = None;
-        while let Some(s) = sense_sub
+        // One receive: the subscriber's buffer holds 1 (the newest frame replaces an unread
+        // one). Draining in a loop could hold two samples at once when the world publishes
+        // the next tick's in between (real-time mode), beyond the air's borrow limit.
+        let latest = sense_sub
             .receive()
             .map_err(|source| TransportError::Receive {
                 service: ServiceId::Sense(robot),
                 source,
-            })?
-        {
-            latest = Some(s);
-        }
+            })?;
         if let Some(s) = latest.as_ref().filter(|s| s.robot == robot && s.tick > k) {
             // The world is past tick k already: keep this Sense for its own tick.
             let mut copy = ahead_sense
@@ -159,16 +158,13 @@ fn run_loop<B: Behaviour>(args: &AgentArgs, mut rt: AgentRuntime<B>) -> Result<i
         // before the release, so it is there unless we attached after).
         inbox.clear();
         let mut malformed = 0;
-        let mut air = None;
-        while let Some(a) = air_sub
+        // One receive, as for the Sense frame (buffer 1; borrowed 1 + radio.zero_copy_held).
+        let air = air_sub
             .receive()
             .map_err(|source| TransportError::Receive {
                 service: ServiceId::Air,
                 source,
-            })?
-        {
-            air = Some(a);
-        }
+            })?;
         match air {
             Some(a) if a.user_header().tick == k => {
                 ahead_air = None;

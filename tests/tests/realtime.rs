@@ -137,15 +137,26 @@ fn a_stopped_agent_misses_ticks_alone_while_the_world_keeps_its_clock() {
         );
         streaks.push(longest_streak(&missed));
     }
-    // Robot 2 missed every tick while it was stopped, in a row; the others, running, missed
-    // no long run of ticks (a loaded machine may make them miss one now and then).
+    // Robot 2 missed every tick while it was stopped, in a row. The others, running, may
+    // miss too when the whole machine stalls (2 cores shared with other work: all robots
+    // then miss the same few ticks), but no run of ticks like robot 2's, and robot 2 alone
+    // missed most of its streak.
     let (first, len) = streaks[2];
     assert!(len >= STOPPED_TICKS, "robot 2's streak {streaks:?}");
     for (r, s) in streaks.iter().enumerate() {
         if r != 2 {
-            assert!(s.1 < STOPPED_TICKS / 5, "robot {r}: {streaks:?} {per:?}");
+            assert!(s.1 < len / 2, "robot {r}: {streaks:?} {per:?}");
         }
     }
+    let others: std::collections::BTreeSet<u64> = [0, 1, 3]
+        .iter()
+        .flat_map(|&r| missed_ticks(&ticks, r))
+        .collect();
+    let alone = (first..first + len).filter(|t| !others.contains(t)).count() as u64;
+    assert!(
+        alone >= STOPPED_TICKS / 2,
+        "robot 2 alone at {alone} of {len}"
+    );
     // While it missed, robot 2 kept its last command: the same step every tick (roam is
     // holonomic: a step is the command), unless a wall or obstacle blocked it.
     let step = |t: u64| {
@@ -162,8 +173,13 @@ fn a_stopped_agent_misses_ticks_alone_while_the_world_keeps_its_clock() {
         .filter(|&t| !blocked(t))
         .collect::<Vec<_>>();
     assert!(kept.len() as u64 > len / 2, "mostly unblocked");
+    // (Steps are differences of positions: equal up to rounding.)
     for t in kept {
-        assert_eq!(step(t), before, "tick {t}: the last command, kept");
+        let d = step(t);
+        assert!(
+            (d[0] - before[0]).abs() < 1e-9 && (d[1] - before[1]).abs() < 1e-9,
+            "tick {t}: step {d:?}, the last command's {before:?}"
+        );
     }
     assert!(before != [0.0, 0.0], "roam robots move");
     // The radio's books balance at every tick, misses included.

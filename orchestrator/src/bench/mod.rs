@@ -20,6 +20,7 @@
 mod error;
 mod latency;
 mod memory;
+mod realtime;
 mod restart;
 mod search;
 mod throughput;
@@ -53,9 +54,23 @@ enum BenchWhat {
         /// Also write the table as JSON.
         #[arg(long)]
         json: Option<PathBuf>,
-        /// Sizes 10,50 and 300 ticks (overrides --robots and --ticks).
+        /// Sizes 10,50 and 300 ticks (overrides --robots and --ticks), 2 s of clock per
+        /// real-time cell.
         #[arg(long)]
         quick: bool,
+        /// The real-time column's clock rates, ticks per second: the deadline-miss rate of
+        /// each size at each rate (`runtime.realtime_hz`).
+        #[arg(long, value_delimiter = ',', default_value = "10,50,100")]
+        realtime_hz: Vec<f64>,
+        /// Seconds of clock per real-time cell (ticks = rate x seconds, at least 40).
+        #[arg(long, default_value_t = 4.0)]
+        realtime_seconds: f64,
+        /// Only the real-time column (no lock-step table).
+        #[arg(long, conflicts_with = "no_realtime")]
+        realtime_only: bool,
+        /// Only the lock-step table (no real-time column).
+        #[arg(long)]
+        no_realtime: bool,
     },
     /// One-hop latency p50 / p99: runtime radio and Sense vs raw iceoryx2 vs UDS + bincode.
     Latency {
@@ -233,17 +248,45 @@ pub fn bench(a: BenchArgs) -> i32 {
             ticks,
             json,
             quick,
+            realtime_hz,
+            realtime_seconds,
+            realtime_only,
+            no_realtime,
         } => {
             let (robots, ticks) = if quick {
                 (vec![10, 50], 300)
             } else {
                 (robots, ticks)
             };
+            let rt = realtime::RealtimeBenchParams {
+                rates: realtime_hz,
+                seconds: if quick { 2.0 } else { realtime_seconds },
+            };
+            print_machine();
             finish(
-                tick::bench_tick(&robots, ticks).and_then(|rows| {
-                    tick::print_table(&rows);
-                    write_json(&json, &rows)
-                }),
+                (|| -> BenchResult<()> {
+                    let rows = if realtime_only {
+                        Vec::new()
+                    } else {
+                        let rows = tick::bench_tick(&robots, ticks)?;
+                        tick::print_table(&rows);
+                        rows
+                    };
+                    let cells = if no_realtime || rt.rates.is_empty() {
+                        Vec::new()
+                    } else {
+                        if !realtime_only {
+                            println!();
+                        }
+                        let cells = realtime::run(&robots, &rt)?;
+                        realtime::print(&cells, &rt);
+                        cells
+                    };
+                    write_json(
+                        &json,
+                        &serde_json::json!({ "lockstep": rows, "realtime": cells }),
+                    )
+                })(),
                 "tick",
             )
         }

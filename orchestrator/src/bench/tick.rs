@@ -184,6 +184,21 @@ fn runtime(n: u32, ticks: u64, barrier: BarrierKind) -> BenchResult<Stats> {
 
 /// Runs `sc` with the processes executor: the ticks it ran and its steady tick statistics.
 fn run_stats(sc: &Scenario) -> BenchResult<(u64, Stats)> {
+    let (s, dir) = run_processes(sc)?;
+    let _ = std::fs::remove_dir_all(&dir);
+    Ok((
+        s["ticks"].as_u64().unwrap_or(0),
+        Stats {
+            per_s: s["steady_ticks_per_second"].as_f64().unwrap_or(0.0),
+            p50_us: s["tick_time"]["p50_us"].as_f64().unwrap_or(0.0),
+            p99_us: s["tick_time"]["p99_us"].as_f64().unwrap_or(0.0),
+        },
+    ))
+}
+
+/// Runs `sc` with the processes executor into a temporary run folder: its summary.json, and
+/// the folder (the caller removes it).
+pub(super) fn run_processes(sc: &Scenario) -> BenchResult<(serde_json::Value, std::path::PathBuf)> {
     sc.validate(&|_| "bench".into())?;
     let run_id = crate::runid::new_run_id();
     let dir = std::env::temp_dir().join(format!("swarm-bench-{run_id}"));
@@ -205,15 +220,7 @@ fn run_stats(sc: &Scenario) -> BenchResult<(u64, Stats)> {
     })?;
     let s: serde_json::Value =
         serde_json::from_str(&text).map_err(|source| BenchError::Json { path, source })?;
-    let _ = std::fs::remove_dir_all(&dir);
-    Ok((
-        s["ticks"].as_u64().unwrap_or(0),
-        Stats {
-            per_s: s["steady_ticks_per_second"].as_f64().unwrap_or(0.0),
-            p50_us: s["tick_time"]["p50_us"].as_f64().unwrap_or(0.0),
-            p99_us: s["tick_time"]["p99_us"].as_f64().unwrap_or(0.0),
-        },
-    ))
+    Ok((s, dir))
 }
 
 fn spawn_children(kind: &str, prefix: &str, n: u32) -> BenchResult<Vec<Child>> {
