@@ -656,13 +656,14 @@ fn blend_of(shot: &Shot, at: (f64, f64), c: [u8; 3], bg: [f64; 3]) -> bool {
     })
 }
 
+/// A page point where a mark must show its colour, the colour, and whether it is filled there
+/// (else a line through it).
+type Sample = ((f64, f64), [u8; 3], bool);
+
 /// The points where the picture of `mark` must show its colour, with that colour: a disc's
 /// centre (filled), four points of a ring or a circle; none for triangles and paths (drawn
 /// under the robots).
-fn mark_samples(
-    meta: &serde_json::Value,
-    mark: &serde_json::Value,
-) -> Vec<((f64, f64), [u8; 3], bool)> {
+fn mark_samples(meta: &serde_json::Value, mark: &serde_json::Value) -> Vec<Sample> {
     let (kind, v) = mark.as_object().unwrap().iter().next().unwrap();
     let at = || {
         let a = &v["at"];
@@ -714,8 +715,7 @@ fn check_marks(
             (project(meta, c), d[1].as_f64().unwrap() * scale)
         })
         .collect();
-    let all: Vec<Vec<((f64, f64), [u8; 3], bool)>> =
-        marks.iter().map(|m| mark_samples(meta, m)).collect();
+    let all: Vec<Vec<Sample>> = marks.iter().map(|m| mark_samples(meta, m)).collect();
     let (mut checked, mut ok) = (0, 0);
     for (mi, samples) in all.iter().enumerate() {
         for &(p, c, filled) in samples {
