@@ -48,11 +48,11 @@ fn chromium() -> PathBuf {
     })
 }
 
-/// A screenshot of `url` (window `w` x `h`), decoded: (width, RGB rows).
-fn screenshot(url: &str, w: u32, h: u32, tag: &str) -> Shot {
+/// Runs headless Chromium on `url` with `extra` arguments (window `w` x `h`, a profile of its
+/// own); its stdout.
+fn run_chromium(url: &str, w: u32, h: u32, tag: &str, extra: &[String]) -> (PathBuf, Vec<u8>) {
     let dir = tmp_dir(&format!("chromium-{tag}"));
     std::fs::create_dir_all(&dir).unwrap();
-    let file = dir.join("shot.png");
     let mut c = Command::new(chromium())
         .args([
             "--headless",
@@ -67,13 +67,19 @@ fn screenshot(url: &str, w: u32, h: u32, tag: &str) -> Shot {
             "--force-device-scale-factor=1",
         ])
         .arg(format!("--user-data-dir={}", dir.join("profile").display()))
-        .arg(format!("--screenshot={}", file.display()))
+        .args(extra)
         .arg(format!("--window-size={w},{h}"))
         .arg(url)
-        .stdout(Stdio::null())
+        .stdout(Stdio::piped())
         .stderr(Stdio::null())
         .spawn()
         .expect("start chromium");
+    let mut out = c.stdout.take().unwrap();
+    let reader = std::thread::spawn(move || {
+        let mut v = Vec::new();
+        let _ = out.read_to_end(&mut v);
+        v
+    });
     let t = Instant::now();
     while c.try_wait().unwrap().is_none() {
         if t.elapsed() > Duration::from_secs(90) {
@@ -83,9 +89,50 @@ fn screenshot(url: &str, w: u32, h: u32, tag: &str) -> Shot {
         }
         std::thread::sleep(Duration::from_millis(50));
     }
+    (dir, reader.join().unwrap())
+}
+
+/// A screenshot of `url` (window `w` x `h`), decoded: (width, RGB rows).
+fn screenshot(url: &str, w: u32, h: u32, tag: &str) -> Shot {
+    let file = tmp_dir(&format!("chromium-{tag}")).join("shot.png");
+    let (dir, _) = run_chromium(
+        url,
+        w,
+        h,
+        tag,
+        &[format!("--screenshot={}", file.display())],
+    );
     let bytes = std::fs::read(&file).unwrap_or_else(|e| panic!("no screenshot of {url}: {e}"));
     let _ = std::fs::remove_dir_all(&dir);
     Shot::decode(&bytes)
+}
+
+/// The page's own state after `budget_ms` of virtual time (its `#state` element, JSON: the
+/// tick shown, the frames it holds, the marks it drew, what the selected robot heard).
+fn page_state(url: &str, budget_ms: u32, tag: &str) -> serde_json::Value {
+    let (dir, dom) = run_chromium(
+        url,
+        1200,
+        820,
+        tag,
+        &[
+            "--dump-dom".to_string(),
+            format!("--virtual-time-budget={budget_ms}"),
+        ],
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+    let dom = String::from_utf8_lossy(&dom);
+    let start = dom
+        .find("<pre id=\"state\" hidden=\"\">")
+        .unwrap_or_else(|| panic!("no #state in the page of {url}: {dom}"));
+    let body = &dom[start..];
+    let body = &body[body.find('>').unwrap() + 1..body.find("</pre>").unwrap()];
+    let body = body
+        .replace("&quot;", "\"")
+        .replace("&lt;", "<")
+        .replace("&gt;", ">")
+        .replace("&amp;", "&");
+    serde_json::from_str(&body).unwrap_or_else(|e| panic!("#state of {url}: {e}: {body}"))
 }
 
 struct Shot {
@@ -198,10 +245,12 @@ struct ViewServer {
 }
 
 impl ViewServer {
-    fn start(dir: &Path) -> ViewServer {
+    /// The page asks for `chunk` ticks at a time (0: the server's choice by size).
+    fn start(dir: &Path, chunk: usize) -> ViewServer {
         let mut child = Command::new(orchestrator())
             .arg("view")
             .arg(dir)
+            .args(["--chunk", &chunk.to_string()])
             .stdout(Stdio::piped())
             .stderr(Stdio::inherit())
             .spawn()
@@ -344,7 +393,8 @@ fn the_replay_page_draws_robots_where_the_recording_puts_them_and_the_scrubber_m
     let (_, ticks) =
         swarm::recording::read_recording(std::fs::File::open(out.join("recording.bin")).unwrap())
             .unwrap();
-    let v = ViewServer::start(&out);
+    // Chunks of 10 ticks: the page holds only the chunks a picture needs.
+    let v = ViewServer::start(&out, 10);
     let meta = json(&v.url, "/api/meta");
     assert_eq!(meta["live"], false);
     assert_eq!(meta["mission"], "search");
@@ -391,6 +441,387 @@ fn the_replay_page_draws_robots_where_the_recording_puts_them_and_the_scrubber_m
     assert!(
         wrong.len() >= 3,
         "tick {k0}'s picture passes for tick {k1}: {wrong:?}"
+    );
+    // The page loaded only the chunk of tick k1 (no trail): 10 frames, nothing asked for.
+    let n = ticks.len();
+    let (_, run_js) = http("GET", &v.url, &format!("/run.js?tick={k1}&trail=0"));
+    assert!(
+        run_js.contains(&format!("\"count\": {n}, \"chunk\": 10, \"first\": {k1}, ")),
+        "{}",
+        &run_js[..run_js.len().min(300)]
+    );
+    let st = page_state(&format!("{}?tick={k1}&trail=0", v.url), 500, "chunk-a");
+    assert_eq!(st["tick"], k1 as u64, "{st}");
+    assert_eq!(st["frames_held"], (n.min(k1 + 10) - k1) as u64, "{st}");
+    assert_eq!(st["requests"], 0, "{st}");
+    // Played from tick 0 (run.js gives chunk 0 only): the page asks for each next chunk as
+    // it goes and shows the tick it has reached; how far it gets in the virtual time depends
+    // on the machine (3 s of it at 1,000 ticks/s reached ticks 35 to 59 of 60 in four tries),
+    // never below 10 seen.
+    let st = page_state(
+        &format!("{}?tick=0&play=1&speed=1000&trail=5", v.url),
+        3000,
+        "chunk-play",
+    );
+    let cur = st["cur"].as_u64().unwrap();
+    assert!(cur >= 10, "{st}");
+    assert_eq!(st["tick"], cur, "{st}");
+    assert!(st["requests"].as_u64().unwrap() >= cur / 10, "{st}");
+    assert!(st["chunks_held"].as_u64().unwrap() <= 8, "{st}");
+    assert!(st["frames_held"].as_u64().unwrap() <= 80, "{st}");
+}
+
+/// `up` of `args` in both executors with `--record-deliveries`: the two recordings.
+fn up_both_with_deliveries(args: &[&str], tag: &str) -> (PathBuf, PathBuf) {
+    let a = tmp_dir(&format!("{tag}-p"));
+    let b = tmp_dir(&format!("{tag}-i"));
+    for (dir, exec) in [(&a, "processes"), (&b, "inprocess")] {
+        let mut all = args.to_vec();
+        all.extend(["--record-deliveries", "--executor", exec]);
+        let o = up(&all, dir);
+        assert!(o.status.success(), "{exec}: {}", stderr(&o));
+    }
+    (a, b)
+}
+
+#[test]
+fn the_page_shows_whom_the_selected_robot_heard_that_tick() {
+    let _g = serial();
+    chromium();
+    let sc = configs().join("search.toml");
+    let args = [
+        "--scenario",
+        sc.to_str().unwrap(),
+        "--robots",
+        "10",
+        "--seed",
+        "5",
+        "--max-ticks",
+        "60",
+    ];
+    let (p, i) = up_both_with_deliveries(&args, "view-heard");
+    assert!(
+        same_recording(&p, &i),
+        "the executors recorded other deliveries"
+    );
+    // Off by default: the same run without the flag records version 5 and the same ticks.
+    let plain = tmp_dir("view-heard-plain");
+    let mut a = args.to_vec();
+    a.extend(["--executor", "inprocess"]);
+    assert!(up(&a, &plain).status.success());
+    let read = |d: &Path| {
+        swarm::recording::read_recording(std::fs::File::open(d.join("recording.bin")).unwrap())
+            .unwrap()
+    };
+    let (h, ticks) = read(&i);
+    let (h0, ticks0) = read(&plain);
+    assert_eq!(h.version, swarm::recording::RECORDING_VERSION_DELIVERIES);
+    assert_eq!(h0.version, swarm::recording::RECORDING_VERSION_LAYER);
+    assert!(!std::fs::read_to_string(plain.join("scenario.toml"))
+        .unwrap()
+        .contains("record_deliveries"));
+    assert_eq!(ticks.len(), ticks0.len());
+    for (t, t0) in ticks.iter().zip(&ticks0) {
+        assert_eq!(
+            (&t.poses, &t.radio),
+            (&t0.poses, &t0.radio),
+            "tick {}",
+            t.tick
+        );
+        assert!(t0.deliveries.is_none());
+        // What the robots were handed is what the world counted delivered or malformed.
+        let d = t.deliveries.as_ref().expect("deliveries every tick");
+        let handed: u64 = d.heard.iter().map(|h| h.len() as u64).sum();
+        assert_eq!(
+            handed,
+            t.radio.delivered + t.radio.malformed,
+            "tick {}",
+            t.tick
+        );
+    }
+    // The robot and tick with the most senders.
+    let senders = |t: &swarm::recording::TickRecord, r: usize| -> Vec<u32> {
+        let mut s: Vec<u32> = t.deliveries.as_ref().unwrap().heard[r]
+            .iter()
+            .map(|m| m.sender)
+            .collect();
+        s.dedup();
+        s
+    };
+    let (k, r) = (10..ticks.len())
+        .flat_map(|k| (0..10).map(move |r| (k, r)))
+        .max_by_key(|&(k, r)| (senders(&ticks[k], r).len(), std::cmp::Reverse((k, r))))
+        .unwrap();
+    let from = senders(&ticks[k], r);
+    assert!(from.len() >= 2, "robot {r} heard from {from:?} at tick {k}");
+    let heard = &ticks[k].deliveries.as_ref().unwrap().heard[r];
+    let v = ViewServer::start(&i, 0);
+    let meta = json(&v.url, "/api/meta");
+    assert_eq!(meta["deliveries"], true);
+    let f = json(&v.url, &format!("/api/frames?from={k}&to={}", k + 1));
+    assert_eq!(
+        f[0]["heard"][r],
+        serde_json::json!(heard.iter().map(|m| m.sender).collect::<Vec<_>>())
+    );
+    let url = format!("{}?tick={k}&robot={r}&trail=0", v.url);
+    let st = page_state(&url, 500, "heard");
+    assert_eq!(st["heard"]["robot"], r as u64, "{st}");
+    assert_eq!(st["heard"]["messages"], heard.len() as u64, "{st}");
+    assert_eq!(
+        st["heard"]["bytes"],
+        heard.iter().map(|m| m.bytes as u64).sum::<u64>(),
+        "{st}"
+    );
+    assert_eq!(st["heard"]["from"], serde_json::json!(from), "{st}");
+    // The picture: a line from each sender to the robot, in the page's "heard" colour, seen
+    // at the middle of each line clear of the robots; not there with no robot selected.
+    let heard_rgb = [200u8, 0, 200];
+    let frame = &f[0];
+    let shot = screenshot(&url, 1200, 820, "heard");
+    let none = screenshot(
+        &format!("{}?tick={k}&trail=0", v.url),
+        1200,
+        820,
+        "heard-none",
+    );
+    let to = project(&meta, pose(frame, r));
+    let n = frame["poses"].as_array().unwrap().len();
+    let (mut checked, mut seen, mut seen_without) = (0, 0, 0);
+    for &j in &from {
+        let s = project(&meta, pose(frame, j as usize));
+        let mid = ((s.0 + to.0) / 2.0, (s.1 + to.1) / 2.0);
+        let clear = (0..n).all(|q| {
+            let c = project(&meta, pose(frame, q));
+            ((c.0 - mid.0).powi(2) + (c.1 - mid.1).powi(2)).sqrt() > 12.0
+        });
+        if !clear {
+            continue;
+        }
+        checked += 1;
+        seen += near_colour(&shot, mid, heard_rgb) as usize;
+        seen_without += near_colour(&none, mid, heard_rgb) as usize;
+    }
+    assert!(checked >= 1, "no line clear of the robots");
+    assert_eq!(
+        seen, checked,
+        "lines from the senders seen: {seen} of {checked}"
+    );
+    assert_eq!(seen_without, 0, "heard lines with no robot selected");
+}
+
+/// Whether a pixel within 1 px of `at` has colour `c` (within 40 a channel: lines are
+/// anti-aliased).
+fn near_colour(shot: &Shot, at: (f64, f64), c: [u8; 3]) -> bool {
+    (-1..=1).any(|dx| {
+        (-1..=1).any(|dy| {
+            let got = shot.rgb(at.0 + dx as f64, at.1 + dy as f64);
+            got.iter()
+                .zip(c)
+                .all(|(x, y)| (*x as i32 - y as i32).abs() <= 40)
+        })
+    })
+}
+
+/// The page's background at page point `p`: white, or inside the start region the region's
+/// tint (rgba(120, 120, 255, 0.15) over white, page/viewer.js).
+fn background(meta: &serde_json::Value, p: (f64, f64)) -> [f64; 3] {
+    let r: Vec<f64> = (0..4)
+        .map(|i| meta["start_region"][i].as_f64().unwrap())
+        .collect();
+    let (lo, hi) = (project(meta, [r[0], r[1]]), project(meta, [r[2], r[3]]));
+    let inside = p.0 >= lo.0 && p.0 <= hi.0 && p.1 <= lo.1 && p.1 >= hi.1;
+    if inside {
+        [120.0, 120.0, 255.0].map(|c| 255.0 + 0.15 * (c - 255.0))
+    } else {
+        [255.0; 3]
+    }
+}
+
+/// Whether a pixel within 1 px of `at` is a blend of `c` over the background `bg` at least
+/// half `c` (a 1-px line drawn off the pixel grid is anti-aliased).
+fn blend_of(shot: &Shot, at: (f64, f64), c: [u8; 3], bg: [f64; 3]) -> bool {
+    (-1..=1).any(|dx| {
+        (-1..=1).any(|dy| {
+            let got = shot.rgb(at.0 + dx as f64, at.1 + dy as f64);
+            // got = bg + a (c - bg) per channel: the share a of the mark's colour.
+            let shares: Vec<f64> = (0..3)
+                .filter(|&k| (c[k] as f64 - bg[k]).abs() > 40.0)
+                .map(|k| (got[k] as f64 - bg[k]) / (c[k] as f64 - bg[k]))
+                .collect();
+            let (lo, hi) = shares
+                .iter()
+                .fold((2.0f64, 0.0f64), |(l, h), a| (l.min(*a), h.max(*a)));
+            !shares.is_empty() && lo >= 0.5 && hi <= 1.1 && hi - lo < 0.25
+        })
+    })
+}
+
+/// A page point where a mark must show its colour, the colour, and whether it is filled there
+/// (else a line through it).
+type Sample = ((f64, f64), [u8; 3], bool);
+
+/// The points where the picture of `mark` must show its colour, with that colour: a disc's
+/// centre (filled), four points of a ring or a circle; none for triangles and paths (drawn
+/// under the robots).
+fn mark_samples(meta: &serde_json::Value, mark: &serde_json::Value) -> Vec<Sample> {
+    let (kind, v) = mark.as_object().unwrap().iter().next().unwrap();
+    let at = || {
+        let a = &v["at"];
+        project(meta, [a[0].as_f64().unwrap(), a[1].as_f64().unwrap()])
+    };
+    let col = |k: &str| [0, 1, 2].map(|i| v[k][i].as_u64().unwrap() as u8);
+    let scale = (CANVAS_W - 2.0 * MARGIN) / meta["arena"][0].as_f64().unwrap();
+    let around = |c: (f64, f64), r: f64| {
+        [0.0f64, 90.0, 180.0, 270.0].map(|d| {
+            (
+                c.0 + r * d.to_radians().cos(),
+                c.1 + r * d.to_radians().sin(),
+            )
+        })
+    };
+    match kind.as_str() {
+        "Disc" => vec![(at(), col("fill"), true)],
+        "Ring" => around(at(), v["px"].as_f64().unwrap())
+            .into_iter()
+            .map(|p| (p, col("colour"), false))
+            .collect(),
+        "Circle" => around(at(), (v["radius"].as_f64().unwrap() * scale).max(1.0))
+            .into_iter()
+            .map(|p| (p, col("colour"), false))
+            .collect(),
+        _ => vec![],
+    }
+}
+
+/// Of the sample points of `marks` clear of every robot and of every other mark's samples
+/// (`shift` px to the right of where they belong): (checked, showing their mark's colour).
+fn check_marks(
+    shot: &Shot,
+    meta: &serde_json::Value,
+    f: &serde_json::Value,
+    shift: f64,
+) -> (usize, usize) {
+    let n = f["poses"].as_array().unwrap().len();
+    let robots: Vec<(f64, f64)> = (0..n).map(|i| project(meta, pose(f, i))).collect();
+    let marks = f["layer"].as_array().unwrap();
+    let scale = (CANVAS_W - 2.0 * MARGIN) / meta["arena"][0].as_f64().unwrap();
+    // Disc obstacles, drawn under the marks: (page centre, page radius).
+    let discs: Vec<((f64, f64), f64)> = meta["discs"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|d| {
+            let c = [d[0][0].as_f64().unwrap(), d[0][1].as_f64().unwrap()];
+            (project(meta, c), d[1].as_f64().unwrap() * scale)
+        })
+        .collect();
+    let all: Vec<Vec<Sample>> = marks.iter().map(|m| mark_samples(meta, m)).collect();
+    let (mut checked, mut ok) = (0, 0);
+    for (mi, samples) in all.iter().enumerate() {
+        for &(p, c, filled) in samples {
+            let d = |q: (f64, f64)| ((q.0 - p.0).powi(2) + (q.1 - p.1).powi(2)).sqrt();
+            let clear = robots.iter().all(|&q| d(q) > 12.0)
+                && discs.iter().all(|&(q, r)| d(q) > r + 3.0)
+                && all
+                    .iter()
+                    .enumerate()
+                    .filter(|(mj, _)| *mj != mi)
+                    .all(|(_, o)| o.iter().all(|s| d(s.0) > 6.0))
+                && p.0 > 2.0
+                && p.1 > 2.0
+                && p.0 < CANVAS_W - 2.0
+                && p.1 < shot.height as f64 - 2.0;
+            if !clear {
+                continue;
+            }
+            let q = (p.0 + shift, p.1);
+            checked += 1;
+            let hit = if filled {
+                close(shot.rgb(q.0, q.1), c)
+            } else {
+                blend_of(shot, q, c, background(meta, q))
+            };
+            ok += hit as usize;
+        }
+    }
+    (checked, ok)
+}
+
+/// Counts of the recording's marks by kind at frame `f`, as the page counts what it drew.
+fn mark_counts(f: &serde_json::Value) -> serde_json::Value {
+    let mut m = serde_json::Map::new();
+    for mark in f["layer"].as_array().unwrap() {
+        let (kind, v) = mark.as_object().unwrap().iter().next().unwrap();
+        if kind == "Path" && v["points"].as_array().unwrap().is_empty() {
+            continue;
+        }
+        let e = m.entry(kind.clone()).or_insert(serde_json::json!(0));
+        *e = serde_json::json!(e.as_u64().unwrap() + 1);
+    }
+    serde_json::Value::Object(m)
+}
+
+/// A short in-process run of `config` (`ticks` ticks); the page at its last tick draws every
+/// mark of the mission's layer there, the marks' colours where they belong.
+fn layer_is_drawn(config: &str, ticks: &str, tag: &str, kinds: &[&str]) {
+    let out = tmp_dir(tag);
+    let sc = configs().join(config);
+    let o = up(
+        &[
+            "--executor",
+            "inprocess",
+            "--scenario",
+            sc.to_str().unwrap(),
+            "--max-ticks",
+            ticks,
+        ],
+        &out,
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v = ViewServer::start(&out, 0);
+    let meta = json(&v.url, "/api/meta");
+    let frames = json(&v.url, "/api/frames");
+    let frames = frames.as_array().unwrap();
+    let k = frames.len() - 1;
+    let f = &frames[k];
+    let want = mark_counts(f);
+    for kind in kinds {
+        assert!(want[kind].as_u64().unwrap_or(0) > 0, "no {kind} in {want}");
+    }
+    let url = format!("{}?tick={k}&trail=0", v.url);
+    let st = page_state(&url, 500, tag);
+    assert_eq!(
+        st["marks"], want,
+        "the page drew other marks than the recording's"
+    );
+    let shot = screenshot(&url, 1200, 820, tag);
+    let (checked, ok) = check_marks(&shot, &meta, f, 0.0);
+    assert!(checked >= 3, "{tag}: {checked} mark points clear to check");
+    assert!(
+        ok * 10 >= checked * 9,
+        "{tag}: {ok} of {checked} mark points show their colour"
+    );
+    // And the check sees a picture without them: the same points 15 px to the right fail.
+    let (c2, ok2) = check_marks(&shot, &meta, f, 15.0);
+    assert!(ok2 * 2 < c2, "{tag}: shifted marks pass: {ok2} of {c2}");
+}
+
+#[test]
+fn the_formation_layer_is_drawn_slots_and_discs() {
+    let _g = serial();
+    chromium();
+    layer_is_drawn("formation.toml", "30", "view-formation", &["Circle"]);
+}
+
+#[test]
+fn the_hunt_layer_is_drawn_evaders_ranges_and_robots() {
+    let _g = serial();
+    chromium();
+    layer_is_drawn(
+        "hunt-auction.toml",
+        "40",
+        "view-hunt",
+        &["Circle", "Triangle", "Path"],
     );
 }
 

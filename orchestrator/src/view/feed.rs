@@ -18,12 +18,21 @@ use swarm::scenario::Scenario;
 /// How often the follower looks for new bytes of a live recording.
 const FOLLOW_POLL: Duration = Duration::from_millis(20);
 
+/// About this many bytes of frame JSON make one chunk, the ticks the page asks for at a time
+/// (`/api/frames?from=K&to=L`) and keeps as one piece: 50 robots' frames (~4 KB) give 128
+/// ticks, 500 robots' (~42 KB) 12.
+pub const CHUNK_BYTES: usize = 512 * 1024;
+/// A chunk's length in ticks stays within these bounds, whatever the frames' size.
+pub const CHUNK_TICKS: std::ops::RangeInclusive<usize> = 10..=500;
+
 #[derive(Default)]
 struct State {
     meta: Option<String>,
     frames: Vec<String>,
     /// No more frames will come (the recording is complete, or the run ended).
     ended: bool,
+    /// Ticks per chunk given by the user (`view --chunk`), instead of [`CHUNK_BYTES`]'.
+    chunk: Option<usize>,
     error: Option<String>,
 }
 
@@ -53,8 +62,36 @@ impl Feed {
         (s.frames.get(from..).unwrap_or(&[]).to_vec(), s.ended)
     }
 
+    /// Frames `from..to` (clipped to those there are; a copy).
+    pub fn range(&self, from: usize, to: usize) -> Vec<String> {
+        let s = self.lock();
+        let to = to.min(s.frames.len());
+        s.frames.get(from.min(to)..to).unwrap_or(&[]).to_vec()
+    }
+
+    /// Chunks of `ticks` ticks from now on (`view --chunk`; 0: from [`CHUNK_BYTES`]).
+    pub fn set_chunk(&self, ticks: usize) {
+        self.lock().chunk = (ticks > 0).then_some(ticks);
+    }
+
+    /// No more frames will come.
+    pub fn ended(&self) -> bool {
+        self.lock().ended
+    }
+
     pub fn len(&self) -> usize {
         self.lock().frames.len()
+    }
+
+    /// Ticks per chunk: [`CHUNK_BYTES`] over the first frame's size (the bounds' smallest
+    /// while there is none).
+    pub fn chunk(&self) -> usize {
+        let s = self.lock();
+        if let Some(c) = s.chunk {
+            return c.max(1);
+        }
+        let per = s.frames.first().map_or(usize::MAX, |f| f.len().max(1));
+        (CHUNK_BYTES / per).clamp(*CHUNK_TICKS.start(), *CHUNK_TICKS.end())
     }
 
     /// Waits up to `timeout` for a frame past `seen` or the end.

@@ -14,13 +14,19 @@ pub struct Frame<'a> {
     pub alive: &'a [u8],
     pub states: &'a [u8],
     pub events: &'a [Event],
-    /// The tick's radio outcome (the recording holds counts for the whole swarm, not who
-    /// heard whom).
+    /// The tick's radio outcome (counts for the whole swarm).
     pub radio: &'a RadioCounters,
     /// The mission's marks at the end of the tick (version-5 recordings; else empty).
     pub layer: &'a [Mark],
     /// EntityDone events up to and including this tick.
     pub done: u32,
+    /// Version-6 recordings (`--record-deliveries`): per robot, the sender of each message it
+    /// was handed this tick, in (sender, seq) order (a sender twice: two messages).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub heard: Option<Vec<Vec<u32>>>,
+    /// Per robot, the payload bytes of those messages.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub heard_bytes: Option<Vec<u64>>,
 }
 
 /// Turns tick records into the page's JSON frames, counting the mission's progress.
@@ -45,6 +51,18 @@ impl Framer {
             radio: &t.radio,
             layer: t.layer.as_deref().unwrap_or(&[]),
             done: self.done,
+            heard: t.deliveries.as_ref().map(|d| {
+                d.heard
+                    .iter()
+                    .map(|h| h.iter().map(|m| m.sender).collect())
+                    .collect()
+            }),
+            heard_bytes: t.deliveries.as_ref().map(|d| {
+                d.heard
+                    .iter()
+                    .map(|h| h.iter().map(|m| m.bytes as u64).sum())
+                    .collect()
+            }),
         };
         // Frames hold only numbers, strings and lists: they always serialise.
         serde_json::to_string(&f).expect("frame JSON")

@@ -45,6 +45,8 @@ pub struct Meta {
     pub arena: [f64; 2],
     pub start_region: [f64; 4],
     pub obstacles: Vec<Vec<[f64; 2]>>,
+    /// Disc obstacles: (centre, radius).
+    pub discs: Vec<([f64; 2], f64)>,
     pub comm_radius: f64,
     /// Robot body radius (0: point robots).
     pub robot_radius: f64,
@@ -55,6 +57,9 @@ pub struct Meta {
     /// What the mission counts in all (search: targets); its done count is the number of
     /// EntityDone events so far.
     pub progress_total: u32,
+    /// The recording says who heard whom each tick (version 6, `--record-deliveries`): the
+    /// frames carry `heard`.
+    pub deliveries: bool,
 }
 
 impl Meta {
@@ -79,6 +84,12 @@ impl Meta {
                 .iter()
                 .map(|o| o.points.clone())
                 .collect(),
+            discs: sc
+                .arena
+                .discs
+                .iter()
+                .map(|d| (d.centre, d.radius))
+                .collect(),
             comm_radius: sc.radio.comm_radius,
             robot_radius: sc.robot.radius,
             states: m
@@ -100,6 +111,7 @@ impl Meta {
                 .collect(),
             progress_label: world::mission::progress_label(&sc),
             progress_total: m.progress().1,
+            deliveries: header.version >= swarm::recording::RECORDING_VERSION_DELIVERIES,
         })
     }
 }

@@ -20,6 +20,9 @@ pub struct ViewArgs {
     /// Port on 127.0.0.1 (0: any free port; the URL is printed).
     #[arg(long, default_value_t = 0)]
     pub port: u16,
+    /// Ticks the page asks for at a time (0: as many as make about 512 KB of frames, 10..=500).
+    #[arg(long, default_value_t = 0)]
+    pub chunk: usize,
 }
 
 /// The run's name on the page: its folder's name.
@@ -38,6 +41,7 @@ pub fn view(a: ViewArgs) -> i32 {
             return 2;
         }
     };
+    feed.set_chunk(a.chunk);
     let v = match server::Viewer::start(a.port, feed.clone(), None) {
         Ok(v) => v,
         Err(e) => {

@@ -2,11 +2,15 @@
 //! (server-sent events) and the kill button's POST.
 //!
 //! Routes:
-//! - `GET /` (any query: `?tick=N` shows tick N, `?robot=I` selects robot I): the page;
+//! - `GET /` (any query: `?tick=N` shows tick N, `?robot=I` selects robot I, `?trail=K`): the
+//!   page, whose `/run.js` asks for the frames that tick and its trail need;
 //! - `GET /viewer.js`, `GET /viewer.css`: the page's code and style (embedded, no CDN);
-//! - `GET /run.js`: `window.RUN = {meta, frames}`, the frames so far (loaded before the page's
-//!   script, so a page drawn at load shows them: a headless screenshot needs no JS driver);
-//! - `GET /api/meta`, `GET /api/frames?from=K`: the same as JSON;
+//! - `GET /run.js?tick=N&trail=K`: `window.RUN = {meta, ended, count, chunk, first, frames}`:
+//!   the frame count so far, the chunk length (ticks the page asks for at a time) and the
+//!   frames of the chunks from tick N - K to tick N (N: the newest of a live run, else 0).
+//!   Loaded before the page's script, so a page drawn at load shows them: a headless
+//!   screenshot needs no JS driver;
+//! - `GET /api/meta`, `GET /api/frames?from=K&to=L` (L: the end if left out): JSON;
 //! - `GET /api/stream?from=K`: server-sent events, one `frame` event per tick from index K
 //!   on, then an `end` event;
 //! - `POST /api/kill?robot=I`: SIGKILL robot I's agent (live runs of the processes executor),
@@ -20,6 +24,9 @@ use tiny_http::{Header, Method, Request, Response, Server};
 const INDEX_HTML: &str = include_str!("page/index.html");
 const VIEWER_JS: &str = include_str!("page/viewer.js");
 const VIEWER_CSS: &str = include_str!("page/viewer.css");
+
+/// The page's trail length when its URL gives none (page/index.html's `#trail` input).
+const DEFAULT_TRAIL: usize = 40;
 
 /// How long a stream request waits for a frame before it writes a keep-alive comment (which
 /// also finds out that a page has gone).
@@ -99,32 +106,81 @@ fn query(url: &str, key: &str) -> Option<String> {
         .map(|(_, v)| v.to_string())
 }
 
+/// A whole number `key` of the query of `url`.
+fn number(url: &str, key: &str) -> Option<usize> {
+    query(url, key).and_then(|v| v.parse::<usize>().ok())
+}
+
+/// The page, its `/run.js` asking for what the page's own `?tick=` and `?trail=` need (numbers
+/// only go into the HTML).
+fn index_html(url: &str) -> String {
+    let mut q = Vec::new();
+    for key in ["tick", "trail"] {
+        if let Some(v) = number(url, key) {
+            q.push(format!("{key}={v}"));
+        }
+    }
+    let src = if q.is_empty() {
+        "/run.js".to_string()
+    } else {
+        format!("/run.js?{}", q.join("&amp;"))
+    };
+    INDEX_HTML.replace("src=\"/run.js\"", &format!("src=\"{src}\""))
+}
+
+/// The first and the end of the frames the page needs at load for tick `tick` (None: the
+/// newest of a live run, else 0) with a trail of `trail` ticks: whole chunks of `chunk`
+/// ticks of the `count` there are.
+pub fn load_window(
+    tick: Option<usize>,
+    trail: usize,
+    live: bool,
+    count: usize,
+    chunk: usize,
+) -> (usize, usize) {
+    if count == 0 {
+        return (0, 0);
+    }
+    let t = match tick {
+        Some(t) => t.min(count - 1),
+        None if live => count - 1,
+        None => 0,
+    };
+    let first = t.saturating_sub(trail) / chunk * chunk;
+    let end = ((t / chunk + 1) * chunk).min(count);
+    (first, end)
+}
+
+fn run_js(url: &str, feed: &Feed) -> String {
+    match (feed.meta(), feed.error()) {
+        (Some(m), _) => {
+            let live = m.contains("\"live\":true");
+            let (ended, count) = (feed.ended(), feed.len());
+            let chunk = feed.chunk();
+            let trail = number(url, "trail").unwrap_or(DEFAULT_TRAIL);
+            let (first, end) = load_window(number(url, "tick"), trail, live, count, chunk);
+            let frames = feed.range(first, end);
+            format!(
+                "window.RUN = {{\"meta\": {m}, \"ended\": {ended}, \"count\": {count}, \"chunk\": {chunk}, \"first\": {first}, \"frames\": [{}]}};\n",
+                frames.join(",\n")
+            )
+        }
+        (None, Some(e)) => format!("window.RUN_ERROR = {};\n", json_str(&e)),
+        (None, None) => "window.RUN = null;\n".to_string(),
+    }
+}
+
 fn handle(req: Request, feed: &Feed, kill: Option<&KillFn>) {
     let url = req.url().to_string();
     let path = url.split('?').next().unwrap_or("/").to_string();
-    let from = query(&url, "from")
-        .and_then(|v| v.parse::<usize>().ok())
-        .unwrap_or(0);
+    let from = number(&url, "from").unwrap_or(0);
     let resp = match (req.method(), path.as_str()) {
         (Method::Get, "/") | (Method::Get, "/index.html") => {
-            text(200, INDEX_HTML.into(), "text/html; charset=utf-8")
+            text(200, index_html(&url), "text/html; charset=utf-8")
         }
         (Method::Get, "/viewer.js") => text(200, VIEWER_JS.into(), "text/javascript"),
         (Method::Get, "/viewer.css") => text(200, VIEWER_CSS.into(), "text/css"),
-        (Method::Get, "/run.js") => {
-            let body = match (feed.meta(), feed.error()) {
-                (Some(m), _) => {
-                    let (frames, ended) = feed.since(0);
-                    format!(
-                        "window.RUN = {{\"meta\": {m}, \"ended\": {ended}, \"frames\": [{}]}};\n",
-                        frames.join(",\n")
-                    )
-                }
-                (None, Some(e)) => format!("window.RUN_ERROR = {};\n", json_str(&e)),
-                (None, None) => "window.RUN = null;\n".to_string(),
-            };
-            text(200, body, "text/javascript")
-        }
+        (Method::Get, "/run.js") => text(200, run_js(&url, feed), "text/javascript"),
         (Method::Get, "/api/meta") => match feed.meta() {
             Some(m) => text(200, m, "application/json"),
             None => text(
@@ -134,7 +190,8 @@ fn handle(req: Request, feed: &Feed, kill: Option<&KillFn>) {
             ),
         },
         (Method::Get, "/api/frames") => {
-            let (frames, _) = feed.since(from);
+            let to = number(&url, "to").unwrap_or(usize::MAX);
+            let frames = feed.range(from, to);
             text(200, format!("[{}]", frames.join(",\n")), "application/json")
         }
         (Method::Get, "/api/stream") => {
@@ -202,5 +259,34 @@ fn stream(req: Request, feed: &Feed, from: usize) {
         if frames.is_empty() {
             feed.wait(next, STREAM_IDLE);
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_load_window_is_whole_chunks_from_the_trails_start_to_the_ticks_chunks_end() {
+        // Chunks of 10 of 95 frames: tick 42 with a trail of 5 needs 37..=42: chunks 30..50.
+        assert_eq!(load_window(Some(42), 5, false, 95, 10), (30, 50));
+        // A trail back into tick 0; a tick past the end shows the last.
+        assert_eq!(load_window(Some(3), 40, false, 95, 10), (0, 10));
+        assert_eq!(load_window(Some(500), 0, false, 95, 10), (90, 95));
+        // No tick: a replay starts at 0, a live page at the newest.
+        assert_eq!(load_window(None, 0, false, 95, 10), (0, 10));
+        assert_eq!(load_window(None, 12, true, 95, 10), (80, 95));
+        assert_eq!(load_window(None, 0, true, 0, 10), (0, 0));
+    }
+
+    #[test]
+    fn the_page_asks_run_js_for_its_tick_and_trail_and_nothing_else_reaches_the_html() {
+        let page = index_html("/?tick=40&trail=0&robot=3");
+        assert!(
+            page.contains("src=\"/run.js?tick=40&amp;trail=0\""),
+            "{page}"
+        );
+        let page = index_html("/?tick=%22%3E%3Cscript%3E&trail=x");
+        assert!(page.contains("src=\"/run.js\""), "{page}");
     }
 }

@@ -1,5 +1,7 @@
-// The swarm viewer: plays a run's frames (window.RUN, from /run.js) on a canvas; a live run's
-// further frames come over server-sent events (/api/stream).
+// The swarm viewer: plays a run's frames on a canvas. /run.js (window.RUN) gives the frames the
+// first picture needs; the others are asked for a chunk at a time (/api/frames?from=&to=) as
+// the page plays or is scrubbed, and only a few chunks are kept. A live run's new frames come
+// over server-sent events (/api/stream).
 "use strict";
 (function () {
   const $ = (id) => document.getElementById(id);
@@ -13,8 +15,50 @@
     return;
   }
   const meta = RUN.meta;
-  const frames = RUN.frames;
   let ended = RUN.ended;
+
+  // The frames the page holds: tick index -> frame, kept a chunk of RUN.chunk ticks at a
+  // time; at most KEEP_CHUNKS chunks (the least recently drawn go first), so a page's memory
+  // does not grow with the run.
+  const CHUNK = RUN.chunk;
+  const KEEP_CHUNKS = 8;
+  let count = RUN.count; // frames the run has (that the page knows of)
+  const frames = new Map();
+  const used = new Map(); // chunk -> when last drawn or received
+  const pending = new Set(); // chunks asked for
+  const askedAt = new Map(); // chunk -> `count` when it was last fetched
+  let clock = 0, requests = 0;
+  const chunkOf = (k) => Math.floor(k / CHUNK);
+  function keep(k, f) {
+    frames.set(k, f);
+    used.set(chunkOf(k), ++clock);
+  }
+  RUN.frames.forEach((f, i) => keep(RUN.first + i, f));
+  function evict(need) {
+    while (used.size > KEEP_CHUNKS) {
+      let old = null, at = Infinity;
+      for (const [c, t] of used) if (!need.has(c) && t < at) { at = t; old = c; }
+      if (old === null) return;
+      used.delete(old); askedAt.delete(old);
+      for (let k = old * CHUNK; k < (old + 1) * CHUNK; k++) frames.delete(k);
+    }
+  }
+  function ask(c) {
+    if (pending.has(c) || askedAt.get(c) === count || c < 0 || c * CHUNK >= count) return;
+    pending.add(c); askedAt.set(c, count); requests++;
+    fetch(`/api/frames?from=${c * CHUNK}&to=${(c + 1) * CHUNK}`)
+      .then((r) => r.json())
+      .then((list) => { list.forEach((f, i) => keep(c * CHUNK + i, f)); })
+      .catch(() => { askedAt.delete(c); })
+      .finally(() => { pending.delete(c); later(); });
+  }
+  // Frame k, or undefined after asking for its chunk.
+  function frame(k) {
+    const f = frames.get(k);
+    if (f === undefined) ask(chunkOf(k));
+    else used.set(chunkOf(k), ++clock);
+    return f;
+  }
 
   // Geometry: the arena fills the canvas width less a margin, y up. Tests project robots
   // with the same numbers (tests/tests/viewer.rs).
@@ -31,8 +75,13 @@
   let playing = q.get("play") === "1";
   let selected = q.has("robot") ? parseInt(q.get("robot"), 10) : null;
   if (pinned) cur = parseInt(q.get("tick"), 10) || 0;
-  else if (meta.live) cur = Math.max(0, frames.length - 1);
+  else if (meta.live) cur = Math.max(0, count - 1);
   if (q.has("trail")) $("trail").value = q.get("trail");
+  if (q.has("speed")) {
+    const v = String(parseFloat(q.get("speed")) || 20), sel = $("speed");
+    if (![...sel.options].some((o) => o.value === v)) sel.add(new Option(v + " ticks/s", v));
+    sel.value = v;
+  }
 
   const rgb = (c, a) => a === undefined ? `rgb(${c[0]},${c[1]},${c[2]})`
     : `rgba(${c[0]},${c[1]},${c[2]},${a})`;
@@ -53,6 +102,8 @@
     return d ? d.name : String(s);
   }
 
+  // What the last picture drew (the page's own state, for tests: #state).
+  let drawn = {};
   function drawMark(m) {
     const kind = Object.keys(m)[0], v = m[kind];
     ctx.save();
@@ -80,7 +131,11 @@
       ctx.beginPath();
       v.points.forEach((p, k) => { const [x, y] = px(p); k ? ctx.lineTo(x, y) : ctx.moveTo(x, y); });
       ctx.strokeStyle = rgb(v.colour); ctx.lineWidth = 2; ctx.stroke();
+    } else {
+      ctx.restore();
+      return;
     }
+    drawn[kind] = (drawn[kind] || 0) + 1;
     ctx.restore();
   }
 
@@ -94,7 +149,18 @@
     return out;
   }
 
+  // Robot i's messages this tick (recordings with deliveries): its senders, one entry per
+  // message, and their payload bytes.
+  function heardBy(f, i) {
+    if (!f.heard) return null;
+    return { senders: f.heard[i] || [], bytes: (f.heard_bytes || [])[i] || 0 };
+  }
+
+  // Colour of the lines from the robots the selected one heard this tick.
+  const HEARD_RGB = [200, 0, 200];
+
   function draw() {
+    drawn = {};
     ctx.fillStyle = "#fff"; ctx.fillRect(0, 0, canvas.width, canvas.height);
     const [ax, ay] = px([0, meta.arena[1]]);
     ctx.strokeStyle = "#000"; ctx.lineWidth = 2;
@@ -110,29 +176,55 @@
       o.forEach((p, k) => { const [x, y] = px(p); k ? ctx.lineTo(x, y) : ctx.moveTo(x, y); });
       ctx.closePath(); ctx.fill();
     }
-    if (!frames.length) { status(); return; }
-    cur = Math.max(0, Math.min(cur, frames.length - 1));
-    const f = frames[cur];
-    for (const m of f.layer) drawMark(m);
-    // Trails: each robot's last `trail` ticks, coloured by its state then.
+    for (const [c, r] of meta.discs) {
+      const [x, y] = px(c);
+      ctx.beginPath(); ctx.arc(x, y, r * scale, 0, 2 * Math.PI); ctx.fill();
+    }
+    if (!count) { status(null); return; }
+    cur = Math.max(0, Math.min(cur, count - 1));
+    // The chunks this picture needs stay; the page asks for the next one ahead of play.
     const trail = Math.max(0, parseInt($("trail").value, 10) || 0);
     const first = Math.max(0, cur - trail);
+    const need = new Set();
+    for (let c = chunkOf(first); c <= chunkOf(cur); c++) need.add(c);
+    if (playing) { need.add(chunkOf(cur) + 1); frame(Math.min(count - 1, (chunkOf(cur) + 1) * CHUNK)); }
+    const f = frame(cur);
+    evict(need);
+    if (!f) { status(null); return; }
+    for (const m of f.layer) drawMark(m);
+    // Trails: each robot's last `trail` ticks, coloured by its state then (the ticks the page
+    // holds: a piece still on its way is drawn when it comes).
     ctx.lineWidth = 1;
-    for (let i = 0; i < meta.robots; i++) {
-      for (let k = first + 1; k <= cur; k++) {
-        const a = px(frames[k - 1].poses[i]), b = px(frames[k].poses[i]);
-        ctx.strokeStyle = rgb(colour(i, frames[k].states[i]), 0.5);
-        ctx.beginPath(); ctx.moveTo(a[0], a[1]); ctx.lineTo(b[0], b[1]); ctx.stroke();
+    let prev = frame(first);
+    for (let k = first + 1; k <= cur; k++) {
+      const g = frame(k);
+      if (prev && g) {
+        for (let i = 0; i < meta.robots; i++) {
+          const a = px(prev.poses[i]), b = px(g.poses[i]);
+          ctx.strokeStyle = rgb(colour(i, g.states[i]), 0.5);
+          ctx.beginPath(); ctx.moveTo(a[0], a[1]); ctx.lineTo(b[0], b[1]); ctx.stroke();
+        }
       }
+      prev = g;
     }
     if (selected !== null && selected < meta.robots) {
       const p = px(f.poses[selected]);
       ctx.strokeStyle = "rgba(0,120,0,0.8)"; ctx.lineWidth = 1;
       ctx.beginPath(); ctx.arc(p[0], p[1], meta.comm_radius * scale, 0, 2 * Math.PI); ctx.stroke();
-      ctx.strokeStyle = "rgba(0,150,0,0.35)";
-      for (const j of inRange(f, selected)) {
-        const b = px(f.poses[j]);
-        ctx.beginPath(); ctx.moveTo(p[0], p[1]); ctx.lineTo(b[0], b[1]); ctx.stroke();
+      const h = heardBy(f, selected);
+      if (h) {
+        // Who it heard: a line from each sender (where the sender is now).
+        ctx.strokeStyle = rgb(HEARD_RGB); ctx.lineWidth = 2;
+        for (const j of new Set(h.senders)) {
+          const b = px(f.poses[j]);
+          ctx.beginPath(); ctx.moveTo(b[0], b[1]); ctx.lineTo(p[0], p[1]); ctx.stroke();
+        }
+      } else {
+        ctx.strokeStyle = "rgba(0,150,0,0.35)";
+        for (const j of inRange(f, selected)) {
+          const b = px(f.poses[j]);
+          ctx.beginPath(); ctx.moveTo(p[0], p[1]); ctx.lineTo(b[0], b[1]); ctx.stroke();
+        }
       }
     }
     for (let i = 0; i < meta.robots; i++) {
@@ -155,26 +247,30 @@
         ctx.beginPath(); ctx.arc(x, y, ROBOT_PX + 4, 0, 2 * Math.PI); ctx.stroke();
       }
     }
-    status();
+    status(f);
   }
 
-  function status() {
-    const n = frames.length;
-    const f = frames[cur];
-    $("scrub").max = Math.max(0, n - 1);
+  function status(f) {
+    $("scrub").max = Math.max(0, count - 1);
     $("scrub").value = cur;
     $("play").textContent = playing ? "pause" : "play";
     $("title").textContent = `run ${meta.run} (${meta.mission}, ${meta.robots} robots, seed ${meta.seed})`;
     const where = meta.live ? (ended ? "live run: ended" : "live run: running") : "replay";
-    $("status").textContent = `${where}; ${n} of ${meta.max_ticks} ticks recorded`;
-    if (!f) { $("info").textContent = ""; return; }
+    $("status").textContent = `${where}; ${count} of ${meta.max_ticks} ticks recorded` +
+      (count && !f ? `; loading tick ${cur}...` : "");
+    const state = {
+      cur, tick: f ? f.tick : null, count, chunk: CHUNK, frames_held: frames.size,
+      chunks_held: used.size, requests, marks: drawn, selected, heard: null,
+      heap: performance.memory ? performance.memory.usedJSHeapSize : null,
+    };
+    if (!f) { $("info").textContent = ""; $("state").textContent = JSON.stringify(state); return; }
     const alive = f.alive.reduce((a, b) => a + b, 0);
     const r = f.radio;
     let t = `tick ${f.tick}\nrobots alive ${alive}/${meta.robots}\n`;
     if (meta.progress_total > 0 && meta.progress_label)
       t += `${meta.progress_label} ${f.done}/${meta.progress_total}\n`;
     t += `radio this tick: offered ${r.offered} delivered ${r.delivered}\n`;
-    t += `  dropped: range ${r.dropped_range} loss ${r.dropped_loss} unlinked ${r.dropped_unlinked}\n`;
+    t += `  dropped: range ${r.dropped_range} occluded ${r.dropped_occluded} bandwidth ${r.dropped_bandwidth} loss ${r.dropped_loss}\n`;
     t += `events this tick ${f.events.length}`;
     $("info").textContent = t;
     let s = "";
@@ -186,11 +282,21 @@
       s = `robot ${selected} ${f.alive[selected] ? "alive" : "DEAD"}\n` +
         `  at (${p[0].toFixed(1)}, ${p[1].toFixed(1)}) heading ${p[2].toFixed(2)}\n` +
         `  state ${stateName(f.states[selected])}\n` +
-        `  in radio range (${meta.comm_radius}): ${near.length} robots\n    ${near.join(", ")}\n` +
-        `  events: ${ev.length ? ev.join("; ") : "none"}`;
+        `  in radio range (${meta.comm_radius}): ${near.length} robots\n`;
+      const h = heardBy(f, selected);
+      if (h) {
+        const from = [...new Set(h.senders)].sort((a, b) => a - b);
+        const rows = [];
+        for (let k = 0; k < from.length; k += 12) rows.push(from.slice(k, k + 12).join(", "));
+        s += `  heard this tick: ${h.senders.length} messages, ${h.bytes} bytes\n` +
+          `    from ${from.length} robots:\n    ${rows.join(",\n    ")}\n`;
+        state.heard = { robot: selected, messages: h.senders.length, bytes: h.bytes, from };
+      } else s += `    ${near.join(", ")}\n  heard this tick: not recorded (up --record-deliveries)\n`;
+      s += `  events: ${ev.length ? ev.join("; ") : "none"}`;
     }
     $("robot").textContent = s;
     $("kill").disabled = !(meta.live && !ended && selected !== null && f.alive[selected]);
+    $("state").textContent = JSON.stringify(state);
   }
 
   function legend() {
@@ -199,6 +305,8 @@
       h += `<div><span class="swatch" style="background:${rgb(s.colour)}"></span>${s.name}</div>`;
     if (!meta.states.length) h += `<div>robots coloured by id</div>`;
     h += `<div><b>&times;</b> dead robot</div>`;
+    if (meta.deliveries)
+      h += `<div><span class="swatch" style="background:${rgb(HEARD_RGB)}"></span>heard by the selected robot this tick</div>`;
     for (const e of meta.legend) {
       const v = Object.values(e.mark)[0];
       const c = v.fill || v.colour || [0, 0, 0];
@@ -214,17 +322,17 @@
 
   $("play").onclick = () => { playing = !playing; pinned = false; last = null; later(); };
   $("back").onclick = () => { playing = false; pinned = true; cur = Math.max(0, cur - 1); later(); };
-  $("fwd").onclick = () => { playing = false; pinned = true; cur = Math.min(frames.length - 1, cur + 1); later(); };
+  $("fwd").onclick = () => { playing = false; pinned = true; cur = Math.min(count - 1, cur + 1); later(); };
   $("scrub").oninput = (e) => { pinned = true; cur = parseInt(e.target.value, 10); later(); };
   $("trail").oninput = later;
-  $("follow").onchange = () => { if ($("follow").checked) { pinned = false; cur = frames.length - 1; } later(); };
+  $("follow").onchange = () => { if ($("follow").checked) { pinned = false; cur = count - 1; } later(); };
   document.addEventListener("keydown", (e) => {
     if (e.key === " ") { $("play").onclick(); e.preventDefault(); }
     if (e.key === "ArrowLeft") $("back").onclick();
     if (e.key === "ArrowRight") $("fwd").onclick();
   });
   canvas.onclick = (e) => {
-    const f = frames[cur]; if (!f) return;
+    const f = frames.get(cur); if (!f) return;
     const b = canvas.getBoundingClientRect(), x = e.clientX - b.left, y = e.clientY - b.top;
     let best = null, bd = 15 * 15;
     f.poses.forEach((p, i) => {
@@ -241,17 +349,20 @@
       .catch((err) => { $("killmsg").textContent = "kill failed: " + err; });
   };
 
-  // Playing: `speed` ticks per second of the recording.
+  // Playing: `speed` ticks per second of the recording; it waits at a tick whose chunk is
+  // still on its way.
   let last = null;
   function tick(now) {
-    if (playing && frames.length) {
+    if (playing && count) {
       if (last !== null) {
         const speed = parseFloat($("speed").value);
         const steps = Math.floor(((now - last) / 1000) * speed);
         if (steps > 0) {
-          cur = Math.min(frames.length - 1, cur + steps);
+          let to = Math.min(count - 1, cur + steps);
+          while (to > cur && !frames.has(to)) { frame(to); to--; }
+          cur = to;
           last = now;
-          if (cur === frames.length - 1 && (ended || !meta.live)) playing = false;
+          if (cur === count - 1 && (ended || !meta.live)) playing = false;
           draw();
         }
       } else last = now;
@@ -260,10 +371,13 @@
   }
 
   if (meta.live && !ended) {
-    const es = new EventSource("/api/stream?from=" + frames.length);
+    const es = new EventSource("/api/stream?from=" + count);
     es.addEventListener("frame", (e) => {
-      frames.push(JSON.parse(e.data));
-      if (!pinned && !playing && $("follow").checked) cur = frames.length - 1;
+      const f = JSON.parse(e.data);
+      count = Math.max(count, f.tick + 1);
+      // Kept when its chunk is held or is the newest (the one a following page shows).
+      if (used.has(chunkOf(f.tick)) || chunkOf(f.tick) >= chunkOf(cur)) keep(f.tick, f);
+      if (!pinned && !playing && $("follow").checked) cur = count - 1;
       later();
     });
     es.addEventListener("end", () => { ended = true; es.close(); later(); });
