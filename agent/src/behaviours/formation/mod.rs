@@ -605,7 +605,7 @@ impl Formation {
     /// velocity: `TRACE tick robot x y slot slot_x slot_y selection neighbours busy
     /// pref_x pref_y v_x v_y` (busy: in a swap handshake).
     fn trace_line(&self, tick: u64, me: Vec2, neighbours: usize, preferred: Vec2, sel: &Selected) {
-        if sel.selection == Selection::Feasible && tick % 10 != 0 {
+        if sel.selection == Selection::Feasible && !tick.is_multiple_of(10) {
             return;
         }
         let (sx, sy, s) = match self.slot {
