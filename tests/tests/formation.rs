@@ -32,6 +32,16 @@ fn nine_robots_in_processes_form_the_c_with_the_in_process_recording() {
         assert_eq!(f["obstacle_overlaps"], 0, "{exec}: {f}");
         assert!(f["min_robot_clearance"].as_f64().unwrap() >= 0.0, "{f}");
         assert_eq!(f["plans"].as_array().unwrap().len(), 1, "{f}");
+        // The plan's alpha, d and theta of eq. (5), within the optimiser's domain.
+        let plan = &f["plans"][0];
+        let alpha = plan["alpha"].as_f64().unwrap();
+        assert!((0.5..=2.0).contains(&alpha), "{plan}");
+        assert!(
+            plan["theta"].as_f64().unwrap().abs() <= std::f64::consts::PI,
+            "{plan}"
+        );
+        assert_eq!(plan["d"].as_array().unwrap().len(), 2, "{plan}");
+        assert_eq!(plan["epoch"], 1, "{plan}");
         assert_eq!(summary(dir)["end"], "the formation is complete");
     }
     let rec = |d: &std::path::Path| std::fs::read(d.join("recording.bin")).unwrap();

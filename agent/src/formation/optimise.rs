@@ -66,6 +66,15 @@
 //! unconstrained best c = p_bar clamped to the node, and the node's centre; a candidate meeting
 //! every constraint becomes the incumbent if it is better.
 //!
+//! # Reuse between nodes (the same numbers, fewer solves)
+//! Bounds 1, 2 and 4 and the incumbent's (alpha, theta) midpoint, its g and its sigma depend
+//! on the node's (alpha, theta) box only, not on its centroid box. A node split along c_1 or
+//! c_2 hands them to both children (`ShapeEval`), which then skip their five to six Hungarian
+//! solves and the dual computation; only the centroid narrowing, the c term and the incumbent's
+//! centroid candidates are evaluated anew. Every number is the one the child would have
+//! computed itself, so the search, its order and its answer are unchanged (tested bit for bit
+//! against `Reuse::Off`).
+//!
 //! # Stopping rule and certificate
 //! Best-first order: the node popped has the least LB of all open nodes, so when its LB is
 //! within max(gap_abs, gap_rel * UB) of the incumbent, no point anywhere is better by more than
@@ -150,7 +159,7 @@ pub fn optimise_in(
         }
     }
     let problem = Problem::new(starts, template, params)?;
-    problem.solve(alpha_range, theta_range, params)
+    problem.solve(alpha_range, theta_range, params, Reuse::On)
 }
 
 /// A box of the search space: alpha, theta, and the pattern centroid c.
@@ -160,6 +169,29 @@ struct Node {
     theta: [f64; 2],
     c: [[f64; 2]; 2],
     lb: f64,
+    /// Index of the node's `ShapeEval` once computed ([`NO_SHAPE`]: not yet).
+    shape: u32,
+}
+
+/// `Node::shape` before the node's (alpha, theta) box was evaluated.
+const NO_SHAPE: u32 = u32::MAX;
+
+/// What a node computes from its (alpha, theta) box alone (module comment, "Reuse").
+#[derive(Debug, Clone)]
+struct ShapeEval {
+    /// max(bound 1-2, bound 4): the lower bound on g over the box.
+    g_lb: f64,
+    /// At the (alpha, theta) midpoint: g and sigma; None when the midpoint breaks C3.
+    mid: Option<(f64, Vec<usize>)>,
+}
+
+/// Whether children split along the centroid reuse their parent's [`ShapeEval`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Reuse {
+    On,
+    /// Every node computes everything itself (the reference the reuse is tested against).
+    #[cfg_attr(not(test), allow(dead_code))]
+    Off,
 }
 
 impl PartialEq for Node {
@@ -296,7 +328,14 @@ impl Problem {
 
     /// The node's lower bound, or None when no point of it can be feasible. Also narrows the
     /// node's centroid box to the part that the constraints leave (domain reduction).
-    fn bound(&self, node: &mut Node, h: &mut Hungarian, sigma: &mut Vec<usize>) -> Option<f64> {
+    fn bound(
+        &self,
+        node: &mut Node,
+        h: &mut Hungarian,
+        sigma: &mut Vec<usize>,
+        shapes: &mut Vec<ShapeEval>,
+        reuse: Reuse,
+    ) -> Option<f64> {
         let (ar, br) = self.ab_box(node.alpha, node.theta);
         let lam2_max = sq_max(ar) + sq_max(br);
         if lam2_max < self.lambda_sep2 * (1.0 - 1e-12) - SLACK {
@@ -305,6 +344,33 @@ impl Problem {
         if !self.narrow_centroid(node, ar, br) {
             return None;
         }
+        let g_lb = match (reuse, node.shape) {
+            (Reuse::On, i) if i != NO_SHAPE => shapes[i as usize].g_lb,
+            _ => {
+                let g_lb = self.g_bound(ar, br, h, sigma);
+                if reuse == Reuse::On {
+                    let mid = self.midpoint(node, h, sigma).map(|g| (g, sigma.clone()));
+                    node.shape = shapes.len() as u32;
+                    shapes.push(ShapeEval { g_lb, mid });
+                }
+                g_lb
+            }
+        };
+        let dc = Vec2::new(
+            dist_to_interval(self.p_bar.x, node.c[0]),
+            dist_to_interval(self.p_bar.y, node.c[1]),
+        );
+        Some(g_lb + self.n as f64 * dc.norm_squared())
+    }
+
+    /// The lower bound on g over the (a, b) rectangle: max(bound 1-2, bound 4).
+    fn g_bound(
+        &self,
+        ar: [f64; 2],
+        br: [f64; 2],
+        h: &mut Hungarian,
+        sigma: &mut Vec<usize>,
+    ) -> f64 {
         let (b2, e) = self.dual_bound(ar, br, h, sigma);
         // With E = 0 the centre's assignment is optimal over the whole rectangle, so bound 4
         // is the exact minimum of the relaxed g there and bounds 1-2 cannot beat it.
@@ -322,11 +388,19 @@ impl Problem {
         } else {
             f64::NEG_INFINITY
         };
-        let dc = Vec2::new(
-            dist_to_interval(self.p_bar.x, node.c[0]),
-            dist_to_interval(self.p_bar.y, node.c[1]),
-        );
-        Some(b1.max(b2) + self.n as f64 * dc.norm_squared())
+        b1.max(b2)
+    }
+
+    /// g and (in `sigma`) the best assignment at the node's (alpha, theta) midpoint; None when
+    /// the midpoint's scale breaks C3.
+    fn midpoint(&self, node: &Node, h: &mut Hungarian, sigma: &mut Vec<usize>) -> Option<f64> {
+        let alpha = 0.5 * (node.alpha[0] + node.alpha[1]);
+        let theta = 0.5 * (node.theta[0] + node.theta[1]);
+        let (a, b) = matrix(alpha, theta, self.reading);
+        if a * a + b * b < self.lambda_sep2 - SLACK {
+            return None;
+        }
+        Some(self.p2 + (a * a + b * b) * self.s2 - 2.0 * self.best_alignment(a, b, h, sigma))
     }
 
     /// Constraint propagation on the centroid box: target j is q_j = o_j + c with o_j in the
@@ -491,14 +565,22 @@ impl Problem {
         h: &mut Hungarian,
         sigma: &mut Vec<usize>,
         best: &mut Option<Incumbent>,
+        shapes: &[ShapeEval],
     ) {
         let alpha = 0.5 * (node.alpha[0] + node.alpha[1]);
         let theta = 0.5 * (node.theta[0] + node.theta[1]);
         let (a, b) = matrix(alpha, theta, self.reading);
-        if a * a + b * b < self.lambda_sep2 - SLACK {
-            return;
-        }
-        let g = self.p2 + (a * a + b * b) * self.s2 - 2.0 * self.best_alignment(a, b, h, sigma);
+        let (g, sigma): (f64, &[usize]) = if node.shape != NO_SHAPE {
+            match &shapes[node.shape as usize].mid {
+                Some((g, s)) => (*g, s),
+                None => return,
+            }
+        } else {
+            match self.midpoint(node, h, sigma) {
+                Some(g) => (g, sigma),
+                None => return,
+            }
+        };
         let clamp = |v: f64, r: [f64; 2]| v.clamp(r[0], r[1]);
         let candidates = [
             Vec2::new(
@@ -520,7 +602,7 @@ impl Problem {
                 alpha,
                 theta,
                 c,
-                assignment: sigma.clone(),
+                assignment: sigma.to_vec(),
             });
         }
     }
@@ -540,6 +622,11 @@ impl Problem {
             }
         }
         let (mut lo, mut hi) = (*node, *node);
+        if k < 2 {
+            // A new (alpha, theta) box: its shape is evaluated afresh.
+            lo.shape = NO_SHAPE;
+            hi.shape = NO_SHAPE;
+        }
         let halve = |r: [f64; 2]| 0.5 * (r[0] + r[1]);
         match k {
             0 => {
@@ -566,8 +653,10 @@ impl Problem {
         alpha: [f64; 2],
         theta: [f64; 2],
         params: &FormationParams,
+        reuse: Reuse,
     ) -> Result<Solution, FormationError> {
         let opts = &params.optimiser;
+        let mut shapes = Vec::new();
         let mut h = Hungarian::new();
         let mut sigma = Vec::with_capacity(self.n);
         let mut best: Option<Incumbent> = None;
@@ -577,14 +666,15 @@ impl Problem {
             theta,
             c: [cons.x_range, cons.y_range],
             lb: 0.0,
+            shape: NO_SHAPE,
         };
         let mut heap = BinaryHeap::new();
         let mut nodes = 1;
         // The least lower bound among nodes discarded by bound (not by infeasibility).
         let mut pruned_lb = f64::INFINITY;
-        if let Some(lb) = self.bound(&mut root, &mut h, &mut sigma) {
+        if let Some(lb) = self.bound(&mut root, &mut h, &mut sigma, &mut shapes, reuse) {
             root.lb = lb;
-            self.try_incumbent(&root, &mut h, &mut sigma, &mut best);
+            self.try_incumbent(&root, &mut h, &mut sigma, &mut best, &shapes);
             heap.push(root);
         }
         // Without an incumbent (ub infinite) nothing is pruned by bound.
@@ -609,11 +699,12 @@ impl Problem {
             }
             for mut child in self.split(&node) {
                 nodes += 1;
-                let Some(lb) = self.bound(&mut child, &mut h, &mut sigma) else {
+                let Some(lb) = self.bound(&mut child, &mut h, &mut sigma, &mut shapes, reuse)
+                else {
                     continue;
                 };
                 child.lb = lb.max(node.lb);
-                self.try_incumbent(&child, &mut h, &mut sigma, &mut best);
+                self.try_incumbent(&child, &mut h, &mut sigma, &mut best, &shapes);
                 let ub = best.as_ref().map_or(f64::INFINITY, |b| b.cost);
                 if child.lb < ub - tolerance(ub) {
                     heap.push(child);

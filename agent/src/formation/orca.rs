@@ -19,7 +19,7 @@
 //! largest violation of the robots' half-planes is minimised (the 3-D fallback of
 //! [`super::linear_program`]).
 
-use super::linear_program::{select_velocity, HalfPlane, Selected};
+use super::linear_program::{select_velocity, HalfPlane, Selected, Selection};
 use super::params::FormationParams;
 use swarm::geometry::Vec2;
 
@@ -117,6 +117,30 @@ pub fn orca_velocity(
     obstacles: &[Disc],
     params: &FormationParams,
 ) -> Selected {
+    let mut horizon = params.time_horizon;
+    let mut selected = orca_velocity_within(me, preferred, robots, obstacles, params, horizon);
+    // Infeasible: the half-planes of a shorter horizon are wider (the truncated cone's cut-off
+    // disc p / T grows), so they conflict less; one step is the least that still forbids an
+    // overlap at the next step.
+    while params.shrink_horizon_when_infeasible
+        && selected.selection != Selection::Feasible
+        && horizon > params.time_step
+    {
+        horizon = (0.5 * horizon).max(params.time_step);
+        selected = orca_velocity_within(me, preferred, robots, obstacles, params, horizon);
+    }
+    selected
+}
+
+/// [`orca_velocity`] with the robots' horizon `horizon`.
+fn orca_velocity_within(
+    me: &Disc,
+    preferred: Vec2,
+    robots: &[Disc],
+    obstacles: &[Disc],
+    params: &FormationParams,
+    horizon: f64,
+) -> Selected {
     let tau = params.time_step;
     let keep = match params.max_accel {
         Some(a) => acceleration_polygon(me.velocity, a * tau, params.accel_polygon_sides),
@@ -129,7 +153,7 @@ pub fn orca_velocity(
     let soft: Vec<HalfPlane> = robots
         .iter()
         .filter(|o| (o.position - me.position).norm() <= params.neighbour_dist)
-        .map(|o| orca_half_plane(me, o, 0.5, params.time_horizon, tau))
+        .map(|o| orca_half_plane(me, o, 0.5, horizon, tau))
         .collect();
     select_velocity(&keep, &hard, &soft, params.max_speed, preferred)
 }

@@ -2,37 +2,82 @@
 //! decentralised reassignment by pairwise swaps between neighbours. Robots i and j holding
 //! targets a and b swap when that lowers the pair's summed cost (the squared distances of
 //! eq. 4) by more than `min_gain`, agreed by a two-message handshake. Each robot runs the same
-//! pure state machine ([`SwapAgent::step`]): messages in, messages out, no clock, no I/O.
+//! pure state machine ([`SwapAgent::step`]): the tick and messages in, messages out, no I/O.
 //!
-//! Protocol (ours):
+//! Protocol (ours; measured on 500 robots, docs/formation.md 9, where the first version, which
+//! waited for an answer without end, left 72 robots busy for good and one slot doubled):
 //! - Only a lower id proposes to a higher id (every pair is still considered, by its lower id),
 //!   so proposals form chains of increasing id and never a cycle: the top of a chain is free
 //!   and decides on the merits, so a round with proposals under lossless delivery commits a
 //!   swap, and the search cannot livelock.
+//! - A robot proposes only to a neighbour heard within `SwapParams::range` (well inside the
+//!   radio's reach, so that the two keep hearing each other while they move).
 //! - The proposer sends `Propose` (its id, target, position, the target it believes the
-//!   receiver holds, and a sequence number) and is then busy: it rejects proposals and keeps
-//!   re-sending the same `Propose` every step until it hears the answer.
-//! - A free receiver that still holds the believed target and finds the gain (from its own
-//!   position and the proposer's) above `min_gain` takes the proposer's target at once and
-//!   answers `Reply { accepted: true }`; otherwise it answers `false`. It records its answer per
-//!   proposer and repeats it for a re-sent proposal (so a lost reply is recovered by the
-//!   proposer's retry, and a duplicate never swaps twice).
-//! - The proposer takes the receiver's old target when the acceptance arrives.
+//!   receiver holds, a sequence number and a deadline `timeout_ticks` ahead) and is then busy:
+//!   it rejects proposals and re-sends the same `Propose` every step until it hears the answer
+//!   or the deadline comes. It commits (takes the receiver's old target) only on an
+//!   acceptance heard before the deadline; at the deadline it gives up, keeps its target and
+//!   makes no swap for `settle_ticks` (so that its receiver hears it still holding it).
+//! - A free receiver that still holds the believed target, before the deadline, and finds the
+//!   gain (from its own position and the proposer's) above `min_gain` takes the proposer's
+//!   target at once and answers `Reply { accepted: true }`; otherwise it answers `false`. It
+//!   records its answer per proposer and repeats it for a re-sent proposal (a lost reply is
+//!   recovered by the proposer's retry, a duplicate never swaps twice).
+//! - An acceptance is "granted" until the receiver learns the proposer's side from its status
+//!   frames (which carry the target each robot holds): the proposer holding the receiver's
+//!   old target confirms it; the proposer still holding its own target in a status sent at or
+//!   after the deadline, and before the settle time ran out, means it gave up, and the receiver
+//!   takes its old target back. Meanwhile the receiver makes and accepts no other swap. Heard
+//!   nothing of the proposer by the end of the settle time: the swap stands.
 //!
 //! Invariants: every committed swap exchanges exactly two targets and lowers the summed cost
-//! by more than `min_gain` (for static positions); whenever no proposal is pending, the targets
-//! are a permutation. Between the receiver's commit and the proposer's, both aim at the same
-//! slot (message loss makes this window arbitrary long; ORCA keeps them apart meanwhile).
-//! The fixed point is swap-stable (no neighbouring pair gains from swapping), which is not
-//! always the optimal assignment that the centralised Hungarian finds.
+//! by more than `min_gain` (for static positions); whenever no robot is busy (pending or
+//! granted), the targets are a permutation, unless a receiver missed every status its
+//! proposer sent in the `settle_ticks` after the deadline (loss^settle_ticks when in range).
+//! Between the receiver's commit and the proposer's (or the receiver's revert), both aim at
+//! the same slot (at most `timeout_ticks` + `settle_ticks` ticks; ORCA keeps them apart).
+//! The fixed point is swap-stable (no neighbouring pair within range gains from swapping),
+//! which is not always the optimal assignment that the centralised Hungarian finds.
 
+use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use swarm::geometry::Vec2;
+
+/// The handshake's numbers.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct SwapParams {
+    /// Least gain (squared units) for a swap, against chattering. [chosen] 0.5.
+    pub min_gain: f64,
+    /// Proposals go only to neighbours at most this far (their last status, extrapolated).
+    /// [chosen] 7.5: half the 100- and 500-robot scenarios' comm radius of 15, so that the
+    /// pair stays in reach for the handshake's few ticks even when moving apart at 2 V_p.
+    pub range: f64,
+    /// Ticks the proposer waits for its answer before it gives up. [chosen] 6: with loss 0.3 a
+    /// round trip fails with probability 0.51 per try, six tries all fail with 0.018.
+    pub timeout_ticks: u64,
+    /// Ticks after its deadline in which a proposer that gave up makes no swap and its
+    /// receiver decides from its status frames. [chosen] 10: the receiver misses all ten
+    /// statuses with probability 0.3^10 = 6e-6 at loss 0.3.
+    pub settle_ticks: u64,
+}
+
+impl Default for SwapParams {
+    fn default() -> Self {
+        SwapParams {
+            min_gain: 0.5,
+            range: 7.5,
+            timeout_ticks: 6,
+            settle_ticks: 10,
+        }
+    }
+}
 
 /// A handshake message (one radio frame).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Message {
-    /// "Swap with me: I hold `from_target` and am at `from_position`; you hold `to_target`."
+    /// "Swap with me: I hold `from_target` and am at `from_position`; you hold `to_target`;
+    /// I wait for your answer until tick `deadline`."
     Propose {
         from: usize,
         to: usize,
@@ -40,6 +85,7 @@ pub enum Message {
         from_target: usize,
         to_target: usize,
         from_position: [f64; 2],
+        deadline: u64,
     },
     /// The receiver's answer to proposal `seq`.
     Reply {
@@ -68,6 +114,8 @@ pub struct NeighbourView {
     pub position: Vec2,
     /// The target it holds.
     pub target: usize,
+    /// The tick its status was sent at.
+    pub tick: u64,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -76,6 +124,18 @@ struct Pending {
     seq: u64,
     from_target: usize,
     to_target: usize,
+    deadline: u64,
+}
+
+/// An acceptance whose proposer's side is not known yet.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Granted {
+    proposer: usize,
+    /// The target this robot gave up (the proposer's, if it committed).
+    gave: usize,
+    /// The target it took (the proposer's old one).
+    took: usize,
+    deadline: u64,
 }
 
 /// One robot's side of the swap protocol.
@@ -87,6 +147,9 @@ pub struct SwapAgent {
     pub target: usize,
     seq: u64,
     pending: Option<Pending>,
+    granted: Option<Granted>,
+    /// No swap before this tick (a proposer that gave up).
+    quiet_until: u64,
     /// The last proposal answered per proposer: (seq, accepted).
     answered: BTreeMap<usize, (u64, bool)>,
 }
@@ -106,6 +169,8 @@ impl SwapAgent {
             target,
             seq: 0,
             pending: None,
+            granted: None,
+            quiet_until: 0,
             answered: BTreeMap::new(),
         }
     }
@@ -115,15 +180,24 @@ impl SwapAgent {
         self.pending.is_some()
     }
 
-    /// One step: handle the frames addressed to this robot (in the order given), then retry
-    /// the pending proposal or make a new one to the best neighbour of higher id.
+    /// Whether the robot is in a handshake: its proposal pending, or an acceptance whose
+    /// proposer's side it does not know yet.
+    pub fn is_busy(&self) -> bool {
+        self.pending.is_some() || self.granted.is_some()
+    }
+
+    /// One step at tick `now`: handle the frames addressed to this robot (in the order given),
+    /// settle a granted acceptance from the proposer's status, give up a proposal past its
+    /// deadline, then retry the pending proposal or make a new one to the best neighbour of
+    /// higher id within range.
     pub fn step(
         &mut self,
+        now: u64,
         position: Vec2,
         targets: &[Vec2],
         neighbours: &[NeighbourView],
         inbox: &[Message],
-        min_gain: f64,
+        p: &SwapParams,
     ) -> Vec<Message> {
         let mut out = Vec::new();
         for m in inbox.iter().filter(|m| m.to() == self.id) {
@@ -134,9 +208,12 @@ impl SwapAgent {
                     accepted,
                     ..
                 } => {
-                    if let Some(p) = self.pending.filter(|p| p.to == from && p.seq == seq) {
+                    if let Some(pd) = self
+                        .pending
+                        .filter(|pd| pd.to == from && pd.seq == seq && now < pd.deadline)
+                    {
                         if accepted {
-                            self.target = p.to_target;
+                            self.target = pd.to_target;
                         }
                         self.pending = None;
                     }
@@ -147,13 +224,16 @@ impl SwapAgent {
                     from_target,
                     to_target,
                     from_position,
+                    deadline,
                     ..
                 } => {
                     let accepted = match self.answered.get(&from) {
                         Some(&(s, a)) if s == seq => a,
                         _ => {
                             let theirs = Vec2::new(from_position[0], from_position[1]);
-                            let fits = self.pending.is_none()
+                            let fits = !self.is_busy()
+                                && now >= self.quiet_until
+                                && now < deadline
                                 && self.target == to_target
                                 && from_target < targets.len()
                                 && swap_gain(
@@ -161,8 +241,14 @@ impl SwapAgent {
                                     position,
                                     targets[from_target],
                                     targets[to_target],
-                                ) > min_gain;
+                                ) > p.min_gain;
                             if fits {
+                                self.granted = Some(Granted {
+                                    proposer: from,
+                                    gave: self.target,
+                                    took: from_target,
+                                    deadline,
+                                });
                                 self.target = from_target;
                             }
                             self.answered.insert(from, (seq, fits));
@@ -178,15 +264,39 @@ impl SwapAgent {
                 }
             }
         }
-        if self.pending.is_none() {
+        if let Some(g) = self.granted {
+            let seen = neighbours.iter().find(|n| n.id == g.proposer);
+            if seen.is_some_and(|n| n.target == g.gave) {
+                // The proposer committed.
+                self.granted = None;
+            } else if seen.is_some_and(|n| {
+                n.target == g.took && n.tick >= g.deadline && n.tick < g.deadline + p.settle_ticks
+            }) {
+                // It still held its own target after its deadline: it gave up.
+                if self.target == g.took {
+                    self.target = g.gave;
+                }
+                self.granted = None;
+            } else if now >= g.deadline + p.settle_ticks {
+                self.granted = None;
+            }
+        }
+        if let Some(pd) = self.pending {
+            if now >= pd.deadline {
+                self.pending = None;
+                self.quiet_until = pd.deadline + p.settle_ticks;
+            }
+        }
+        if !self.is_busy() && now >= self.quiet_until {
             let mine = targets[self.target];
             let mut best: Option<(f64, &NeighbourView)> = None;
-            for n in neighbours
-                .iter()
-                .filter(|n| n.id > self.id && n.target < targets.len())
-            {
+            for n in neighbours.iter().filter(|n| {
+                n.id > self.id
+                    && n.target < targets.len()
+                    && (n.position - position).norm() <= p.range
+            }) {
                 let gain = swap_gain(position, n.position, mine, targets[n.target]);
-                if gain > min_gain
+                if gain > p.min_gain
                     && best.is_none_or(|(g, b)| gain > g || (gain == g && n.id < b.id))
                 {
                     best = Some((gain, n));
@@ -199,17 +309,19 @@ impl SwapAgent {
                     seq: self.seq,
                     from_target: self.target,
                     to_target: n.target,
+                    deadline: now + p.timeout_ticks,
                 });
             }
         }
-        if let Some(p) = self.pending {
+        if let Some(pd) = self.pending {
             out.push(Message::Propose {
                 from: self.id,
-                to: p.to,
-                seq: p.seq,
-                from_target: p.from_target,
-                to_target: p.to_target,
+                to: pd.to,
+                seq: pd.seq,
+                from_target: pd.from_target,
+                to_target: pd.to_target,
                 from_position: [position.x, position.y],
+                deadline: pd.deadline,
             });
         }
         out
@@ -258,7 +370,13 @@ mod tests {
             (0..n).map(|i| SwapAgent::new(i, (i * 7 + 3) % n)).collect();
         let mut in_flight: Vec<Message> = Vec::new();
         let mut costs = vec![total_cost(&p, &q, &agents)];
-        for _round in 0..5000 {
+        let params = SwapParams {
+            min_gain: 1e-9,
+            range: radius,
+            ..SwapParams::default()
+        };
+        for round in 0..5000u64 {
+            // Status frames (not lost here): what each robot held after the last round.
             let views: Vec<NeighbourView> = agents
                 .iter()
                 .enumerate()
@@ -266,6 +384,7 @@ mod tests {
                     id: i,
                     position: p[i],
                     target: a.target,
+                    tick: round.saturating_sub(1),
                 })
                 .collect();
             let delivered: Vec<Message> = in_flight
@@ -279,10 +398,10 @@ mod tests {
                     .filter(|v| v.id != i && (v.position - p[i]).norm() <= radius)
                     .copied()
                     .collect();
-                sent.extend(agents[i].step(p[i], &q, &nb, &delivered, 1e-9));
+                sent.extend(agents[i].step(round, p[i], &q, &nb, &delivered, &params));
             }
             in_flight = sent;
-            if agents.iter().all(|a| !a.is_pending()) {
+            if agents.iter().all(|a| !a.is_busy()) {
                 costs.push(total_cost(&p, &q, &agents));
                 if in_flight.is_empty() {
                     break;
@@ -307,7 +426,7 @@ mod tests {
             let (p, q, agents, costs) = simulate(seed, n, 6.0, loss);
             assert!(connected(&p, 6.0), "seed {seed}");
             assert!(
-                agents.iter().all(|a| !a.is_pending()),
+                agents.iter().all(|a| !a.is_busy()),
                 "seed {seed}: did not settle"
             );
             assert!(is_permutation(&agents), "seed {seed}");
@@ -356,27 +475,110 @@ mod tests {
         seen.iter().all(|&s| s)
     }
 
+    fn view(id: usize, position: Vec2, target: usize, tick: u64) -> NeighbourView {
+        NeighbourView {
+            id,
+            position,
+            target,
+            tick,
+        }
+    }
+
+    fn no_gain_limit() -> SwapParams {
+        SwapParams {
+            min_gain: 0.0,
+            range: 20.0,
+            ..SwapParams::default()
+        }
+    }
+
     #[test]
     fn a_duplicated_proposal_swaps_once() {
+        let p = no_gain_limit();
         let q = [Vec2::new(10.0, 0.0), Vec2::zeros()];
         let (pa, pb) = (Vec2::zeros(), Vec2::new(10.0, 0.0));
         let mut a = SwapAgent::new(0, 0);
         let mut b = SwapAgent::new(1, 1);
-        let view_b = [NeighbourView {
-            id: 1,
-            position: pb,
-            target: 1,
-        }];
-        let out = a.step(pa, &q, &view_b, &[], 0.0);
+        let out = a.step(0, pa, &q, &[view(1, pb, 1, 0)], &[], &p);
         assert_eq!(out.len(), 1);
         // b hears the proposal twice (a retry): it swaps once and answers both times.
-        let replies = b.step(pb, &q, &[], &[out[0], out[0]], 0.0);
+        let replies = b.step(1, pb, &q, &[], &[out[0], out[0]], &p);
         assert_eq!(b.target, 0);
         assert_eq!(replies.len(), 2);
-        let again = b.step(pb, &q, &[], &[out[0]], 0.0);
+        let again = b.step(2, pb, &q, &[], &[out[0]], &p);
         assert_eq!(b.target, 0, "a re-sent proposal must not swap back");
         assert!(matches!(again[0], Message::Reply { accepted: true, .. }));
-        a.step(pa, &q, &[], &replies[..1], 0.0);
+        a.step(2, pa, &q, &[], &replies[..1], &p);
         assert_eq!((a.target, a.is_pending()), (1, false));
+        // b is granted until it hears a holding b's old target.
+        assert!(b.is_busy());
+        b.step(3, pb, &q, &[view(0, pa, 1, 2)], &[], &p);
+        assert!(!b.is_busy());
+        assert_eq!((a.target, b.target), (1, 0));
+    }
+
+    #[test]
+    fn a_lost_answer_is_given_up_and_the_receiver_takes_its_target_back() {
+        // Every reply is lost: a gives up at its deadline (tick 0 + 6), b accepted at tick 1
+        // and, hearing a still on target 0 in a status sent at tick 6, returns to target 1.
+        let p = no_gain_limit();
+        let q = [Vec2::new(10.0, 0.0), Vec2::zeros()];
+        let (pa, pb) = (Vec2::zeros(), Vec2::new(10.0, 0.0));
+        let mut a = SwapAgent::new(0, 0);
+        let mut b = SwapAgent::new(1, 1);
+        let out = a.step(0, pa, &q, &[view(1, pb, 1, 0)], &[], &p);
+        assert!(matches!(out[0], Message::Propose { deadline: 6, .. }));
+        b.step(1, pb, &q, &[view(0, pa, 0, 0)], &out, &p);
+        assert_eq!(b.target, 0);
+        for now in 1..6 {
+            let retry = a.step(now, pa, &q, &[view(1, pb, 0, now - 1)], &[], &p);
+            assert_eq!(retry.len(), 1, "tick {now}: a retries");
+            // a's statuses before its deadline decide nothing.
+            b.step(now + 1, pb, &q, &[view(0, pa, 0, now)], &[], &p);
+            assert!(b.is_busy());
+        }
+        let quiet = a.step(6, pa, &q, &[view(1, pb, 0, 5)], &[], &p);
+        assert!(quiet.is_empty() && !a.is_busy() && a.target == 0);
+        b.step(7, pb, &q, &[view(0, pa, 0, 6)], &[], &p);
+        assert_eq!((a.target, b.target, b.is_busy()), (0, 1, false));
+        // a stays quiet for settle_ticks after its deadline, then proposes again.
+        assert!(a
+            .step(15, pa, &q, &[view(1, pb, 1, 14)], &[], &p)
+            .is_empty());
+        assert_eq!(a.step(16, pa, &q, &[view(1, pb, 1, 15)], &[], &p).len(), 1);
+    }
+
+    #[test]
+    fn proposes_only_within_range() {
+        let p = SwapParams {
+            min_gain: 0.0,
+            range: 9.0,
+            ..SwapParams::default()
+        };
+        let q = [Vec2::new(10.0, 0.0), Vec2::zeros()];
+        let mut a = SwapAgent::new(0, 0);
+        // Gain 200, but b is 10 away.
+        assert!(a
+            .step(
+                0,
+                Vec2::zeros(),
+                &q,
+                &[view(1, Vec2::new(10.0, 0.0), 1, 0)],
+                &[],
+                &p
+            )
+            .is_empty());
+        assert_eq!(
+            a.step(
+                1,
+                Vec2::zeros(),
+                &q,
+                &[view(1, Vec2::new(9.0, 0.0), 1, 0)],
+                &[],
+                &p
+            )
+            .len(),
+            1
+        );
     }
 }

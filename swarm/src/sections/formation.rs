@@ -99,6 +99,10 @@ pub const REPORT_NO_SLOT: f64 = -1.0;
 /// `report[2]` on the tick the coordinator solved the pattern: the report is then
 /// [gap, optimiser wall seconds, REPORT_PLAN, branch-and-bound nodes].
 pub const REPORT_PLAN: f64 = -2.0;
+/// `report[2]` on the tick after a plan: [alpha, theta, REPORT_PLAN_SHAPE, plan epoch].
+pub const REPORT_PLAN_SHAPE: f64 = -3.0;
+/// `report[2]` two ticks after a plan: [d_1, d_2, REPORT_PLAN_SHIFT, plan epoch].
+pub const REPORT_PLAN_SHIFT: f64 = -4.0;
 // Otherwise the report is [slot x, slot y, slot index, plan epoch].
 
 /// Gap between neighbouring points of the built-in letters (template units): 2r + 0.148 at

@@ -13,7 +13,8 @@ use swarm::frames::Sense;
 use swarm::recording::Event;
 use swarm::scenario::{Check, ConfigError, Scenario};
 use swarm::sections::formation::{
-    FormationSection, REPORT_NO_SLOT, REPORT_PLAN, STATE_COORDINATOR, STATE_IN_PLACE,
+    FormationSection, REPORT_NO_SLOT, REPORT_PLAN, REPORT_PLAN_SHAPE, REPORT_PLAN_SHIFT,
+    STATE_COORDINATOR, STATE_IN_PLACE,
 };
 
 pub const ENTRY: MissionEntry = MissionEntry {
@@ -133,6 +134,14 @@ pub struct PlanReport {
     /// Wall seconds the branch-and-bound took in the coordinator's process.
     pub seconds: f64,
     pub nodes: u64,
+    /// The pattern's parameters of eq. (5) in the kernels' reading (reported on the next two
+    /// ticks; None until they arrive): the scale parameter alpha, the translation d and the
+    /// rotation theta (radians).
+    pub alpha: Option<f64>,
+    pub d: Option<[f64; 2]>,
+    pub theta: Option<f64>,
+    /// The plan's epoch (with the parameters).
+    pub epoch: Option<u32>,
 }
 
 /// The formation scenario's measures (docs/formation.md 4.1, 4.6), summary `mission.formation`.
@@ -314,7 +323,24 @@ impl Mission for FormationMission {
                 gap: report[0],
                 seconds: report[1],
                 nodes: report[3] as u64,
+                alpha: None,
+                d: None,
+                theta: None,
+                epoch: None,
             });
+            return;
+        }
+        if report[2] == REPORT_PLAN_SHAPE || report[2] == REPORT_PLAN_SHIFT {
+            // The robot's last plan: its parameters follow it on the next two ticks.
+            if let Some(plan) = self.plans.iter_mut().rev().find(|p| p.robot == robot) {
+                if report[2] == REPORT_PLAN_SHAPE {
+                    plan.alpha = Some(report[0]);
+                    plan.theta = Some(report[1]);
+                } else {
+                    plan.d = Some([report[0], report[1]]);
+                }
+                plan.epoch = Some(report[3] as u32);
+            }
             return;
         }
         if report[2] == REPORT_NO_SLOT || report[2] < 0.0 {
@@ -463,6 +489,15 @@ mod tests {
         m.observe(1, [0.1, 0.2, REPORT_PLAN, 7.0]);
         assert_eq!(m.plans.len(), 1);
         assert_eq!(m.plans[0].nodes, 7);
+        assert_eq!((m.plans[0].alpha, m.plans[0].d), (None, None));
+        m.observe(1, [1.25, -0.5, REPORT_PLAN_SHAPE, 3.0]);
+        m.observe(1, [4.0, 5.0, REPORT_PLAN_SHIFT, 3.0]);
+        let p = m.plans[0];
+        assert_eq!(
+            (p.alpha, p.theta, p.d, p.epoch),
+            (Some(1.25), Some(-0.5), Some([4.0, 5.0]), Some(3))
+        );
+        assert_eq!(m.slots[1].map(|s| s.index), Some(1), "parameter reports keep the slot");
         m.update(4, &[[0.0, 0.0, 0.0], [1.5, 0.0, 0.0]], &[true, false], &mut vec![]);
         assert_eq!(m.progress(), (1, 1));
         assert_eq!(m.overlapping_pairs, 1);

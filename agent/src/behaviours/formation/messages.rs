@@ -55,6 +55,8 @@ pub enum Msg {
         from_target: u32,
         to_target: u32,
         from_position: [f64; 2],
+        /// The proposer waits for the answer until this tick.
+        deadline: u64,
     },
     /// The answer to proposal `seq`.
     Reply { to: u32, seq: u64, accepted: bool },

@@ -37,6 +37,7 @@ pub use messages::{Assign, Msg, Plan, Status};
 pub use params::{parse_params, Params};
 
 use crate::formation::hungarian::{assign_targets, Hungarian};
+use crate::formation::linear_program::{Selected, Selection};
 use crate::formation::optimise::{optimise, optimise_without_rotation};
 use crate::formation::orca::{orca_velocity, Disc};
 use crate::formation::preferred::preferred_velocity;
@@ -47,7 +48,7 @@ use swarm::geometry::Vec2;
 use swarm::scenario::{Check, ConfigError, Scenario};
 use swarm::sections::formation::{
     FormationSection, PatternChoice, Reassignment, REPORT_NO_SLOT, REPORT_PLAN,
-    STATE_COORDINATOR, STATE_IN_PLACE,
+    REPORT_PLAN_SHAPE, REPORT_PLAN_SHIFT, STATE_COORDINATOR, STATE_IN_PLACE,
 };
 use swarm::{Behaviour, Command, Outbox, Received, Sense};
 
@@ -109,8 +110,12 @@ pub struct Formation {
     swap: Option<SwapAgent>,
     hungarian: Hungarian,
     first_tick: Option<u64>,
+    /// Reports queued for the next ticks: a plan's (alpha, theta) and d follow its report.
+    queued_reports: std::collections::VecDeque<[f64; 4]>,
     sensing_radius: f64,
     v_max_tick: f64,
+    /// `FORMATION_TRACE` is set: print the measurement lines of [`Formation::trace_line`].
+    trace: bool,
 }
 
 impl Formation {
@@ -146,8 +151,10 @@ impl Formation {
             swap: None,
             hungarian: Hungarian::new(),
             first_tick: None,
+            queued_reports: Default::default(),
             sensing_radius: sc.robot.neighbour_sensing_radius,
             v_max_tick: sc.robot.v_max,
+            trace: std::env::var_os("FORMATION_TRACE").is_some(),
         }
     }
 
@@ -239,6 +246,7 @@ impl Formation {
                     from_target,
                     to_target,
                     from_position,
+                    deadline,
                 } if *to == self.robot => swaps.push(SwapMessage::Propose {
                     from: r.from as usize,
                     to: *to as usize,
@@ -246,6 +254,7 @@ impl Formation {
                     from_target: *from_target as usize,
                     to_target: *to_target as usize,
                     from_position: *from_position,
+                    deadline: *deadline,
                 }),
                 Msg::Reply { to, seq, accepted } if *to == self.robot => {
                     swaps.push(SwapMessage::Reply {
@@ -339,6 +348,13 @@ impl Formation {
                 plan.transform[2],
                 plan.transform[3],
             );
+            let t = plan.transform;
+            let epoch = plan.epoch as f64;
+            self.queued_reports = [
+                [t[0], t[3], REPORT_PLAN_SHAPE, epoch],
+                [t[1], t[2], REPORT_PLAN_SHIFT, epoch],
+            ]
+            .into();
             self.install(plan);
             report = Some([gap, seconds, REPORT_PLAN, nodes as f64]);
         }
@@ -499,10 +515,11 @@ impl Formation {
                 id: *id as usize,
                 position: self.estimate(h, k),
                 target: h.slot as usize,
+                tick: h.tick,
             })
             .collect();
         let Some(agent) = &mut self.swap else { return };
-        let msgs = agent.step(me, &self.targets, &neighbours, inbox, self.p.swap_min_gain);
+        let msgs = agent.step(k, me, &self.targets, &neighbours, inbox, &self.p.swaps);
         self.slot = Some(agent.target);
         for m in msgs {
             let _ = match m {
@@ -512,6 +529,7 @@ impl Formation {
                     from_target,
                     to_target,
                     from_position,
+                    deadline,
                     ..
                 } => out.send(
                     to as u32,
@@ -521,6 +539,7 @@ impl Formation {
                         from_target: from_target as u32,
                         to_target: to_target as u32,
                         from_position,
+                        deadline,
                     },
                 ),
                 SwapMessage::Reply {
@@ -572,7 +591,32 @@ impl Formation {
                 radius: r,
             });
         }
-        orca_velocity(&mine, preferred, &robots, &obstacles, k).velocity
+        let sel = orca_velocity(&mine, preferred, &robots, &obstacles, k);
+        if self.trace {
+            self.trace_line(sense.tick, me, robots.len(), preferred, &sel);
+        }
+        sel.velocity
+    }
+}
+
+impl Formation {
+    /// The measurement of docs/formation.md 9 (environment variable `FORMATION_TRACE` set):
+    /// one stderr line per robot every 10 ticks and at every tick ORCA had no feasible
+    /// velocity: `TRACE tick robot x y slot slot_x slot_y selection neighbours busy
+    /// pref_x pref_y v_x v_y` (busy: in a swap handshake).
+    fn trace_line(&self, tick: u64, me: Vec2, neighbours: usize, preferred: Vec2, sel: &Selected) {
+        if sel.selection == Selection::Feasible && !tick.is_multiple_of(10) {
+            return;
+        }
+        let (sx, sy, s) = match self.slot {
+            Some(s) => (self.targets[s].x, self.targets[s].y, s as i64),
+            None => (0.0, 0.0, -1),
+        };
+        let busy = self.swap.as_ref().is_some_and(|a| a.is_busy());
+        eprintln!(
+            "TRACE {tick} {} {:.3} {:.3} {s} {sx:.3} {sy:.3} {:?} {neighbours} {busy} {:.3} {:.3} {:.3} {:.3}",
+            self.robot, me.x, me.y, sel.selection, preferred.x, preferred.y, sel.velocity.x, sel.velocity.y
+        );
     }
 }
 
@@ -618,7 +662,7 @@ impl Behaviour for Formation {
         let in_place = self
             .slot
             .is_some_and(|s| (self.targets[s] - me).norm() <= self.p.kernels.epsilon);
-        let report = report.unwrap_or(match self.slot {
+        let report = report.or_else(|| self.queued_reports.pop_front()).unwrap_or(match self.slot {
             Some(s) => [self.targets[s].x, self.targets[s].y, s as f64, epoch as f64],
             None => [0.0, 0.0, REPORT_NO_SLOT, 0.0],
         });

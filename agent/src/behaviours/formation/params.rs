@@ -3,6 +3,7 @@
 //! scenario already holds elsewhere (box, radius, obstacles, V_p, epsilon) are derived from it,
 //! so each has one source.
 
+use crate::formation::swaps::SwapParams;
 use crate::formation::FormationParams;
 use serde::{Deserialize, Serialize};
 use swarm::scenario::{Check, ConfigError, Scenario};
@@ -19,9 +20,9 @@ pub struct Params {
     /// position before it solves with those it heard. [chosen] 20 (5 s at tau = 0.25); with
     /// no loss it hears everyone at tick 1.
     pub gather_ticks: u32,
-    /// Decentralised swaps: least gain (squared units) for a swap, against chattering.
-    /// [chosen] 0.5.
-    pub swap_min_gain: f64,
+    /// Decentralised swaps (`formation.kernels.swaps`): least gain, range, the handshake's
+    /// timeout and settle ticks (agent/src/formation/swaps.rs documents each).
+    pub swaps: SwapParams,
     /// Added to every radius in ORCA (robots, discs, lost robots): a safety margin for what
     /// lock-step ORCA does not model (neighbours sensed one step old, the LP's fallback in a
     /// crowd). [chosen] 0.05: without it 100 robots under swaps overlapped by up to 0.07.
@@ -33,7 +34,7 @@ impl Default for Params {
         Params {
             kernels: FormationParams::default(),
             gather_ticks: 20,
-            swap_min_gain: 0.5,
+            swaps: SwapParams::default(),
             orca_margin: 0.05,
         }
     }
@@ -95,7 +96,10 @@ pub fn validate(sc: &Scenario, c: &Check) -> Result<(), ConfigError> {
     if let Some(a) = k.max_accel {
         c.range_f("formation.kernels.max_accel", a, 0.0, 1e9, true)?;
     }
-    c.range_f("formation.kernels.swap_min_gain", p.swap_min_gain, 0.0, 1e9, false)?;
+    c.range_f("formation.kernels.swaps.min_gain", p.swaps.min_gain, 0.0, 1e9, false)?;
+    c.range_f("formation.kernels.swaps.range", p.swaps.range, 0.0, 1e9, true)?;
+    c.range_u("formation.kernels.swaps.timeout_ticks", p.swaps.timeout_ticks, 1, 1_000_000)?;
+    c.range_u("formation.kernels.swaps.settle_ticks", p.swaps.settle_ticks, 1, 1_000_000)?;
     c.range_f("formation.kernels.orca_margin", p.orca_margin, 0.0, 1e6, false)?;
     let o = &k.optimiser;
     for (key, r) in [

@@ -321,6 +321,15 @@ fn timing_per_solve_for_nine_robots() {
         let t0 = Instant::now();
         let sol = optimise(&starts, &template, &params).unwrap();
         let dt = t0.elapsed().as_secs_f64();
+        let problem = Problem::new(&starts, &template, &params).unwrap();
+        let o = &params.optimiser;
+        let t2 = Instant::now();
+        let plain = problem
+            .solve(o.alpha_range, o.theta_range, &params, Reuse::Off)
+            .unwrap();
+        let d_plain = t2.elapsed().as_secs_f64();
+        assert_eq!(plain, sol);
+        eprintln!("seed {seed}: without reuse {d_plain:.3} s");
         let t1 = Instant::now();
         let base = optimise_without_rotation(&starts, &template, &params).unwrap();
         let db = t1.elapsed().as_secs_f64();
@@ -336,6 +345,35 @@ fn timing_per_solve_for_nine_robots() {
         times[times.len() / 2],
         times[times.len() - 1]
     );
+}
+
+#[test]
+fn reusing_the_parents_shape_changes_nothing() {
+    // Children split along the centroid take their parent's (alpha, theta) evaluation: the
+    // search must be the same, node for node, so the answers are equal to the last bit, also
+    // when the node budget cuts the search short.
+    let mut params = FormationParams::default();
+    params.optimiser.max_nodes = 20_000;
+    let template = Template::letter_c();
+    let o = params.optimiser.clone();
+    for seed in [1000, 1003, 1007, 1011] {
+        let starts = random_starts(seed, 9, &params, 0.1);
+        let problem = Problem::new(&starts, &template, &params).unwrap();
+        let on = problem
+            .solve(o.alpha_range, o.theta_range, &params, Reuse::On)
+            .unwrap();
+        let off = problem
+            .solve(o.alpha_range, o.theta_range, &params, Reuse::Off)
+            .unwrap();
+        assert_eq!(on, off, "seed {seed}");
+        let base_on = problem
+            .solve(o.alpha_range, [0.0, 0.0], &params, Reuse::On)
+            .unwrap();
+        let base_off = problem
+            .solve(o.alpha_range, [0.0, 0.0], &params, Reuse::Off)
+            .unwrap();
+        assert_eq!(base_on, base_off, "seed {seed}, theta = 0");
+    }
 }
 
 #[test]

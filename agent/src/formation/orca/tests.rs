@@ -284,3 +284,40 @@ fn agrees_with_dodgy_2d_on_random_cases() {
     assert!(relaxed_compared > 10, "{relaxed_compared}");
     assert_eq!(relaxed_agreed, relaxed_compared);
 }
+
+#[test]
+fn a_squeezed_robot_finds_a_one_step_safe_velocity_by_shrinking_the_horizon() {
+    // Four neighbours 2.5 away (R = 2) close in on a robot at rest at speed 1 from the four
+    // sides. Against a 2 s horizon each pair's half-plane asks the robot to move away from
+    // that neighbour (opposite sides conflict: infeasible). At one step (0.25 s) the
+    // truncated cone starts |p| / T - R / T = 2 away, beyond the closing speed 1: feasible.
+    let me = disc(0.0, 0.0, 0.0, 0.0, 1.0);
+    let others = [
+        disc(2.5, 0.0, -1.0, 0.0, 1.0),
+        disc(-2.5, 0.0, 1.0, 0.0, 1.0),
+        disc(0.0, 2.5, 0.0, -1.0, 1.0),
+        disc(0.0, -2.5, 0.0, 1.0, 1.0),
+    ];
+    let mut params = FormationParams::default();
+    let plain = orca_velocity(&me, Vec2::new(1.0, 0.0), &others, &[], &params);
+    assert_ne!(plain.selection, Selection::Feasible);
+    params.shrink_horizon_when_infeasible = true;
+    let shrunk = orca_velocity(&me, Vec2::new(1.0, 0.0), &others, &[], &params);
+    assert_eq!(shrunk.selection, Selection::Feasible);
+    for o in &others {
+        let h = orca_half_plane(&me, o, 0.5, params.time_step, params.time_step);
+        assert!(h.violation(shrunk.velocity) <= 1e-9, "{o:?}: {shrunk:?}");
+    }
+    // Feasible scenes are not touched: one neighbour far away.
+    let far = [disc(8.0, 0.0, 0.0, 0.0, 1.0)];
+    assert_eq!(
+        orca_velocity(&me, Vec2::new(1.0, 0.0), &far, &[], &params),
+        orca_velocity(
+            &me,
+            Vec2::new(1.0, 0.0),
+            &far,
+            &[],
+            &FormationParams::default()
+        )
+    );
+}
