@@ -98,6 +98,14 @@ fn run_loop<B: Behaviour>(args: &AgentArgs, mut rt: AgentRuntime<B>) -> Result<i
     let live: Arc<AtomicUsize> = Arc::default();
     let area = transport::act_slice_len(sc);
     let mut inbox: Vec<Received<B::Msg>> = Vec::new();
+    // Real-time mode (the world does not wait past a tick's deadline): a slow agent can find
+    // the Sense frame or the air of a later tick than the one it woke for. It keeps them for
+    // that tick (a copy of the Sense, the decoded list of the air) rather than losing them
+    // when it reads the next time. In lock-step the world publishes tick k + 1 only after
+    // every ack of tick k, so none of this ever happens.
+    let mut ahead_sense: Option<Box<swarm::frames::Sense>> = None;
+    let mut ahead_inbox: Vec<Received<B::Msg>> = Vec::new();
+    let mut ahead_air: Option<(u64, u32)> = None;
     let mut done = barrier.acked_up_to(robot);
     barrier.mark_ready(robot);
     loop {
@@ -123,10 +131,25 @@ fn run_loop<B: Behaviour>(args: &AgentArgs, mut rt: AgentRuntime<B>) -> Result<i
         {
             latest = Some(s);
         }
-        let Some(sense) = latest else {
-            // Not for us yet (a restarted agent attaching mid-tick): wait for the next one.
+        if let Some(s) = latest.as_ref().filter(|s| s.robot == robot && s.tick > k) {
+            // The world is past tick k already: keep this Sense for its own tick.
+            let mut copy = ahead_sense
+                .take()
+                .unwrap_or_else(swarm::frames::Sense::zeroed);
+            copy.as_mut().clone_from(s.payload());
+            ahead_sense = Some(copy);
             done = k + 1;
             continue;
+        }
+        let kept = ahead_sense.take();
+        let sense: &swarm::frames::Sense = match (&latest, &kept) {
+            (Some(s), _) => s,
+            // Not for us yet (a restarted agent attaching mid-tick): wait for the next one.
+            (None, None) => {
+                done = k + 1;
+                continue;
+            }
+            (None, Some(s)) => s,
         };
         if sense.tick != k || sense.robot != robot {
             done = k + 1;
@@ -146,9 +169,36 @@ fn run_loop<B: Behaviour>(args: &AgentArgs, mut rt: AgentRuntime<B>) -> Result<i
         {
             air = Some(a);
         }
-        if let Some(a) = air.filter(|a| a.user_header().tick == k) {
-            malformed =
-                transport::air_inbox(a, robot, rt.zero_copy(), &live, held_limit, &mut inbox);
+        match air {
+            Some(a) if a.user_header().tick == k => {
+                ahead_air = None;
+                malformed =
+                    transport::air_inbox(a, robot, rt.zero_copy(), &live, held_limit, &mut inbox);
+            }
+            Some(a) if a.user_header().tick > k => {
+                // Past tick k's deadline already (real-time mode): the list is for a later
+                // tick, decoded now and kept for it.
+                let t = a.user_header().tick;
+                ahead_inbox.clear();
+                let bad = transport::air_inbox(
+                    a,
+                    robot,
+                    rt.zero_copy(),
+                    &live,
+                    held_limit,
+                    &mut ahead_inbox,
+                );
+                ahead_air = Some((t, bad));
+            }
+            _ => match ahead_air {
+                Some((t, bad)) if t == k => {
+                    ahead_air = None;
+                    std::mem::swap(&mut inbox, &mut ahead_inbox);
+                    malformed = bad;
+                }
+                Some((t, _)) if t < k => ahead_air = None,
+                _ => {}
+            },
         }
         let sample = act_pub
             .loan_slice_uninit(area)
@@ -170,7 +220,8 @@ fn run_loop<B: Behaviour>(args: &AgentArgs, mut rt: AgentRuntime<B>) -> Result<i
             service: ServiceId::Act(robot),
             source,
         })?;
-        drop(sense);
+        drop(latest);
+        drop(kept);
         barrier.ack_with(robot, k, bell);
         done = k + 1;
     }

@@ -93,7 +93,7 @@ fn merge_toml(base: &mut toml::Table, over: toml::Table) {
 impl Variant {
     /// The base scenario with this variant's `overlay` and `set` laid over it (`dir`: the
     /// experiment file's folder).
-    fn scenario(&self, base: &Scenario, dir: &Path) -> Result<Scenario, String> {
+    pub(crate) fn scenario(&self, base: &Scenario, dir: &Path) -> Result<Scenario, String> {
         if self.overlay.is_none() && self.set.is_none() {
             return Ok(base.clone());
         }
@@ -232,6 +232,9 @@ fn run(a: ExperimentArgs) -> Result<i32, String> {
     }
     if crate::experiment_hunt::is_hunt(&a.file) {
         return crate::experiment_hunt::run(&a.file, a.out.as_deref(), a.executor, a.runs);
+    }
+    if crate::experiment_cbca::is_cbca(&a.file) {
+        return crate::experiment_cbca::run(&a.file, a.out.as_deref());
     }
     let x = load(&a.file)?;
     let base = Scenario::load(&x.scenario).map_err(|e| e.to_string())?;

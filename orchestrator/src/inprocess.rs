@@ -226,6 +226,7 @@ impl BehaviourVisitor for InProcess<'_> {
             loop_seconds: t_loop.elapsed().as_secs_f64(),
             startup_seconds,
             tick_ns,
+            late_releases: 0,
         };
         outputs.finish(&mut world, &timing, self.run_id, "inprocess", end)
     }
@@ -241,6 +242,28 @@ pub fn run(
     run_live(sc, out_dir, run_id, threads, on_tick, false)
 }
 
+/// Why the in-process executor refuses a scenario.
+#[derive(Debug, thiserror::Error)]
+pub enum InProcessError {
+    /// Real-time mode needs agents that can be late: in one process the world's own threads
+    /// step every robot inside the tick, so no action can miss a deadline, and a paced
+    /// in-process run is what `runtime.tick_hz` already gives.
+    #[error(
+        "runtime.realtime_hz = {0} (--realtime) needs the processes executor: in-process, \
+         the world's own threads step every robot within the tick, so no action can miss its \
+         deadline; use --executor processes, or --tick-hz to pace an in-process run"
+    )]
+    Realtime(f64),
+}
+
+/// Refuses what the in-process executor cannot run (real-time mode).
+pub fn check(sc: &Scenario) -> Result<(), InProcessError> {
+    if sc.runtime.is_realtime() {
+        return Err(InProcessError::Realtime(sc.runtime.realtime_hz));
+    }
+    Ok(())
+}
+
 /// [`run`], recording.bin flushed after every tick when `live` (`orchestrator up --view`).
 pub fn run_live(
     sc: &Scenario,
@@ -250,6 +273,7 @@ pub fn run_live(
     on_tick: &mut dyn FnMut(&World),
     live: bool,
 ) -> std::io::Result<Summary> {
+    check(sc).map_err(|e| std::io::Error::new(std::io::ErrorKind::InvalidInput, e))?;
     dispatch(
         sc,
         InProcess {

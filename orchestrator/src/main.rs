@@ -4,6 +4,7 @@ mod bench;
 mod clean;
 mod control;
 mod experiment;
+mod experiment_cbca;
 mod experiment_formation;
 mod experiment_hunt;
 mod export;

@@ -56,6 +56,11 @@ pub struct UpArgs {
     /// [scenario: runtime.tick_hz].
     #[arg(long)]
     pub tick_hz: Option<f64>,
+    /// Real-time mode: tick on a clock at HZ ticks per second; an action late for its
+    /// tick's deadline is not waited for (the robot keeps its last command) and counts as a
+    /// deadline miss. Processes executor only [scenario: runtime.realtime_hz].
+    #[arg(long, value_name = "HZ")]
+    pub realtime: Option<f64>,
     /// Run folder (default runs/<run-id>).
     #[arg(long)]
     pub out: Option<PathBuf>,
@@ -88,6 +93,10 @@ pub struct UpArgs {
     /// Port of --view (0: any free port).
     #[arg(long, default_value_t = 0, requires = "view")]
     pub view_port: u16,
+    /// Record which messages each robot was handed every tick (sender, seq, size), for the
+    /// viewer's "heard this tick" [scenario: runtime.record_deliveries].
+    #[arg(long)]
+    pub record_deliveries: bool,
 }
 
 #[derive(Copy, Clone, Debug, PartialEq, Eq, ValueEnum)]
@@ -176,6 +185,8 @@ const FLAG_KEYS: &[(&str, &str)] = &[
     ("faults.kill_fraction", "--kill-fraction"),
     ("faults.max_restarts", "--max-restarts"),
     ("runtime.tick_hz", "--tick-hz"),
+    ("runtime.realtime_hz", "--realtime"),
+    ("runtime.record_deliveries", "--record-deliveries"),
 ];
 
 /// The scenario with the flags applied and validated.
@@ -252,6 +263,14 @@ pub fn resolve(a: &UpArgs) -> Result<Scenario, ConfigError> {
     if let Some(v) = a.tick_hz {
         set("runtime.tick_hz", &mut || sc.runtime.tick_hz = v);
     }
+    if let Some(v) = a.realtime {
+        set("runtime.realtime_hz", &mut || sc.runtime.realtime_hz = v);
+    }
+    if a.record_deliveries {
+        set("runtime.record_deliveries", &mut || {
+            sc.runtime.record_deliveries = true
+        });
+    }
     if let Some(v) = a.max_restarts {
         set("faults.max_restarts", &mut || sc.faults.max_restarts = v);
     }
@@ -298,6 +317,7 @@ fn progress(sc: &Scenario, quiet: bool) -> ProgressBar {
     pb
 }
 
+#[allow(clippy::too_many_arguments)]
 fn bar_msg(
     alive: u32,
     n: u32,
@@ -306,6 +326,7 @@ fn bar_msg(
     loss: u64,
     other: u64,
     progress: (&str, u32, u32),
+    misses: Option<u64>,
 ) -> String {
     let (label, done, total) = progress;
     let t = if total > 0 && !label.is_empty() {
@@ -313,7 +334,11 @@ fn bar_msg(
     } else {
         String::new()
     };
-    format!("{t}robots alive {alive}/{n} | messages delivered {delivered}, dropped: out of range {range}, lost {loss}, other {other}")
+    // Real-time mode: the deadline misses so far.
+    let m = misses
+        .map(|m| format!(" | deadline misses {m}"))
+        .unwrap_or_default();
+    format!("{t}robots alive {alive}/{n}{m} | messages delivered {delivered}, dropped: out of range {range}, lost {loss}, other {other}")
 }
 
 pub fn up(a: UpArgs) -> i32 {
@@ -326,6 +351,12 @@ pub fn up(a: UpArgs) -> i32 {
             return 2;
         }
     };
+    if a.executor == Executor::Inprocess {
+        if let Err(e) = inprocess::check(&sc) {
+            eprintln!("error: --executor inprocess: {e}");
+            return 2;
+        }
+    }
     if a.executor == Executor::Processes {
         // Refused before anything starts, rather than EMFILE in the world after seconds.
         let (soft, _) = swarm::limits::raise_nofile();
@@ -393,6 +424,7 @@ pub fn up(a: UpArgs) -> i32 {
     let pb = progress(&sc, a.quiet);
     let n = sc.run.robots;
     let label = world::mission::progress_label(&sc);
+    let realtime = sc.runtime.is_realtime();
     let result: Result<(), String> = match a.executor {
         Executor::Inprocess => inprocess::run_live(
             &sc,
@@ -412,6 +444,7 @@ pub fn up(a: UpArgs) -> i32 {
                         r.dropped_loss,
                         r.dropped_occluded + r.dropped_bandwidth + r.receiver_dead + r.malformed,
                         (label, done, total),
+                        None,
                     ));
                 }
             },
@@ -433,6 +466,7 @@ pub fn up(a: UpArgs) -> i32 {
                     s.dropped_loss,
                     s.dropped_other,
                     (label, s.progress_done, s.progress_total),
+                    realtime.then_some(s.deadline_misses),
                 ));
             },
             live: a.view,
@@ -473,6 +507,9 @@ pub fn up(a: UpArgs) -> i32 {
     }
 }
 
+/// Robots whose misses the printed summary lists.
+const MISSES_LISTED: usize = 20;
+
 fn print_summary(v: &serde_json::Value, dir: &Path) {
     let g = |p: &str| v.pointer(p).cloned().unwrap_or_default();
     let f = |p: &str| v.pointer(p).and_then(|x| x.as_f64()).unwrap_or(0.0);
@@ -504,6 +541,30 @@ fn print_summary(v: &serde_json::Value, dir: &Path) {
         g("/messages/dropped_occluded"), g("/messages/dropped_bandwidth"), g("/messages/dropped_loss"),
         g("/messages/malformed"), g("/messages/receiver_dead"), g("/messages/in_flight")
     );
+    if let Some(rt) = v.pointer("/realtime") {
+        // Robots that missed, as robot:misses (the first MISSES_LISTED; summary.json has all).
+        let per: Vec<String> = rt["misses_per_robot"]
+            .as_array()
+            .map(|a| {
+                a.iter()
+                    .enumerate()
+                    .filter(|(_, x)| x.as_u64().unwrap_or(0) > 0)
+                    .take(MISSES_LISTED)
+                    .map(|(i, x)| format!("{i}:{x}"))
+                    .collect()
+            })
+            .unwrap_or_default();
+        println!(
+            "  real-time {} Hz: deadline misses {} of {} robot-ticks ({:.2} %), late actions {}, late releases {}; robot:misses [{}]",
+            rt["hz"],
+            rt["deadline_misses"],
+            rt["robot_ticks"],
+            100.0 * rt["miss_rate"].as_f64().unwrap_or(0.0),
+            rt["late_actions"],
+            rt["late_releases"],
+            per.join(", ")
+        );
+    }
     let rejected: u64 = v
         .pointer("/rejected_actions")
         .and_then(|r| r.as_object())

@@ -303,6 +303,25 @@ impl TickBarrier {
         }
     }
 
+    /// The ack counter (acknowledgements since the last release, late ones of earlier ticks
+    /// included, plus the orchestrator's nudges): read it before checking who acknowledged,
+    /// then sleep with [`TickBarrier::wait_ack_change`] on the value read, and no wake-up is
+    /// lost in between.
+    pub fn ack_count(&self) -> u32 {
+        self.header().acks.load(Ordering::Acquire)
+    }
+
+    /// Sleeps while the ack counter holds `seen`, at most `timeout` (real-time mode). Unlike
+    /// [`TickBarrier::wait_acks`] it does not return at once when the counter reached the
+    /// expected number: in real-time mode late acknowledgements of an earlier tick count
+    /// too, so the counter can reach it while robots of this tick are still missing.
+    pub fn wait_ack_change_with(&self, seen: u32, timeout: Duration, bell: Option<&EventBell>) {
+        match bell {
+            Some(b) => b.wait(timeout),
+            None => futex_wait(&self.header().acks, seen, timeout),
+        }
+    }
+
     /// Wakes the world from `wait_acks` (the orchestrator does this after reporting a fault).
     pub fn nudge_world(&self) {
         let h = self.header();

@@ -272,6 +272,8 @@ pub struct WorldStatus {
     /// Dropped by the medium for line of sight or bandwidth, or due at a dead receiver.
     pub dropped_other: u64,
     pub rejected_actions: u64,
+    /// Real-time mode: deadlines missed so far, all robots (0 in lock-step).
+    pub deadline_misses: u64,
 }
 
 /// Orchestrator -> world.

@@ -172,7 +172,8 @@ pub struct RadioCounters {
     pub dropped_loss: u64,
     /// Due at this tick, but the receiver could not decode the payload.
     pub malformed: u64,
-    /// Due at this tick, but the receiver was dead (or sent no action).
+    /// Due at this tick, but the receiver was dead (or sent no action: in real-time mode, a
+    /// receiver that missed the tick's deadline, so its list of the tick went unread).
     pub receiver_dead: u64,
     /// Passed the medium and not due yet, after this tick (a snapshot, not a sum: the run's is
     /// that of its last tick).

@@ -20,6 +20,10 @@ pub const RECORDING_VERSION_EXTRA: u32 = 4;
 pub const RECORDING_VERSION_LAYER: u32 = 5;
 /// The oldest version this reader understands.
 pub const RECORDING_VERSION_OLDEST: u32 = 3;
+/// Version 6: as version 5, each TickLayer followed by the tick's [`TickDeliveries`] (who
+/// heard whom). Opt-in (`runtime.record_deliveries`, `up --record-deliveries`): other runs keep
+/// their version.
+pub const RECORDING_VERSION_DELIVERIES: u32 = 6;
 
 /// Clearances of robot bodies at one tick (robots with `robot.radius` > 0).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -101,6 +105,9 @@ pub enum Event {
     EntityDone { entity: u32, robot: u32 },
     /// Behaviour-declared event flags.
     Declared { robot: u32, flags: u32 },
+    /// Real-time mode (`runtime.realtime_hz`): the robot's action for this tick missed its
+    /// deadline; it kept its last command. (Last variant: older recordings read unchanged.)
+    DeadlineMissed { robot: u32 },
 }
 
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -124,6 +131,10 @@ pub struct TickRecord {
     /// TickExtra as a [`TickLayer`]; read back whole, unchanged ticks filled in).
     #[serde(skip)]
     pub layer: Option<Vec<Mark>>,
+    /// Version 6 only: the messages each robot was handed this tick (written after the
+    /// TickLayer).
+    #[serde(skip)]
+    pub deliveries: Option<TickDeliveries>,
 }
 
 fn cfg() -> bincode::config::Configuration {
@@ -138,6 +149,8 @@ pub struct RecordingWriter<W: Write> {
     layer: Option<Vec<Mark>>,
     /// Flush after every tick (a live viewer reads the file as it grows).
     flush_each_tick: bool,
+    /// Version 6: a TickDeliveries follows each TickLayer.
+    deliveries: bool,
 }
 
 impl<W: Write> RecordingWriter<W> {
@@ -150,6 +163,7 @@ impl<W: Write> RecordingWriter<W> {
             extra: header.version >= RECORDING_VERSION_EXTRA,
             layer: (header.version >= RECORDING_VERSION_LAYER).then(Vec::new),
             flush_each_tick: false,
+            deliveries: header.version >= RECORDING_VERSION_DELIVERIES,
         })
     }
     /// Every tick reaches the file when pushed (`orchestrator up --view`); otherwise the
@@ -185,6 +199,11 @@ impl<W: Write> RecordingWriter<W> {
                 last.clear();
                 last.extend_from_slice(now);
             }
+        }
+        if self.deliveries {
+            let d = rec.deliveries.as_ref().unwrap_or(&NO_DELIVERIES);
+            bincode::serde::encode_into_std_write(d, &mut self.out, cfg())
+                .map_err(std::io::Error::other)?;
         }
         if self.flush_each_tick {
             self.out.flush()?;
@@ -225,6 +244,7 @@ pub fn read_header<R: Read>(r: &mut R) -> std::io::Result<RecordingHeader> {
 pub struct TickReader {
     extra: bool,
     layer: Option<Vec<Mark>>,
+    deliveries: bool,
 }
 
 impl TickReader {
@@ -232,6 +252,7 @@ impl TickReader {
         TickReader {
             extra: header.version >= RECORDING_VERSION_EXTRA,
             layer: (header.version >= RECORDING_VERSION_LAYER).then(Vec::new),
+            deliveries: header.version >= RECORDING_VERSION_DELIVERIES,
         }
     }
 
@@ -265,9 +286,46 @@ impl TickReader {
             }
             t.layer = Some(last.clone());
         }
+        if self.deliveries {
+            match bincode::serde::decode_from_std_read(inp, cfg()) {
+                Ok(d) => t.deliveries = Some(d),
+                Err(e) if eof(&e) => return Ok(None),
+                Err(e) => return Err(std::io::Error::other(e)),
+            }
+        }
         Ok(Some(t))
     }
 }
+
+/// One message a robot was handed at a tick (version 6).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Heard {
+    pub sender: u32,
+    /// The sender's sequence number of the message.
+    pub seq: u32,
+    /// Payload bytes (the header not counted).
+    pub bytes: u32,
+}
+
+/// What a version-6 recording adds after each tick's TickLayer: the messages the medium handed
+/// each robot at this tick (those due now: sent `1 + radio.delay_ticks` ticks earlier), for
+/// the viewer's "what it heard that tick". Their count over all robots is the tick's
+/// `delivered + malformed`.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct TickDeliveries {
+    /// Index = receiver: its messages in (sender, seq) order. Empty for a robot that was dead
+    /// or sent no valid action this tick (its messages count as `receiver_dead`).
+    pub heard: Vec<Vec<Heard>>,
+    /// (robot, count) of the receivers that reported messages of their list as malformed
+    /// (the agent reports a count, not which).
+    pub malformed: Vec<(u32, u32)>,
+}
+
+/// A version-6 tick whose record carries no deliveries writes these (nothing heard).
+static NO_DELIVERIES: TickDeliveries = TickDeliveries {
+    heard: Vec::new(),
+    malformed: Vec::new(),
+};
 
 #[cfg(test)]
 mod tests {
@@ -299,6 +357,7 @@ mod tests {
             },
             extra: None,
             layer: None,
+            deliveries: None,
         };
         let mut buf = Vec::new();
         let mut w = RecordingWriter::new(&mut buf, &h).unwrap();
@@ -354,6 +413,7 @@ mod tests {
             radio: RadioCounters::default(),
             extra: Some(TickExtra::default()),
             layer: Some(m),
+            deliveries: None,
         };
         let ticks = vec![
             tick(0, vec![disc(1)]),
@@ -383,6 +443,75 @@ mod tests {
             let (_, part) = read_recording(&buf[..cut]).unwrap();
             assert_eq!(part.len(), 2, "cut at {cut}");
         }
+    }
+
+    #[test]
+    fn version_6_carries_each_ticks_deliveries_after_its_layer() {
+        let h = RecordingHeader {
+            version: RECORDING_VERSION_DELIVERIES,
+            robots: 3,
+            seed: 0,
+            scenario: String::new(),
+        };
+        let heard = |sender, seq, bytes| Heard { sender, seq, bytes };
+        let tick = |k: u64, d: Option<TickDeliveries>| TickRecord {
+            tick: k,
+            poses: vec![[0.0; 3]; 3],
+            alive: vec![1, 1, 0],
+            states: vec![0; 3],
+            events: vec![],
+            radio: RadioCounters::default(),
+            extra: Some(TickExtra::default()),
+            layer: Some(vec![]),
+            deliveries: d,
+        };
+        let d1 = TickDeliveries {
+            heard: vec![
+                vec![heard(1, 7, 12)],
+                vec![heard(0, 3, 4), heard(0, 4, 300)],
+                vec![],
+            ],
+            malformed: vec![(1, 1)],
+        };
+        let ticks = vec![tick(0, Some(TickDeliveries::default())), tick(1, Some(d1))];
+        let mut buf = Vec::new();
+        let mut w = RecordingWriter::new(&mut buf, &h).unwrap();
+        for t in &ticks {
+            w.push(t).unwrap();
+        }
+        // A record without deliveries writes "nothing heard".
+        w.push(&tick(2, None)).unwrap();
+        w.finish().unwrap();
+        let (_, back) = read_recording(&buf[..]).unwrap();
+        assert_eq!(back[..2], ticks[..]);
+        assert_eq!(back[2].deliveries, Some(TickDeliveries::default()));
+        // Cut inside the last record's deliveries: two ticks.
+        let (_, part) = read_recording(&buf[..buf.len() - 1]).unwrap();
+        assert_eq!(part.len(), 2);
+        // A version-5 reader's view of the same ticks is smaller by exactly the deliveries.
+        let mut buf5 = Vec::new();
+        let h5 = RecordingHeader {
+            version: RECORDING_VERSION_LAYER,
+            ..h.clone()
+        };
+        let mut w = RecordingWriter::new(&mut buf5, &h5).unwrap();
+        for t in &ticks {
+            w.push(t).unwrap();
+        }
+        w.push(&tick(2, None)).unwrap();
+        w.finish().unwrap();
+        let d_bytes: usize = [
+            TickDeliveries::default(),
+            ticks[1].deliveries.clone().unwrap(),
+            TickDeliveries::default(),
+        ]
+        .iter()
+        .map(|d| bincode::serde::encode_to_vec(d, cfg()).unwrap().len())
+        .sum();
+        assert_eq!(
+            buf.len() - encoded_header_len(&h),
+            buf5.len() - encoded_header_len(&h5) + d_bytes
+        );
     }
 
     fn encoded_header_len(h: &RecordingHeader) -> usize {

@@ -229,9 +229,37 @@ pub struct RuntimeParams {
     /// lock-step (every live agent is waited for), so results do not depend on it.
     #[serde(default)]
     pub tick_hz: f64,
+    /// Real-time mode (`--realtime HZ`, DESIGN section 3): the world ticks on a clock at this
+    /// rate, tick k's deadline being t0 + (k + 1) / realtime_hz; an action that misses it is
+    /// not waited for (the robot keeps its last command) and counts as a deadline miss.
+    /// 0 = lock-step (the default, deterministic). Left out of a resolved scenario when 0, so
+    /// lock-step files and recordings are unchanged; a real-time run's resolved scenario (and
+    /// so its recording's header) names its rate.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub realtime_hz: f64,
+    /// Record the messages each robot was handed every tick (recording version 6: sender,
+    /// seq and size of each), for the viewer's "heard this tick". Off by default: a run that
+    /// leaves it off records what it did before (and its resolved scenario does not list it).
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub record_deliveries: bool,
 }
 
 impl RuntimeParams {
+    /// Whether the world ticks on a clock (`realtime_hz` > 0) rather than in lock-step.
+    pub fn is_realtime(&self) -> bool {
+        self.realtime_hz > 0.0
+    }
+
+    /// Real-time mode: when tick `k` starts (k / realtime_hz) and its deadline
+    /// ((k + 1) / realtime_hz), counted from the start of the loop. None in lock-step.
+    pub fn realtime_window(&self, k: u64) -> Option<(std::time::Duration, std::time::Duration)> {
+        let at = |t: u64| {
+            std::time::Duration::try_from_secs_f64(t as f64 / self.realtime_hz)
+                .unwrap_or(std::time::Duration::MAX)
+        };
+        self.is_realtime().then(|| (at(k), at(k + 1)))
+    }
+
     /// When tick `k` may start, counted from the start of the loop (None: unpaced).
     pub fn tick_start(&self, k: u64) -> Option<std::time::Duration> {
         // Saturating: a pace so slow that tick k lies beyond Duration's range (`--tick-hz
@@ -284,6 +312,12 @@ pub const MAX_ROBOTS: u32 = 4096;
 /// Slowest pacing, in ticks per second (one tick per 1,000 s): below it a tick's start time
 /// k / tick_hz no longer fits a `Duration` for long runs, and nobody watches a run that slow.
 pub const MIN_TICK_HZ: f64 = 1e-3;
+/// Slowest real-time rate (`runtime.realtime_hz`, ticks per second): one tick per 100 s; a
+/// slower clock is pacing, for which `runtime.tick_hz` is the key.
+pub const MIN_REALTIME_HZ: f64 = 0.01;
+/// Fastest real-time rate: a 100 us tick, already below one wake-up round of 50 agents on
+/// this kind of VM (BENCHMARKS.md); faster only measures the clock.
+pub const MAX_REALTIME_HZ: f64 = 10_000.0;
 /// Most restarts a robot may have (`faults.max_restarts`): more than any run needs.
 pub const MAX_RESTARTS: u32 = 1_000_000;
 /// Fastest pacing (ticks per second); faster than any run goes unpaced.
@@ -624,6 +658,32 @@ impl Scenario {
                 e.message += " (or 0: unpaced)";
                 e
             })?;
+        }
+        // 0 is lock-step; a real-time clock has its own pace, so tick_hz must be 0 with it.
+        if self.runtime.realtime_hz != 0.0 {
+            c.range_f(
+                "runtime.realtime_hz",
+                self.runtime.realtime_hz,
+                MIN_REALTIME_HZ,
+                MAX_REALTIME_HZ,
+                false,
+            )
+            .map_err(|mut e| {
+                e.message += " ticks per second (or 0: lock-step)";
+                e
+            })?;
+            if self.runtime.tick_hz != 0.0 {
+                return Err(c.err(
+                    "runtime.realtime_hz",
+                    format!(
+                        "= {} cannot be combined with runtime.tick_hz = {}: real-time mode \
+                         ticks on its own clock; set runtime.tick_hz = 0 (pacing is for \
+                         lock-step runs)",
+                        number(self.runtime.realtime_hz),
+                        number(self.runtime.tick_hz)
+                    ),
+                ));
+            }
         }
         c.range_u(
             "runtime.startup_timeout_s",

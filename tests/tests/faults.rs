@@ -6,35 +6,6 @@ use std::path::Path;
 use std::process::Child;
 use std::time::{Duration, Instant};
 
-/// The registry entry of the run writing to `out`, once all its agents are started.
-fn registry_entry(out: &Path, robots: usize) -> serde_json::Value {
-    let t = Instant::now();
-    loop {
-        assert!(
-            t.elapsed() < Duration::from_secs(30),
-            "run never registered its agents"
-        );
-        for e in std::fs::read_dir("/tmp/swarm-runtime/runs")
-            .into_iter()
-            .flatten()
-            .flatten()
-        {
-            let Ok(s) = std::fs::read_to_string(e.path()) else {
-                continue;
-            };
-            let Ok(v) = serde_json::from_str::<serde_json::Value>(&s) else {
-                continue;
-            };
-            if v["run_dir"].as_str() == Some(&out.display().to_string())
-                && v["agent_pids"].as_array().map(|a| a.len()) == Some(robots)
-            {
-                return v;
-            }
-        }
-        std::thread::sleep(Duration::from_millis(20));
-    }
-}
-
 fn wait_with_timeout(mut c: Child, limit: Duration) -> std::process::Output {
     let t = Instant::now();
     while c.try_wait().unwrap().is_none() {

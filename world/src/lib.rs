@@ -4,6 +4,7 @@
 //! world process drives it over iceoryx2, the in-process executor drives it directly.
 
 pub mod body;
+pub mod heard;
 pub mod kinematics;
 pub mod limits;
 pub mod medium;

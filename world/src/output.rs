@@ -20,6 +20,27 @@ pub struct Timing {
     pub startup_seconds: f64,
     /// Duration of every tick, nanoseconds.
     pub tick_ns: Vec<u64>,
+    /// Real-time mode: ticks the world itself released after their deadline (the world's
+    /// own work, sensing and the medium, took longer than the period).
+    pub late_releases: u64,
+}
+
+/// Real-time mode's figures in summary.json (absent for lock-step runs).
+#[derive(Debug, Clone, Serialize)]
+pub struct RealtimeSummary {
+    /// The clock's rate, ticks per second (`runtime.realtime_hz`).
+    pub hz: f64,
+    /// Deadlines missed, all robots.
+    pub deadline_misses: u64,
+    /// Deadlines missed by each robot (index = robot).
+    pub misses_per_robot: Vec<u64>,
+    /// (live robot, tick) pairs: deadline_misses / robot_ticks is the miss rate.
+    pub robot_ticks: u64,
+    pub miss_rate: f64,
+    /// Actions read after their tick's deadline (their messages went out then).
+    pub late_actions: u64,
+    /// Ticks the world released after their own deadline.
+    pub late_releases: u64,
 }
 
 #[derive(Debug, Clone, Serialize)]
@@ -61,6 +82,9 @@ pub struct Summary {
     pub distance_travelled: f64,
     pub alive_at_end: u32,
     pub faults: Vec<Fault>,
+    /// Real-time mode only: deadline misses per robot and in all.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub realtime: Option<RealtimeSummary>,
     /// The run's worst clearances and overlaps (robots with a body only).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub body: Option<BodySummary>,
@@ -181,6 +205,19 @@ impl RunOutputs {
             distance_travelled: world.distance_travelled,
             alive_at_end: world.alive_count(),
             faults: world.faults.clone(),
+            realtime: world.sc.runtime.is_realtime().then(|| RealtimeSummary {
+                hz: world.sc.runtime.realtime_hz,
+                deadline_misses: world.total_misses(),
+                misses_per_robot: world.misses.clone(),
+                robot_ticks: world.robot_ticks,
+                miss_rate: if world.robot_ticks > 0 {
+                    world.total_misses() as f64 / world.robot_ticks as f64
+                } else {
+                    0.0
+                },
+                late_actions: world.late_actions,
+                late_releases: timing.late_releases,
+            }),
             body: world.body,
             mission: {
                 let mut m = spread(&world.coverage, &world.poses, &world.alive);

@@ -72,6 +72,101 @@ fn take_action(act: &Subscriber<ipc::Service, [u8], Action>, sent: &mut Air) -> 
     Some(a)
 }
 
+/// Real-time mode: robot i's act samples at tick `k`'s deadline. The one of tick k (its
+/// messages go to `sent`) is this tick's action; one of an earlier tick arrived after that
+/// tick's deadline: its messages go out now (into `sent`) and its command is superseded.
+/// Only the newest late sample counts (the act buffer holds 2, and an agent sends at most one
+/// late action between two reads of the world); samples of a tick before `since` (an earlier
+/// agent's, before a restart) and of ticks not yet released are dropped.
+fn take_actions_realtime(
+    act: &Subscriber<ipc::Service, [u8], Action>,
+    k: u64,
+    since: u64,
+    sent: &mut Air,
+    late_msgs: &mut Air,
+) -> (Option<Action>, Option<Action>) {
+    use swarm::wire::RadioTx;
+    let (mut cur, mut late) = (None, None);
+    late_msgs.clear();
+    while let Ok(Some(s)) = act.receive() {
+        let a = *s.user_header();
+        let into = if a.tick == k {
+            cur = Some(a);
+            &mut *sent
+        } else if a.tick < k && a.tick >= since {
+            late = Some(a);
+            late_msgs.clear();
+            &mut *late_msgs
+        } else {
+            continue;
+        };
+        let used = (a.radio_bytes as usize).min(s.payload().len());
+        if let Some(msgs) = swarm::air::act_messages(&s.payload()[..used]) {
+            for (h, p) in msgs {
+                into.transmit(&h, &mut |b| b.copy_from_slice(p));
+            }
+        }
+    }
+    sent.append(late_msgs);
+    (cur, late)
+}
+
+/// Real-time mode's clock and each robot's progress: when the world last saw each robot
+/// acknowledge a tick (the ack-deadline rule is per robot here, since the world never waits
+/// for anyone past a tick's deadline) and from which tick its current agent drives it.
+struct RealtimeClock {
+    /// Each robot's last acknowledged tick + 1, as last seen, and when it last changed (or
+    /// the robot started or was revived).
+    seen: Vec<u64>,
+    last_ack: Vec<Instant>,
+    since: Vec<u64>,
+    late_msgs: Air,
+    late_releases: u64,
+}
+
+impl RealtimeClock {
+    fn new(n: usize, now: Instant) -> RealtimeClock {
+        RealtimeClock {
+            seen: vec![0; n],
+            last_ack: vec![now; n],
+            since: vec![0; n],
+            late_msgs: Air::default(),
+            late_releases: 0,
+        }
+    }
+
+    /// A (re)started agent drives robot i from tick k: its deadline clock starts now.
+    fn start(&mut self, i: usize, k: u64) {
+        self.last_ack[i] = Instant::now();
+        self.since[i] = k;
+    }
+
+    /// Notes who acknowledged since the last look; true if every live robot acknowledged
+    /// tick k.
+    fn all_acked(&mut self, world: &World, barrier: &TickBarrier, k: u64) -> bool {
+        let now = Instant::now();
+        let mut all = true;
+        for i in world.live_robots() {
+            let a = barrier.acked_up_to(i);
+            let r = i as usize;
+            if a != self.seen[r] {
+                self.seen[r] = a;
+                self.last_ack[r] = now;
+            }
+            all &= a == k + 1;
+        }
+        all
+    }
+
+    /// The live robots silent for longer than `deadline` (runtime.ack_deadline_ms).
+    fn silent(&self, world: &World, deadline: Duration) -> Vec<u32> {
+        world
+            .live_robots()
+            .filter(|&i| self.last_ack[i as usize].elapsed() > deadline)
+            .collect()
+    }
+}
+
 /// What the control channel said.
 #[derive(Default)]
 struct ControlState {
@@ -142,9 +237,9 @@ fn drain_control(
     }
 }
 
-/// Sleeps until tick `k` may start (runtime.tick_hz), in slices of at most `poll`, asking
-/// `stopped` after each: a stop request ends a slow pace at once (a pace of `--tick-hz 1e-300`
-/// would otherwise sleep for ever). Returns false if stopped.
+/// Sleeps until tick `k` may start (runtime.tick_hz, or real-time mode's clock), in slices
+/// of at most `poll`, asking `stopped` after each: a stop request ends a slow pace at once (a
+/// pace of `--tick-hz 1e-300` would otherwise sleep for ever). Returns false if stopped.
 fn pace(
     rt: &swarm::scenario::RuntimeParams,
     loop_start: Instant,
@@ -152,7 +247,10 @@ fn pace(
     poll: Duration,
     mut stopped: impl FnMut() -> bool,
 ) -> bool {
-    let Some(at) = rt.tick_start(k) else {
+    let Some(at) = rt
+        .tick_start(k)
+        .or_else(|| rt.realtime_window(k).map(|w| w.0))
+    else {
         return true;
     };
     loop {
@@ -178,6 +276,60 @@ pub fn monotonic_us() -> u64 {
         libc::clock_gettime(libc::CLOCK_MONOTONIC, &mut ts);
     }
     ts.tv_sec as u64 * 1_000_000 + ts.tv_nsec as u64 / 1000
+}
+
+/// Real-time mode: waits for tick k's acknowledgements until every live robot has sent its
+/// action or tick k's deadline (t0 + (k + 1) / realtime_hz) has passed, whichever comes first,
+/// then declares dead every robot silent for longer than `runtime.ack_deadline_ms` (per robot,
+/// from its last acknowledgement). Returns false on a stop request.
+fn wait_realtime(
+    clock: &mut RealtimeClock,
+    world: &mut World,
+    barrier: &TickBarrier,
+    bell: Option<&swarm::bell::EventBell>,
+    (control, ctl, drivers): (
+        &Subscriber<ipc::Service, Control, ()>,
+        &mut ControlState,
+        &mut Drivers,
+    ),
+    t_loop: Instant,
+    k: u64,
+) -> bool {
+    let sc = &world.sc;
+    let poll = Duration::from_millis(sc.runtime.poll_ms);
+    let ack_deadline = Duration::from_millis(sc.runtime.ack_deadline_ms);
+    let due = t_loop
+        + sc.runtime
+            .realtime_window(k)
+            .expect("real-time mode")
+            .1
+            .min(Duration::from_secs(u32::MAX as u64));
+    if Instant::now() > due {
+        clock.late_releases += 1;
+    }
+    drain_control(control, world, ctl, barrier, drivers);
+    loop {
+        // The counter first, then who acknowledged: an ack after the look changes the
+        // counter, so the sleep below returns at once.
+        let seen = barrier.ack_count();
+        if clock.all_acked(world, barrier, k) {
+            break;
+        }
+        let now = Instant::now();
+        if now >= due {
+            break;
+        }
+        barrier.wait_ack_change_with(seen, (due - now).min(poll), bell);
+        drain_control(control, world, ctl, barrier, drivers);
+        if ctl.stop {
+            return false;
+        }
+    }
+    for i in clock.silent(world, ack_deadline) {
+        world.mark_dead(i, "no action within runtime.ack_deadline_ms", None, None);
+    }
+    drivers.order_kills(world, barrier);
+    true
 }
 
 pub fn run(args: &WorldArgs) -> Result<i32> {
@@ -270,6 +422,9 @@ pub fn run(args: &WorldArgs) -> Result<i32> {
         };
     }
     let t_loop = Instant::now();
+    let realtime = sc.runtime.is_realtime();
+    let mut clock = RealtimeClock::new(n as usize, t_loop);
+    let mut late: Vec<Option<Action>> = vec![None; n as usize];
     let mut tick_ns = Vec::with_capacity(sc.run.max_ticks.min(10_000_000) as usize);
     let mut actions: Vec<Option<Action>> = vec![None; n as usize];
     let mut sent = Air::default();
@@ -298,6 +453,7 @@ pub fn run(args: &WorldArgs) -> Result<i32> {
                 let c = barrier.attach_count(i);
                 if c > drivers.attached[i as usize] && c > barrier.dead_upto(i) && world.revive(i) {
                     drivers.attached[i as usize] = c;
+                    clock.start(i as usize, k);
                 }
             }
         }
@@ -327,6 +483,52 @@ pub fn run(args: &WorldArgs) -> Result<i32> {
         }
         publish_air(&air_pub, &world, k)?;
         barrier.release_with(k, world.alive_count(), bell);
+        if realtime {
+            if !wait_realtime(
+                &mut clock,
+                &mut world,
+                &barrier,
+                bell,
+                (&control, &mut ctl, &mut drivers),
+                t_loop,
+                k,
+            ) {
+                end = "interrupted".to_string();
+                break 'ticks;
+            }
+            sent.clear();
+            for i in 0..n as usize {
+                (actions[i], late[i]) = (None, None);
+                if !world.alive[i] {
+                    // Nothing of a dead robot's agent is read later as late.
+                    while let Ok(Some(_)) = robots[i].act.receive() {}
+                    continue;
+                }
+                (actions[i], late[i]) = take_actions_realtime(
+                    &robots[i].act,
+                    k,
+                    clock.since[i],
+                    &mut sent,
+                    &mut clock.late_msgs,
+                );
+            }
+            let rec = world.apply_with_late(&actions, &late, &sent);
+            outputs.push(&rec, &world)?;
+            tick_ns.push(t_tick.elapsed().as_nanos() as u64);
+            if let Ok(s) = status_pub.loan_uninit() {
+                let _ = s.write_payload(world.status(false)).send();
+            }
+            drain_control(&control, &mut world, &mut ctl, &barrier, &drivers);
+            if ctl.stop {
+                end = "interrupted".to_string();
+                break;
+            }
+            if let Some(why) = world.end_reason() {
+                end = why.to_string();
+                break;
+            }
+            continue;
+        }
         // The deadline runs from the last ack of any robot, not from the release: when many
         // agents are slow but working (1,000 agents making their first radio links on 2 cores
         // take ~25 s), none is declared dead while acks still come in; a hung agent is
@@ -390,12 +592,14 @@ pub fn run(args: &WorldArgs) -> Result<i32> {
         }
     }
     let loop_seconds = t_loop.elapsed().as_secs_f64();
+    let late_releases = clock.late_releases;
     barrier.shutdown_with(bell);
     let timing = Timing {
         wall_seconds: t_start.elapsed().as_secs_f64(),
         loop_seconds,
         startup_seconds,
         tick_ns,
+        late_releases,
     };
     outputs.finish(&mut world, &timing, &args.run_id, "processes", &end)?;
     if let Ok(s) = status_pub.loan_uninit() {

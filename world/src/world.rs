@@ -98,6 +98,19 @@ pub struct World {
     statics: Statics,
     /// The run's worst body figures (robot.radius > 0).
     pub body: Option<BodySummary>,
+    /// Real-time mode (`runtime.realtime_hz` > 0): a live robot without an action this tick
+    /// missed its deadline and keeps its last command; in lock-step it stands still.
+    realtime: bool,
+    /// Each robot's last command the world applied (None: stand still; after a rejected
+    /// action, a death or a revive).
+    last_cmd: Vec<Option<[f64; 2]>>,
+    /// Real-time mode: the deadlines each robot missed.
+    pub misses: Vec<u64>,
+    /// Real-time mode: actions read after their tick's deadline (their messages went out at
+    /// the tick they were read, their commands were superseded).
+    pub late_actions: u64,
+    /// Real-time mode: (live robot, tick) pairs, the denominator of the miss rate.
+    pub robot_ticks: u64,
 }
 
 fn reason_index(r: RejectReason) -> usize {
@@ -212,6 +225,11 @@ impl World {
             limits,
             statics: Statics::new(sc),
             body: (sc.robot.radius > 0.0).then(|| BodySummary::new(sc.robot.radius)),
+            realtime: sc.runtime.is_realtime(),
+            last_cmd: vec![None; n],
+            misses: vec![0; n],
+            late_actions: 0,
+            robot_ticks: 0,
         })
     }
 
@@ -314,6 +332,7 @@ impl World {
         }
         self.alive[i] = false;
         self.vel[i] = [0.0; 2];
+        self.last_cmd[i] = None;
         if i < self.bodies {
             self.dead_points.push([self.poses[i][0], self.poses[i][1]]);
         }
@@ -372,6 +391,7 @@ impl World {
             return false;
         }
         self.alive[i] = true;
+        self.last_cmd[i] = None;
         let p = [self.poses[i][0], self.poses[i][1]];
         if let Some(j) = self.dead_points.iter().position(|q| *q == p) {
             self.dead_points.remove(j);
@@ -529,12 +549,35 @@ impl World {
     /// only with a valid action of its own), and advances to the next tick. Returns the
     /// tick's record.
     pub fn apply(&mut self, actions: &[Option<Action>], sent: &Air) -> TickRecord {
+        self.apply_with_late(actions, &[], sent)
+    }
+
+    /// [`World::apply`] in real-time mode: `late[i]` is robot i's action for an earlier tick
+    /// that arrived after that tick's deadline and was read at this one (index = robot; a
+    /// shorter slice: none). Its command is superseded (the robot kept its last command at
+    /// its own tick) and its malformed report is void (its list of that tick was counted
+    /// with the miss), but its messages, which are in `sent` beside this tick's, go out now,
+    /// sent at this tick. A live robot with no action of this tick missed its deadline: it
+    /// keeps its last command and the miss is counted (`misses`, an `Event::DeadlineMissed`).
+    pub fn apply_with_late(
+        &mut self,
+        actions: &[Option<Action>],
+        late: &[Option<Action>],
+        sent: &Air,
+    ) -> TickRecord {
         let k = self.tick;
         let mut events = std::mem::take(&mut self.pending_events);
         let mut radio = RadioCounters::default();
         // The messages due now: each receiver's list, delivered or malformed as it reports, or
         // lost with it when it is dead or sent no action.
         let radio_ok = |i: usize, a: &Option<Action>| matches!(a, Some(a) if a.robot as usize == i && a.tick == k);
+        let deliveries = self.sc.runtime.record_deliveries.then(|| {
+            crate::heard::deliveries(self.due.as_ref(), self.n, |i| {
+                let a = actions.get(i).copied().flatten();
+                (self.alive[i] && radio_ok(i, &a))
+                    .then(|| a.map_or(0, |a| a.radio_malformed as u32))
+            })
+        });
         if let Some(due) = self.due.take() {
             for i in 0..due.robots().min(self.n) {
                 let listed = due.deliveries(i as u32).len() as u64;
@@ -561,20 +604,36 @@ impl World {
             }
         }
         let mut ok = vec![false; self.n];
+        let cap = MAX_SENT.min(self.sc.radio.max_messages_per_tick as usize);
         for i in 0..self.n {
-            let a = actions.get(i).copied().flatten();
-            if !self.alive[i] || !radio_ok(i, &a) {
+            if !self.alive[i] {
                 continue;
             }
-            let n_sent = a.expect("checked").n_sent as usize;
-            if n_sent > MAX_SENT.min(self.sc.radio.max_messages_per_tick as usize)
-                || n_sent != counts[i]
-            {
+            // This tick's valid action, and (real-time mode) a late one of an earlier tick:
+            // each within the cap, together as many as the robot's messages in `sent`.
+            let a = actions
+                .get(i)
+                .copied()
+                .flatten()
+                .filter(|a| radio_ok(i, &Some(*a)));
+            let l = late
+                .get(i)
+                .copied()
+                .flatten()
+                .filter(|l| l.robot as usize == i && l.tick < k);
+            if a.is_none() && l.is_none() {
+                continue;
+            }
+            let reports = [a, l];
+            let each = reports.iter().flatten().map(|r| r.n_sent as usize);
+            if each.clone().any(|n_sent| n_sent > cap) || each.sum::<usize>() != counts[i] {
                 self.reject(&mut events, i, RejectReason::BadRadioReport);
                 continue;
             }
             ok[i] = true;
         }
+        self.late_actions += late.iter().flatten().count() as u64;
+        self.robot_ticks += self.alive.iter().filter(|a| **a).count() as u64;
         let mut owned: Vec<(RadioHeader, &[u8])> = Vec::with_capacity(sent.len());
         for (h, payload) in sent.messages() {
             let i = h.sender as usize;
@@ -603,7 +662,17 @@ impl World {
                 continue;
             }
             let Some(a) = actions.get(i).copied().flatten() else {
-                self.vel[i] = [0.0; 2];
+                if !self.realtime {
+                    self.vel[i] = [0.0; 2];
+                    continue;
+                }
+                // Real-time mode: the deadline passed without this tick's action.
+                self.misses[i] += 1;
+                events.push(Event::DeadlineMissed { robot: i as u32 });
+                match self.last_cmd[i] {
+                    Some(cmd) if i < self.bodies => self.step_robot(i, cmd, &mut events),
+                    _ => self.vel[i] = [0.0; 2],
+                }
                 continue;
             };
             if i >= self.bodies {
@@ -618,6 +687,7 @@ impl World {
             if let Err(r) = self.validate(i, &a) {
                 self.reject(&mut events, i, r);
                 self.vel[i] = [0.0; 2];
+                self.last_cmd[i] = None;
                 continue;
             }
             self.states[i] = (a.events & STATE_MASK) as u8;
@@ -628,24 +698,8 @@ impl World {
                     flags: a.events & !STATE_MASK,
                 });
             }
-            let p = Vec2::new(self.poses[i][0], self.poses[i][1]);
-            let (step, turned) =
-                kinematics::intended(&self.sc.robot.kinematics, self.poses[i], a.cmd);
-            let (q, blocked) = self.clip_move(p, v2(step));
-            if blocked {
-                self.blocked_moves += 1;
-                events.push(Event::MoveBlocked { robot: i as u32 });
-            }
-            let moved = q - p;
-            self.distance_travelled += moved.norm();
-            let heading = match turned {
-                Some(h) => h,
-                None if moved.norm() > 0.0 => moved.y.atan2(moved.x),
-                None => self.poses[i][2],
-            };
-            self.poses[i] = [q.x, q.y, heading];
-            self.coverage.visit([q.x, q.y]);
-            self.vel[i] = [moved.x, moved.y];
+            self.last_cmd[i] = Some(a.cmd);
+            self.step_robot(i, a.cmd, &mut events);
         }
         self.mission
             .update(k, &self.poses, &self.alive, &mut events);
@@ -678,12 +732,42 @@ impl World {
             radio,
             extra,
             layer: None,
+            deliveries,
         }
+    }
+
+    /// Moves robot i one tick by command `cmd` (validated), stopping short of obstacles.
+    fn step_robot(&mut self, i: usize, cmd: [f64; 2], events: &mut Vec<Event>) {
+        let p = Vec2::new(self.poses[i][0], self.poses[i][1]);
+        let (step, turned) = kinematics::intended(&self.sc.robot.kinematics, self.poses[i], cmd);
+        let (q, blocked) = self.clip_move(p, v2(step));
+        if blocked {
+            self.blocked_moves += 1;
+            events.push(Event::MoveBlocked { robot: i as u32 });
+        }
+        let moved = q - p;
+        self.distance_travelled += moved.norm();
+        let heading = match turned {
+            Some(h) => h,
+            None if moved.norm() > 0.0 => moved.y.atan2(moved.x),
+            None => self.poses[i][2],
+        };
+        self.poses[i] = [q.x, q.y, heading];
+        self.coverage.visit([q.x, q.y]);
+        self.vel[i] = [moved.x, moved.y];
+    }
+
+    /// Deadlines missed so far, all robots (real-time mode).
+    pub fn total_misses(&self) -> u64 {
+        self.misses.iter().sum()
     }
 
     /// The recording version this run writes: 2 (a TickExtra a tick) when robots have a body.
     pub fn recording_version(&self) -> u32 {
-        if !self.mission.live_layer().is_empty() {
+        if self.sc.runtime.record_deliveries {
+            // 6: who heard whom per tick (opt-in), after the layer (empty for roam).
+            swarm::recording::RECORDING_VERSION_DELIVERIES
+        } else if !self.mission.live_layer().is_empty() {
             // 3: the mission's marks per tick too (the viewer draws them).
             swarm::recording::RECORDING_VERSION_LAYER
         } else if self.body.is_some() {
@@ -739,9 +823,14 @@ impl World {
                 + self.radio.receiver_dead
                 + self.radio.malformed,
             rejected_actions: self.rejected.iter().sum(),
+            deadline_misses: self.total_misses(),
         }
     }
 }
+
+#[cfg(test)]
+#[path = "realtime_tests.rs"]
+mod realtime_tests;
 
 #[cfg(test)]
 mod tests {

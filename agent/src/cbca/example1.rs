@@ -1,5 +1,5 @@
 //! Example 1 of thesis sec. 4.3 (Tables 4.1, 4.2; spec 8.1) run through the in-memory radio
-//! of testdriver.rs: the temporary groups, the coalitions beside the thesis's, the idle robots
+//! of rounds.rs: the temporary groups, the coalitions beside the thesis's, the idle robots
 //! and why, consensus rounds, messages and bytes, with and without grouping. It prints a report
 //! (`cargo test --release -p agent --lib cbca::example1 -- --nocapture`) and asserts only what
 //! is true of the algorithm, not the thesis's figures.
@@ -15,7 +15,7 @@ use super::dag;
 use super::grouping::{comm_graph, robot_knowledge, temporary_groups, PriorInfo};
 use super::model::{coverage_shortfall, robot_label, task_label, Robot, RobotId, Task, TaskId};
 use super::scenario::tests::example;
-use super::testdriver::{run, Radio, RunStats};
+use super::rounds::{run, Radio, RunStats};
 
 /// How a run is set up.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -19,7 +19,7 @@ use super::params::CbcaParams;
 use super::replan::{decide, Proposal, Verdict};
 use super::scenario::tests::example;
 use super::score::path_score;
-use super::testdriver::{run, Radio};
+use super::rounds::{run, Radio};
 
 fn labels(ms: &[RobotId]) -> String {
     ms.iter()

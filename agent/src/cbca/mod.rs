@@ -7,13 +7,16 @@
 
 pub mod baselines;
 pub mod bundle;
+pub mod compare;
 pub mod consensus;
 pub mod dag;
 pub mod grouping;
+pub mod instance;
 pub mod loyalty;
 pub mod model;
 pub mod params;
 pub mod replan;
+pub mod rounds;
 pub mod scenario;
 pub mod score;
 pub mod winners;
@@ -27,5 +30,3 @@ mod example1;
 mod example2;
 #[cfg(test)]
 mod proptests;
-#[cfg(test)]
-pub(crate) mod testdriver;

@@ -1,5 +1,5 @@
 //! Property tests of CBCA's consensus (Algorithms 1 + 2) on random instances and random
-//! connected graphs, over the in-memory radio of testdriver.rs: after the detectors declare
+//! connected graphs, over the in-memory radio of rounds.rs: after the detectors declare
 //! convergence, every robot holds the same winner lists, they match the robots' own bundles,
 //! no task has more than L_j winners, and the paths' task graph is a DAG (4.6); with loss 0.3
 //! and delays of up to 2 rounds as well.
@@ -13,7 +13,7 @@ use super::consensus::CbcaRobot;
 use super::dag;
 use super::model::{Robot, RobotId, Task, TaskBook, RESOURCE_TYPES};
 use super::params::CbcaParams;
-use super::testdriver::{run, Radio, RunStats};
+use super::rounds::{run, Radio, RunStats};
 
 /// A random instance: n_r robots, n_e targets in a 4 km square, positive resources (so (2.7)
 /// always holds), and a random connected graph (a random spanning tree plus extra edges).

@@ -228,6 +228,7 @@ mod tests {
                     fill: [1, 2, 3],
                     outline: None,
                 }]),
+                deliveries: None,
             })
             .unwrap();
         }

@@ -1,4 +1,4 @@
-//! Test-only in-memory radio for CBCA: every robot iterates, broadcasts its message to its
+//! The round radio for CBCA (the thesis runs CBCA as rounds): every round each robot iterates, broadcasts its message to its
 //! neighbours, and messages are dropped with probability `loss` and delayed by 0..=max_delay
 //! rounds (a seeded rand_chacha stream); the run ends when every robot's convergence detector
 //! says so (or at a safety cap, reported as not converged).
