@@ -111,7 +111,9 @@ fn outcome_of(s: &Value) -> Value {
         "alive_at_end",
         "mission",
     ];
-    keys.iter().map(|k| (k.to_string(), s[*k].clone())).collect()
+    keys.iter()
+        .map(|k| (k.to_string(), s[*k].clone()))
+        .collect()
 }
 
 /// The robot ids of a JSON array (a coalition).
@@ -187,7 +189,9 @@ fn example_3a(sc: &Scenario, run: &Runner, out: &Path, md: &mut String) -> Resul
     let _ = writeln!(md, "## Example 3-A (`{}`)\n", sc.run.behaviour);
     let how = match run.executor {
         crate::up::Executor::Inprocess => "in-process",
-        crate::up::Executor::Processes => "with real processes (one a robot, the auctioneer, the world)",
+        crate::up::Executor::Processes => {
+            "with real processes (one a robot, the auctioneer, the world)"
+        }
     };
     let _ = writeln!(
         md,
@@ -457,7 +461,8 @@ impl LiveRow {
             .push(s["messages"]["offered"].as_f64().unwrap_or(0.0));
         self.delivered
             .push(s["messages"]["delivered"].as_f64().unwrap_or(0.0));
-        self.rounds.push(m["auction_rounds"].as_f64().unwrap_or(0.0));
+        self.rounds
+            .push(m["auction_rounds"].as_f64().unwrap_or(0.0));
         self.killed
             .push(s["faults"].as_array().map_or(0, |f| f.len()) as f64);
     }

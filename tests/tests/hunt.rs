@@ -35,7 +35,11 @@ fn the_parallel_auction_over_the_radio_captures_every_evader_as_in_process() {
         std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../configs/hunt-auction.toml"),
     )
     .expect("hunt-auction.toml");
-    let text = base.replacen("[hunt.params]\n", "[hunt.params]\nauction = \"parallel\"\n", 1);
+    let text = base.replacen(
+        "[hunt.params]\n",
+        "[hunt.params]\nauction = \"parallel\"\n",
+        1,
+    );
     assert_ne!(text, base, "hunt-auction.toml has a [hunt.params] section");
     let dir = tmp_dir("hunt-parallel-scenario");
     std::fs::create_dir_all(&dir).unwrap();

@@ -294,8 +294,7 @@ fn example_3a_t5_split_needs_a_larger_g_on_t5_than_printed() {
     let p = HuntParams::default();
     let phi4 = [3, 5, 10, 11, 14];
     let run = |g5: Option<f64>| {
-        let mut robots: BTreeMap<u32, Robot> =
-            h.robots().into_iter().map(|r| (r.id, r)).collect();
+        let mut robots: BTreeMap<u32, Robot> = h.robots().into_iter().map(|r| (r.id, r)).collect();
         if let Some(g) = g5 {
             for i in phi4 {
                 robots.get_mut(&i).unwrap().matching[4] = g;
@@ -335,7 +334,11 @@ fn example_3a_t5_split_needs_a_larger_g_on_t5_than_printed() {
     assert_eq!(raised.interested, vec![4]);
     let a = raised.award.expect("T5 awarded");
     assert_eq!(a.members.len(), 3);
-    assert!(a.members.iter().all(|i| phi4.contains(i)), "{:?}", a.members);
+    assert!(
+        a.members.iter().all(|i| phi4.contains(i)),
+        "{:?}",
+        a.members
+    );
     println!(
         "g_i5 = 0.2 for Phi4: Phi5 = {{{}}} at z5 = {:.1} after {} rounds (thesis: {{R10, R11, R14}}, 1450)",
         ids(&a.members),

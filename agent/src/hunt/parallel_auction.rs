@@ -7,8 +7,8 @@
 //! id order among the robots not yet awarded.
 
 use crate::hunt::auction::{
-    select_winners, Announcement, AuctionError, Award, Bid, Closed, Coalition, Finish,
-    RoundRecord, TaskInfo,
+    select_winners, Announcement, AuctionError, Award, Bid, Closed, Coalition, Finish, RoundRecord,
+    TaskInfo,
 };
 use crate::hunt::cost::{auctioneer_cost, bid_value};
 use crate::hunt::model::{Robot, RobotId, Task, TaskId};
@@ -367,7 +367,10 @@ mod tests {
         for b in &bids {
             a.receive(b.clone()).unwrap();
         }
-        assert_eq!(a.receive(bids[0].clone()), Err(AuctionError::DuplicateBid(1)));
+        assert_eq!(
+            a.receive(bids[0].clone()),
+            Err(AuctionError::DuplicateBid(1))
+        );
         let awards = a.close_round();
         assert_eq!(awards.len(), 2);
         assert_eq!(a.finish(), Some(Finish::AllAwarded));
