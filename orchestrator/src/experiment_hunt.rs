@@ -183,8 +183,7 @@ fn example_3a(sc: &Scenario, run: &Runner, out: &Path, md: &mut String) -> Resul
             .iter()
             .filter(|c| c["task"] == task && c["tick"].as_u64().unwrap_or(0) < before)
             .map(|c| ids(&c["members"]))
-            .filter(|m| !m.is_empty())
-            .next_back()
+            .rfind(|m| !m.is_empty())
     };
     let _ = writeln!(md, "## Example 3-A (`{}`)\n", sc.run.behaviour);
     let how = match run.executor {

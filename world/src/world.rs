@@ -574,8 +574,7 @@ impl World {
         let deliveries = self.sc.runtime.record_deliveries.then(|| {
             crate::heard::deliveries(self.due.as_ref(), self.n, |i| {
                 let a = actions.get(i).copied().flatten();
-                (self.alive[i] && radio_ok(i, &a))
-                    .then(|| a.map_or(0, |a| a.radio_malformed as u32))
+                (self.alive[i] && radio_ok(i, &a)).then(|| a.map_or(0, |a| a.radio_malformed))
             })
         });
         if let Some(due) = self.due.take() {
