@@ -208,7 +208,7 @@ fn run_loop<B: Behaviour>(args: &AgentArgs, mut rt: AgentRuntime<B>) -> Result<i
         // `radio_bytes` that ActTx writes.
         let mut sample = unsafe { sample.assume_init() };
         let mut tx = ActTx::new(sample.payload_mut());
-        let mut action = rt.step_owned(&sense, &inbox, malformed, &mut tx);
+        let mut action = rt.step_owned(sense, &inbox, malformed, &mut tx);
         action.radio_bytes = tx.used as u32;
         inbox.clear();
         *sample.user_header_mut() = action;

@@ -52,11 +52,7 @@ fn recording(out: &Path) -> (String, Vec<TickRecord>) {
 fn missed_ticks(ticks: &[TickRecord], r: u32) -> Vec<u64> {
     ticks
         .iter()
-        .filter(|t| {
-            t.events
-                .iter()
-                .any(|e| *e == Event::DeadlineMissed { robot: r })
-        })
+        .filter(|t| t.events.contains(&Event::DeadlineMissed { robot: r }))
         .map(|t| t.tick)
         .collect()
 }
@@ -171,8 +167,7 @@ fn a_stopped_agent_misses_ticks_alone_while_the_world_keeps_its_clock() {
     let blocked = |t: u64| {
         ticks[t as usize]
             .events
-            .iter()
-            .any(|e| *e == Event::MoveBlocked { robot: 2 })
+            .contains(&Event::MoveBlocked { robot: 2 })
     };
     let kept = (first..first + len)
         .filter(|&t| !blocked(t))
