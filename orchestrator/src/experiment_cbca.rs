@@ -180,19 +180,23 @@ fn example_rounds(
         "| method | system utility | mean completion (time units) | hunted / shelved | messages | consensus rounds | bytes broadcast |\n|---|---|---|---|---|---|---|"
     );
     for r in &runs {
-        let (u, c, h) = r.evaluation.as_ref().map_or(
-            ("deadlock".into(), "-".into(), "-".into()),
-            |e| {
-                (
-                    format!("{:.1}", e.system_utility),
-                    format!("{:.2}", e.mean_completion),
-                    format!("{} / {}", e.hunted, e.shelved),
-                )
-            },
-        );
+        let (u, c, h) =
+            r.evaluation
+                .as_ref()
+                .map_or(("deadlock".into(), "-".into(), "-".into()), |e| {
+                    (
+                        format!("{:.1}", e.system_utility),
+                        format!("{:.2}", e.mean_completion),
+                        format!("{} / {}", e.hunted, e.shelved),
+                    )
+                });
         let (rounds, bytes) = r.consensus.as_ref().map_or(("-".into(), "-".into()), |s| {
             (
-                format!("{}{}", s.rounds, if s.converged { "" } else { " (censored)" }),
+                format!(
+                    "{}{}",
+                    s.rounds,
+                    if s.converged { "" } else { " (censored)" }
+                ),
                 format!("{}", s.bytes),
             )
         });
@@ -434,7 +438,12 @@ fn fmt_ms(v: &[f64], digits: usize) -> String {
     format!("{m:.digits$} ± {s:.digits$}")
 }
 
-fn sweeps(x: &CbcaExperiment, params: &CbcaParams, out: &Path, md: &mut String) -> Result<(), String> {
+fn sweeps(
+    x: &CbcaExperiment,
+    params: &CbcaParams,
+    out: &Path,
+    md: &mut String,
+) -> Result<(), String> {
     let _ = writeln!(
         md,
         "## Figs. 4.6-4.7 as tables ({} seeds a point, mean ± sd; random instances of `agent::cbca::instance`, perfect radio)\n",
@@ -569,8 +578,14 @@ fn sweeps(x: &CbcaExperiment, params: &CbcaParams, out: &Path, md: &mut String) 
         let n = results.len();
         let mut lines = Vec::new();
         for (mi, m) in Method::ALL.iter().enumerate().skip(2) {
-            let higher = results.iter().filter(|r| means(r, 0, 0) > means(r, mi, 0)).count();
-            let faster = results.iter().filter(|r| means(r, 0, 1) < means(r, mi, 1)).count();
+            let higher = results
+                .iter()
+                .filter(|r| means(r, 0, 0) > means(r, mi, 0))
+                .count();
+            let faster = results
+                .iter()
+                .filter(|r| means(r, 0, 1) < means(r, mi, 1))
+                .count();
             lines.push(format!(
                 "CBCA's utility above {}'s at {higher} of {n} points, its completion time below at {faster} of {n}",
                 m.label()
@@ -668,8 +683,7 @@ fn loss_sweep(x: &CbcaExperiment, params: &CbcaParams, md: &mut String) {
                     messages: s.broadcasts,
                 };
                 let book = inst.tasks.iter().map(|t| (t.id, t.clone())).collect();
-                if let Ok(e) =
-                    agent::cbca::baselines::evaluate(&inst.robots, &book, &alloc, params)
+                if let Ok(e) = agent::cbca::baselines::evaluate(&inst.robots, &book, &alloc, params)
                 {
                     util.push(e.system_utility);
                     hunted.push(e.hunted as f64);

@@ -14,8 +14,8 @@ use super::consensus::CbcaRobot;
 use super::dag;
 use super::grouping::{comm_graph, robot_knowledge, temporary_groups, PriorInfo};
 use super::model::{coverage_shortfall, robot_label, task_label, Robot, RobotId, Task, TaskId};
-use super::scenario::tests::example;
 use super::rounds::{run, Radio, RunStats};
+use super::scenario::tests::example;
 
 /// How a run is set up.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -17,9 +17,9 @@ use super::loyalty::LoyaltyState;
 use super::model::{coverage_shortfall, robot_label, task_label, Robot, RobotId, Task, TaskId};
 use super::params::CbcaParams;
 use super::replan::{decide, Proposal, Verdict};
+use super::rounds::{run, Radio};
 use super::scenario::tests::example;
 use super::score::path_score;
-use super::rounds::{run, Radio};
 
 fn labels(ms: &[RobotId]) -> String {
     ms.iter()
