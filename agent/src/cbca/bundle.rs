@@ -57,6 +57,21 @@ impl Peers for StaticPeers {
 pub struct Plan {
     pub bundle: Vec<TaskId>,
     pub path: Vec<TaskId>,
+    /// The tasks the robot has committed to (`CbcaRobot::pin`, the runtime's first
+    /// settlement). They keep the head of p_i: Algorithm 1 inserts a new task only after them,
+    /// so a committed robot is never drawn away from the coalition it is executing by a task
+    /// learnt later (only the loyalty review (4.22) may do that). Empty in the round runs.
+    pub committed: std::collections::BTreeSet<TaskId>,
+}
+
+impl Plan {
+    /// How many leading entries of p_i are committed (insertions go at or after this index).
+    pub fn committed_head(&self) -> usize {
+        self.path
+            .iter()
+            .take_while(|j| self.committed.contains(j))
+            .count()
+    }
 }
 
 /// How a task looks to robot i at one step of Algorithm 1.
@@ -113,7 +128,11 @@ pub fn evaluate(
     };
     let first_reason: RefCell<Option<Infeasible>> = RefCell::new(None);
     let any_alone = Cell::new(false);
+    let head = plan.committed_head();
     let allowed = |p: &[TaskId]| -> bool {
+        if p[..head] != plan.path[..head] {
+            return false;
+        }
         match check_path(me, p, book, params) {
             Err(e) => {
                 first_reason.borrow_mut().get_or_insert(e);
@@ -398,6 +417,7 @@ pub(crate) mod tests {
         };
         let mut winners = Winners::new(3, 2);
         let plan = Plan {
+            committed: Default::default(),
             bundle: vec![0],
             path: vec![0],
         };
@@ -412,6 +432,7 @@ pub(crate) mod tests {
             paths: vec![vec![], vec![1, 0], vec![0, 1]],
         };
         let plan = Plan {
+            committed: Default::default(),
             bundle: vec![0],
             path: vec![0],
         };

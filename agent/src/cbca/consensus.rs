@@ -311,6 +311,7 @@ impl CbcaRobot {
         for &j in &dropped {
             self.winners.clear(self.me.id, j);
             self.plan.path.retain(|&p| p != j);
+            self.plan.committed.remove(&j);
         }
         dropped
     }
@@ -486,6 +487,7 @@ impl CbcaRobot {
     /// that both took the task). Returns whether anything changed.
     pub fn pin(&mut self, bonus: f64) -> bool {
         let mut changed = false;
+        self.plan.committed = self.plan.bundle.iter().copied().collect();
         for &j in &self.plan.bundle {
             if let Some(b) = self.winners.get(self.me.id, j) {
                 if b < bonus {
@@ -513,6 +515,7 @@ impl CbcaRobot {
         if let Some(pos) = self.plan.bundle.iter().position(|&t| t == j) {
             self.plan.bundle.remove(pos);
             self.plan.path.retain(|&t| t != j);
+            self.plan.committed.remove(&j);
             self.me.max_tasks = self.me.max_tasks.saturating_sub(1);
         }
         for m in 0..self.winners.n_robots() {
@@ -665,6 +668,7 @@ mod tests {
         let (mut a, _) = pair();
         // T1 (L = 2) holds R1 itself; R2 reports R3 on T1 with newer news: room, R3 joins.
         a.plan = Plan {
+            committed: Default::default(),
             bundle: vec![0],
             path: vec![0],
         };
@@ -721,6 +725,7 @@ mod tests {
         let (mut a, _) = pair();
         // R1's bundle: T1 (bid 3) then T2 (bid 2). T1 (L = 2) also has R2 (6).
         a.plan = Plan {
+            committed: Default::default(),
             bundle: vec![0, 1],
             path: vec![0, 1],
         };
@@ -770,6 +775,7 @@ mod tests {
     fn own_entries_are_never_overwritten() {
         let (mut a, _) = pair();
         a.plan = Plan {
+            committed: Default::default(),
             bundle: vec![0],
             path: vec![0],
         };

@@ -60,6 +60,25 @@ pub struct BehaviourParams {
     /// Loyalty (4.18)-(4.22) on; false is the "no loyalty" ablation (a robot switches whenever
     /// the new plan scores more).
     pub loyalty: bool,
+    /// A robot with an empty path (idle from the start, or its targets done) goes to
+    /// `seek_radius_km` of the nearest unfinished target it knows of and stays
+    /// there, inside the radio range of that target's coalition, so it can replace a member
+    /// that dies (sec. 4.2.5 re-planning needs a free robot within reach). [chosen] false, the
+    /// thesis's Fig. 4.2(c) (idle robots stay where they are); true lets a coalition that lost
+    /// a member after spreading out be completed (configs/cbca-experiment.toml measures both).
+    pub seek_when_idle: bool,
+    /// Where a seeking idle robot parks: this far from the target (km). [chosen] 1.0: within
+    /// the 1.5 km radio of every member on a capture ring of radius up to 0.5 km (the waiting
+    /// ring, 1.6 km, is not: a member across the ring is up to 1.9 km away).
+    pub seek_radius_km: f64,
+    /// A coalition member that has held its capture point this many ticks without the capture
+    /// takes every member it has not heard directly in as many ticks for dead (forgotten and
+    /// gossiped, as a death the proximity sensor saw): at the capture ring (radius r_s) every
+    /// live member is in radio range of every other, so silence there means death, whereas a
+    /// member that dies after the coalition spread out leaves nobody's proximity sensor.
+    /// [chosen] 100 (5 time units; beacons go every `beacon_period` = 5 ticks). A member still
+    /// on its way after that long is taken for dead too: the cost of the rule.
+    pub presume_lost_ticks: u64,
     /// Speed / distance gain of the holonomic go-to (1/tick): v = min(v_max, gain d). [chosen]
     /// 0.5: a robot slows down in the last 2 v_max of its goal.
     pub goto_gain: f64,
@@ -79,6 +98,9 @@ impl Default for BehaviourParams {
             arrive_tolerance_km: 0.05,
             ring_radius_km: 0.3,
             loyalty: true,
+            seek_when_idle: false,
+            seek_radius_km: 1.0,
+            presume_lost_ticks: 100,
             goto_gain: 0.5,
         }
     }

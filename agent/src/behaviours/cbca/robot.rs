@@ -64,6 +64,8 @@ pub enum Event {
     Switched { tick: u64, from: Vec<TaskId>, to: Vec<TaskId>, gain: f64, sigma: f64 },
     StayedLoyal { tick: u64, kept: Vec<TaskId>, offered: Vec<TaskId>, gain: f64, sigma: f64 },
     RobotGone { tick: u64, robot: u32 },
+    /// A member of `task` not heard at the capture ring for `presume_lost_ticks`: taken for dead.
+    PresumedLost { tick: u64, robot: u32, task: TaskId },
     Captured { tick: u64, task: TaskId },
     Finished { tick: u64, task: TaskId, utility: f64 },
 }
@@ -104,6 +106,8 @@ pub struct Cbca {
     waiting: Option<(TaskId, u64)>,
     /// It is closing on its capture point (after the joint arrival, or holding).
     closing: bool,
+    /// Since when it closes on the capture point of which target (the presumed-loss clock).
+    closing_since: Option<(TaskId, u64)>,
     /// Realised utility: finished tasks' scores, plus compensation received, less paid.
     utility: f64,
     /// Distance travelled since the last finished task (km) and the tick it finished.
@@ -163,6 +167,7 @@ impl Cbca {
             hold: None,
             waiting: None,
             closing: false,
+            closing_since: None,
             utility: 0.0,
             leg: 0.0,
             last_pos: None,
@@ -470,7 +475,8 @@ impl Cbca {
             }
         }
         let Some(&j) = self.kernel.plan().path.first() else {
-            return self.mover.stop();
+            self.closing_since = None;
+            return self.seek(s);
         };
         let Some(target) = self.target_pos(j) else {
             return self.mover.stop();
@@ -508,13 +514,70 @@ impl Cbca {
             return self.mover.go(s, goal);
         }
         self.ready.insert((j as u32, self.id));
-        if assembled || now.saturating_sub(since) >= self.p.max_wait_ticks {
+        // A coalition short of L_j (a member died and was forgotten) waits for a replacement.
+        let full = members.len() >= self.tasks[j].robots_needed;
+        if full && (assembled || now.saturating_sub(since) >= self.p.max_wait_ticks) {
             self.closing = true;
+            let started = match self.closing_since {
+                Some((c, t)) if c == j => t,
+                _ => {
+                    self.closing_since = Some((j, now));
+                    now
+                }
+            };
+            if now.saturating_sub(started) >= self.p.presume_lost_ticks {
+                self.presume_lost(j, &members, now);
+            }
             let goal = self.capture_goal(j, s.pos).unwrap_or(target);
             self.mover.go(s, goal)
         } else {
+            self.closing_since = None;
             self.mover.stop()
         }
+    }
+
+    /// Members of j not heard directly for `presume_lost_ticks` while this robot has closed on
+    /// j that long are dead (BehaviourParams::presume_lost_ticks).
+    fn presume_lost(&mut self, j: TaskId, members: &[u32], now: u64) {
+        let window = self.p.presume_lost_ticks;
+        let silent: Vec<u32> = members
+            .iter()
+            .copied()
+            .filter(|&m| m != self.id)
+            .filter(|m| {
+                self.heard
+                    .get(m)
+                    .is_none_or(|h| now.saturating_sub(h.tick) >= window)
+            })
+            .collect();
+        for m in silent {
+            self.events.push(Event::PresumedLost { tick: now, robot: m, task: j });
+            self.forget(m, now);
+        }
+    }
+
+    /// An idle robot goes to `seek_radius_km` of the nearest unfinished target it knows of
+    /// (BehaviourParams::seek_when_idle), or stands still.
+    fn seek(&mut self, s: &Sense) -> [f64; 2] {
+        if !self.p.seek_when_idle {
+            return self.mover.stop();
+        }
+        let nearest = self
+            .kernel
+            .book()
+            .keys()
+            .filter_map(|&j| self.target_pos(j))
+            .min_by(|a, b| dist(s.pos, *a).total_cmp(&dist(s.pos, *b)));
+        let Some(target) = nearest else {
+            return self.mover.stop();
+        };
+        let d = dist(s.pos, target);
+        if d <= self.p.seek_radius_km + self.p.arrive_tolerance_km {
+            return self.mover.stop();
+        }
+        let k = (d - self.p.seek_radius_km) / d;
+        let goal = [s.pos[0] + (target[0] - s.pos[0]) * k, s.pos[1] + (target[1] - s.pos[1]) * k];
+        self.mover.go(s, goal)
     }
 
     /// The robot's place on the capture ring of target j: members in id order, evenly around.

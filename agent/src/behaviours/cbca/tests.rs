@@ -200,3 +200,61 @@ fn loyalty_blocks_a_switch_below_its_threshold_and_the_ablation_switches() {
     println!("utilities after the switch: {:?}", d.robots.iter().map(|r| r.utility()).collect::<Vec<_>>());
     assert!(total.abs() < 1e-9, "{total}");
 }
+
+/// R5 (index 4) dies on its way to T2 where no proximity sensor sees it vanish (the sensor
+/// range is cut to 0.2 km, below the spacing of the members on the capture ring: the case of
+/// a coalition that has spread out). R1 and R6 wait at T2's ring, close in after
+/// `max_wait_ticks`, and at the capture ring take R5 for dead after `presume_lost_ticks` of
+/// silence; the short coalition waits; R10, idle and seeking (`seek_when_idle`), is parked
+/// within radio range, bids for the free place, and T2 is finished without R5.
+#[test]
+fn a_robot_that_dies_unseen_is_presumed_lost_and_replaced() {
+    let mut sc = scenario(1);
+    let mut b = toml::Table::new();
+    b.insert("seek_when_idle".into(), toml::Value::Boolean(true));
+    sc.cbca.insert("behaviour".into(), toml::Value::Table(b));
+    sc.robot.neighbour_sensing_radius = 0.2;
+    let mut d = Driver::new(sc, 0.0, 1);
+    let r5_on_t2 = |d: &Driver| {
+        d.robots[4].phase() == super::robot::Phase::Executing && d.robots[4].path().contains(&1)
+    };
+    assert!(d.run_until(300, r5_on_t2), "R5 never committed to T2");
+    let commit = d.tick;
+    assert!(!d.run_until(commit + 20, |_| false));
+    d.kill(4);
+    assert!(d.run_until(5000, |d| d.all_finished()), "targets left at tick {}", d.tick);
+    let who = |d: &Driver, f: &dyn Fn(&Event) -> bool| -> Vec<usize> {
+        d.robots
+            .iter()
+            .enumerate()
+            .filter(|(_, r)| r.events.iter().any(f))
+            .map(|(i, _)| i + 1)
+            .collect()
+    };
+    let presumed = who(&d, &|e| matches!(e, Event::PresumedLost { robot: 4, .. }));
+    let t2 = who(&d, &|e| matches!(e, Event::Finished { task: 1, .. }));
+    println!(
+        "R5 killed at tick {}; presumed lost by {presumed:?}; T2 finished by {t2:?}, captured at {:?}",
+        commit + 20,
+        d.targets[1].captured_at
+    );
+    assert!(!presumed.is_empty(), "nobody took R5 for dead");
+    assert!(t2.len() >= 3 && !t2.contains(&5), "{t2:?}");
+}
+
+/// The same without seeking: nobody free comes within range, T2 stays unfinished (the
+/// behaviour the thesis's idle robots give; what `seek_when_idle` is for).
+#[test]
+fn without_seeking_the_unseen_death_leaves_its_target_unfinished() {
+    let mut sc = scenario(1);
+    sc.robot.neighbour_sensing_radius = 0.2;
+    let mut d = Driver::new(sc, 0.0, 1);
+    let r5_on_t2 = |d: &Driver| {
+        d.robots[4].phase() == super::robot::Phase::Executing && d.robots[4].path().contains(&1)
+    };
+    assert!(d.run_until(300, r5_on_t2), "R5 never committed to T2");
+    let commit = d.tick;
+    assert!(!d.run_until(commit + 20, |_| false));
+    d.kill(4);
+    assert!(!d.run_until(3000, |d| d.targets[1].captured_at.is_some()));
+}
