@@ -607,6 +607,30 @@ fn the_page_shows_whom_the_selected_robot_heard_that_tick() {
         "lines from the senders seen: {seen} of {checked}"
     );
     assert_eq!(seen_without, 0, "heard lines with no robot selected");
+    // The MCAP export has a fourth channel with the deliveries, one message a tick.
+    let o = Command::new(orchestrator())
+        .args(["export", i.to_str().unwrap(), "--format", "mcap"])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", stderr(&o));
+    let bytes = std::fs::read(i.join("recording.mcap")).unwrap();
+    let mut per_topic: std::collections::BTreeMap<String, usize> = Default::default();
+    for m in mcap::MessageStream::new(&bytes).unwrap() {
+        let m = m.unwrap();
+        if m.channel.topic == "/swarm/deliveries" && m.sequence as usize == k {
+            let v: serde_json::Value = serde_json::from_slice(&m.data).unwrap();
+            let got = v["heard"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .find(|h| h["receiver"] == r as u64)
+                .expect("robot r in tick k's deliveries");
+            assert_eq!(got["messages"], serde_json::to_value(heard).unwrap());
+        }
+        *per_topic.entry(m.channel.topic.clone()).or_default() += 1;
+    }
+    assert_eq!(per_topic.get("/swarm/deliveries"), Some(&ticks.len()));
+    assert_eq!(per_topic.len(), 4, "{per_topic:?}");
 }
 
 /// Whether a pixel within 1 px of `at` has colour `c` (within 40 a channel: lines are

@@ -1,7 +1,9 @@
 //! MCAP with JSON messages and JSON-schema channels, one message per tick on each:
 //! `/swarm/poses` (every robot's pose, state, alive), `/swarm/entities` (the mission's marks:
-//! search targets found and not, ...) and `/swarm/radio` (the tick's radio counters). The
-//! recording's header is the file's `scenario` metadata record.
+//! search targets found and not, ...) and `/swarm/radio` (the tick's radio counters); a
+//! recording with deliveries (version 6, `up --record-deliveries`) adds `/swarm/deliveries`
+//! (per receiver, the messages it was handed: sender, seq, bytes). The recording's header is
+//! the file's `scenario` metadata record.
 
 use super::ExportError;
 use mcap::records::MessageHeader;
@@ -24,17 +26,28 @@ const POSES_SCHEMA: &str = r#"{"type":"object","properties":{
 const ENTITIES_SCHEMA: &str = r#"{"type":"object","properties":{
  "tick":{"type":"integer"},
  "marks":{"type":"array","items":{"type":"object","properties":{
-  "kind":{"type":"string","enum":["Disc","Ring","Circle","Path"]},
+  "kind":{"type":"string","enum":["Disc","Ring","Circle","Triangle","Path"]},
   "at":{"type":"array","items":{"type":"number"}},
   "colour":{"type":"array","items":{"type":"integer"}}}}}}}"#;
 
 const RADIO_SCHEMA: &str = r#"{"type":"object","properties":{
  "tick":{"type":"integer"},"offered":{"type":"integer"},"delivered":{"type":"integer"},
- "dropped_range":{"type":"integer"},"dropped_loss":{"type":"integer"},
- "dropped_unlinked":{"type":"integer"},"malformed":{"type":"integer"}}}"#;
+ "dropped_range":{"type":"integer"},"dropped_occluded":{"type":"integer"},
+ "dropped_bandwidth":{"type":"integer"},"dropped_loss":{"type":"integer"},
+ "malformed":{"type":"integer"},"receiver_dead":{"type":"integer"},
+ "in_flight":{"type":"integer"}}}"#;
+
+const DELIVERIES_SCHEMA: &str = r#"{"type":"object","properties":{
+ "tick":{"type":"integer"},
+ "heard":{"type":"array","items":{"type":"object","properties":{
+  "receiver":{"type":"integer"},
+  "messages":{"type":"array","items":{"type":"object","properties":{
+   "sender":{"type":"integer"},"seq":{"type":"integer"},"bytes":{"type":"integer"}}}}}}}}}"#;
 
 /// The channels, in the order their messages are written each tick.
 pub const TOPICS: [&str; 3] = ["/swarm/poses", "/swarm/entities", "/swarm/radio"];
+/// The channel of a recording with deliveries, written after the others each tick.
+pub const DELIVERIES_TOPIC: &str = "/swarm/deliveries";
 
 fn tick_ns(header: &RecordingHeader) -> u64 {
     let hz = swarm::scenario::Scenario::parse(&header.scenario, "recording.bin header")
@@ -106,6 +119,21 @@ pub fn write(
             .add_channel(s, TOPICS[k], "json", &BTreeMap::new())
             .map_err(mc)?;
     }
+    let deliveries = if header.version >= swarm::recording::RECORDING_VERSION_DELIVERIES {
+        let s = w
+            .add_schema(
+                "swarm.Deliveries",
+                "jsonschema",
+                DELIVERIES_SCHEMA.as_bytes(),
+            )
+            .map_err(mc)?;
+        Some(
+            w.add_channel(s, DELIVERIES_TOPIC, "json", &BTreeMap::new())
+                .map_err(mc)?,
+        )
+    } else {
+        None
+    };
     let dt = tick_ns(header);
     let mut count = 0u64;
     for t in ticks {
@@ -129,16 +157,29 @@ pub fn write(
         // Every counter the recording holds (the schema names those known today).
         let mut radio = serde_json::to_value(t.radio).expect("radio JSON");
         radio["tick"] = t.tick.into();
-        let msgs = [
-            json!({"tick": t.tick, "robots": robots}),
-            json!({"tick": t.tick, "marks": marks}),
-            radio,
+        let mut msgs = vec![
+            (channels[0], json!({"tick": t.tick, "robots": robots})),
+            (channels[1], json!({"tick": t.tick, "marks": marks})),
+            (channels[2], radio),
         ];
+        if let Some(c) = deliveries {
+            // Receivers that heard something, in id order.
+            let heard: Vec<serde_json::Value> = t
+                .deliveries
+                .as_ref()
+                .map_or(&[][..], |d| &d.heard[..])
+                .iter()
+                .enumerate()
+                .filter(|(_, h)| !h.is_empty())
+                .map(|(i, h)| json!({"receiver": i, "messages": h}))
+                .collect();
+            msgs.push((c, json!({"tick": t.tick, "heard": heard})));
+        }
         let time = t.tick * dt;
-        for (k, m) in msgs.iter().enumerate() {
+        for (channel_id, m) in &msgs {
             w.write_to_known_channel(
                 &MessageHeader {
-                    channel_id: channels[k],
+                    channel_id: *channel_id,
                     sequence: t.tick as u32,
                     log_time: time,
                     publish_time: time,
