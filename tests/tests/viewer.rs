@@ -48,6 +48,10 @@ fn chromium() -> PathBuf {
     })
 }
 
+/// How long one Chromium run may take (a few seconds normally; once over 90 s when the shared
+/// machine's load average was 13-28).
+const CHROMIUM_LIMIT: Duration = Duration::from_secs(180);
+
 /// Runs headless Chromium on `url` with `extra` arguments (window `w` x `h`, a profile of its
 /// own); its stdout.
 fn run_chromium(url: &str, w: u32, h: u32, tag: &str, extra: &[String]) -> (PathBuf, Vec<u8>) {
@@ -82,10 +86,10 @@ fn run_chromium(url: &str, w: u32, h: u32, tag: &str, extra: &[String]) -> (Path
     });
     let t = Instant::now();
     while c.try_wait().unwrap().is_none() {
-        if t.elapsed() > Duration::from_secs(90) {
+        if t.elapsed() > CHROMIUM_LIMIT {
             let _ = c.kill();
             let _ = c.wait();
-            panic!("chromium took over 90 s for {url}");
+            panic!("chromium took over {CHROMIUM_LIMIT:?} for {url}");
         }
         std::thread::sleep(Duration::from_millis(50));
     }
