@@ -18,6 +18,10 @@ pub const RECORDING_VERSION_EXTRA: u32 = 4;
 /// Version 5: as version 4, each TickExtra followed by the tick's [`TickLayer`] (the mission's
 /// marks, for the viewer). A run writes it when its mission has a layer (search: targets).
 pub const RECORDING_VERSION_LAYER: u32 = 5;
+/// Version 6: as version 5, each TickLayer followed by the tick's radio counters in payload
+/// bytes (a [`RadioCounters`] whose every field counts bytes: `TickRecord::radio_bytes`).
+/// Every run writes it (the TickExtra and TickLayer of a run without them cost a byte each).
+pub const RECORDING_VERSION_BYTES: u32 = 6;
 /// The oldest version this reader understands.
 pub const RECORDING_VERSION_OLDEST: u32 = 3;
 
@@ -117,6 +121,10 @@ pub struct TickRecord {
     /// outcome of those due at it (delivered, malformed, receiver dead), and what is in flight
     /// after it.
     pub radio: RadioCounters,
+    /// The same counters in payload bytes: each (message, receiver) pair counts its message's
+    /// length. Version 6: written after the TickLayer; zero when read from older versions.
+    #[serde(skip)]
+    pub radio_bytes: RadioCounters,
     /// Version 4 only: written after the record, not inside it.
     #[serde(skip)]
     pub extra: Option<TickExtra>,
@@ -136,6 +144,8 @@ pub struct RecordingWriter<W: Write> {
     extra: bool,
     /// Version 5: a TickLayer follows each TickExtra; the last marks written.
     layer: Option<Vec<Mark>>,
+    /// Version 6: the radio's byte counters follow each TickLayer.
+    bytes: bool,
     /// Flush after every tick (a live viewer reads the file as it grows).
     flush_each_tick: bool,
 }
@@ -149,6 +159,7 @@ impl<W: Write> RecordingWriter<W> {
             out,
             extra: header.version >= RECORDING_VERSION_EXTRA,
             layer: (header.version >= RECORDING_VERSION_LAYER).then(Vec::new),
+            bytes: header.version >= RECORDING_VERSION_BYTES,
             flush_each_tick: false,
         })
     }
@@ -185,6 +196,10 @@ impl<W: Write> RecordingWriter<W> {
                 last.clear();
                 last.extend_from_slice(now);
             }
+        }
+        if self.bytes {
+            bincode::serde::encode_into_std_write(rec.radio_bytes, &mut self.out, cfg())
+                .map_err(std::io::Error::other)?;
         }
         if self.flush_each_tick {
             self.out.flush()?;
@@ -225,6 +240,7 @@ pub fn read_header<R: Read>(r: &mut R) -> std::io::Result<RecordingHeader> {
 pub struct TickReader {
     extra: bool,
     layer: Option<Vec<Mark>>,
+    bytes: bool,
 }
 
 impl TickReader {
@@ -232,6 +248,7 @@ impl TickReader {
         TickReader {
             extra: header.version >= RECORDING_VERSION_EXTRA,
             layer: (header.version >= RECORDING_VERSION_LAYER).then(Vec::new),
+            bytes: header.version >= RECORDING_VERSION_BYTES,
         }
     }
 
@@ -265,6 +282,13 @@ impl TickReader {
             }
             t.layer = Some(last.clone());
         }
+        if self.bytes {
+            match bincode::serde::decode_from_std_read(inp, cfg()) {
+                Ok(b) => t.radio_bytes = b,
+                Err(e) if eof(&e) => return Ok(None),
+                Err(e) => return Err(std::io::Error::other(e)),
+            }
+        }
         Ok(Some(t))
     }
 }
@@ -297,6 +321,7 @@ mod tests {
                 offered: 5,
                 ..Default::default()
             },
+            radio_bytes: RadioCounters::default(),
             extra: None,
             layer: None,
         };
@@ -332,6 +357,68 @@ mod tests {
     }
 
     #[test]
+    fn version_6_carries_the_byte_counters_and_older_versions_read_them_as_zero() {
+        let h = RecordingHeader {
+            version: RECORDING_VERSION_BYTES,
+            robots: 1,
+            seed: 0,
+            scenario: String::new(),
+        };
+        let t = TickRecord {
+            tick: 0,
+            poses: vec![[0.0; 3]],
+            alive: vec![1],
+            states: vec![0],
+            events: vec![],
+            radio: RadioCounters {
+                offered: 2,
+                delivered: 2,
+                ..Default::default()
+            },
+            radio_bytes: RadioCounters {
+                offered: 300,
+                delivered: 200,
+                dropped_loss: 100,
+                ..Default::default()
+            },
+            extra: Some(TickExtra::default()),
+            layer: Some(vec![]),
+        };
+        let mut buf = Vec::new();
+        let mut w = RecordingWriter::new(&mut buf, &h).unwrap();
+        w.push(&t).unwrap();
+        w.push(&TickRecord {
+            tick: 1,
+            ..t.clone()
+        })
+        .unwrap();
+        w.finish().unwrap();
+        let (_, back) = read_recording(&buf[..]).unwrap();
+        assert_eq!(
+            back,
+            vec![
+                t.clone(),
+                TickRecord {
+                    tick: 1,
+                    ..t.clone()
+                }
+            ]
+        );
+        // The same tick in version 5: no bytes written, none read.
+        let h5 = RecordingHeader {
+            version: RECORDING_VERSION_LAYER,
+            ..h
+        };
+        let mut buf5 = Vec::new();
+        let mut w = RecordingWriter::new(&mut buf5, &h5).unwrap();
+        w.push(&t).unwrap();
+        w.finish().unwrap();
+        let (_, back5) = read_recording(&buf5[..]).unwrap();
+        assert_eq!(back5[0].radio_bytes, RadioCounters::default());
+        assert_eq!(back5[0].radio, t.radio);
+    }
+
+    #[test]
     fn version_3_writes_a_layer_only_when_it_changes_and_reads_every_tick_whole() {
         let h = RecordingHeader {
             version: RECORDING_VERSION_LAYER,
@@ -352,6 +439,7 @@ mod tests {
             states: vec![0],
             events: vec![],
             radio: RadioCounters::default(),
+            radio_bytes: RadioCounters::default(),
             extra: Some(TickExtra::default()),
             layer: Some(m),
         };
