@@ -107,9 +107,24 @@ pub struct TickAir {
     /// Receiver r's messages are `index[start[r]..start[r + 1]]` (indices into `messages`).
     pub start: Vec<u32>,
     pub index: Vec<u32>,
+    /// Payload bytes of receiver r's list (the radio's byte counters; not on the wire).
+    pub bytes_to: Vec<u64>,
 }
 
 impl TickAir {
+    /// Empties it, keeping its allocations.
+    pub fn clear(&mut self) {
+        self.tick = 0;
+        self.messages.clear();
+        self.bytes.clear();
+        self.start.clear();
+        self.index.clear();
+        self.bytes_to.clear();
+    }
+    /// Payload bytes of the messages that reach `robot`.
+    pub fn bytes_to(&self, robot: u32) -> u64 {
+        self.bytes_to.get(robot as usize).copied().unwrap_or(0)
+    }
     /// The messages that reach `robot`.
     pub fn deliveries(&self, robot: u32) -> &[u32] {
         let r = robot as usize;

@@ -43,6 +43,16 @@ impl Air {
         self.bytes.clear();
     }
 
+    /// The messages in the order sent: header and the offset of its payload in [`Air::bytes`].
+    pub fn entries(&self) -> &[(RadioHeader, usize)] {
+        &self.headers
+    }
+
+    /// Every payload, back to back.
+    pub fn bytes(&self) -> &[u8] {
+        &self.bytes
+    }
+
     /// Appends another buffer's messages after ours (in their order).
     pub fn append(&mut self, other: &Air) {
         let base = self.bytes.len();

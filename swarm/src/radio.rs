@@ -36,10 +36,17 @@ pub fn loss_draw(seed: u64, tick: u64, sender: u32, receiver: u32, seq: u32) -> 
 /// Loss probability at distance d.
 #[inline]
 pub fn loss_probability(p: &RadioParams, d: f64) -> f64 {
+    loss_probability_within(p, p.comm_radius, d)
+}
+
+/// Loss probability at distance d from a sender of range `radius` (the distance model's
+/// d / R_comm is d / radius).
+#[inline]
+pub fn loss_probability_within(p: &RadioParams, radius: f64, d: f64) -> f64 {
     match p.loss_model {
         LossModel::Bernoulli => p.loss,
         LossModel::Distance => {
-            let x = (d / p.comm_radius).clamp(0.0, 1.0);
+            let x = (d / radius).clamp(0.0, 1.0);
             (p.loss + (p.loss_at_range - p.loss) * x.powf(p.loss_exponent)).clamp(0.0, 1.0)
         }
     }
@@ -81,13 +88,41 @@ pub fn decide(
     receiver_pos: [f64; 2],
     seq: u32,
 ) -> Verdict {
+    decide_within(
+        p,
+        p.comm_radius,
+        seed,
+        tick,
+        sender,
+        sender_pos,
+        receiver,
+        receiver_pos,
+        seq,
+    )
+}
+
+/// [`decide`] for a sender whose range is `radius` (`radio.sender_ranges`; `comm_radius` for
+/// the others).
+#[allow(clippy::too_many_arguments)]
+#[inline]
+pub fn decide_within(
+    p: &RadioParams,
+    radius: f64,
+    seed: u64,
+    tick: u64,
+    sender: u32,
+    sender_pos: [f64; 2],
+    receiver: u32,
+    receiver_pos: [f64; 2],
+    seq: u32,
+) -> Verdict {
     // d = sqrt(s) is needed only near the range (and by the distance loss model): a square
     // beyond (below) R^2 by far more than sqrt's rounding decides `d > R` without it. Half the
     // pairs are out of range, and the sqrt sat in front of that unpredictable branch.
     let dx = sender_pos[0] - receiver_pos[0];
     let dy = sender_pos[1] - receiver_pos[1];
     let s = dx * dx + dy * dy;
-    let r2 = p.comm_radius * p.comm_radius;
+    let r2 = radius * radius;
     if s > r2 * (1.0 + 1e-9) {
         return Verdict::OutOfRange;
     }
@@ -95,10 +130,10 @@ pub fn decide(
         p.loss
     } else {
         let d = s.sqrt();
-        if d > p.comm_radius {
+        if d > radius {
             return Verdict::OutOfRange;
         }
-        loss_probability(p, d)
+        loss_probability_within(p, radius, d)
     };
     if pl > 0.0 && loss_draw(seed, tick, sender, receiver, seq) < pl {
         Verdict::Lost

@@ -18,12 +18,16 @@ pub const RECORDING_VERSION_EXTRA: u32 = 4;
 /// Version 5: as version 4, each TickExtra followed by the tick's [`TickLayer`] (the mission's
 /// marks, for the viewer). A run writes it when its mission has a layer (search: targets).
 pub const RECORDING_VERSION_LAYER: u32 = 5;
+/// Version 6: as version 5, each TickLayer followed by the tick's radio counters in payload
+/// bytes (a [`RadioCounters`] whose every field counts bytes: `TickRecord::radio_bytes`).
+/// Every run writes it (the TickExtra and TickLayer of a run without them cost a byte each).
+pub const RECORDING_VERSION_BYTES: u32 = 6;
 /// The oldest version this reader understands.
 pub const RECORDING_VERSION_OLDEST: u32 = 3;
-/// Version 6: as version 5, each TickLayer followed by the tick's [`TickDeliveries`] (who
-/// heard whom). Opt-in (`runtime.record_deliveries`, `up --record-deliveries`): other runs keep
-/// their version.
-pub const RECORDING_VERSION_DELIVERIES: u32 = 6;
+/// Version 7: as version 6, each tick's byte counters followed by its [`TickDeliveries`] (who
+/// heard whom). Opt-in (`runtime.record_deliveries`, `up --record-deliveries`): other runs
+/// write version 6.
+pub const RECORDING_VERSION_DELIVERIES: u32 = 7;
 
 /// Clearances of robot bodies at one tick (robots with `robot.radius` > 0).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -124,6 +128,10 @@ pub struct TickRecord {
     /// outcome of those due at it (delivered, malformed, receiver dead), and what is in flight
     /// after it.
     pub radio: RadioCounters,
+    /// The same counters in payload bytes: each (message, receiver) pair counts its message's
+    /// length. Version 6: written after the TickLayer; zero when read from older versions.
+    #[serde(skip)]
+    pub radio_bytes: RadioCounters,
     /// Version 4 only: written after the record, not inside it.
     #[serde(skip)]
     pub extra: Option<TickExtra>,
@@ -147,6 +155,8 @@ pub struct RecordingWriter<W: Write> {
     extra: bool,
     /// Version 5: a TickLayer follows each TickExtra; the last marks written.
     layer: Option<Vec<Mark>>,
+    /// Version 6: the radio's byte counters follow each TickLayer.
+    bytes: bool,
     /// Flush after every tick (a live viewer reads the file as it grows).
     flush_each_tick: bool,
     /// Version 6: a TickDeliveries follows each TickLayer.
@@ -162,6 +172,7 @@ impl<W: Write> RecordingWriter<W> {
             out,
             extra: header.version >= RECORDING_VERSION_EXTRA,
             layer: (header.version >= RECORDING_VERSION_LAYER).then(Vec::new),
+            bytes: header.version >= RECORDING_VERSION_BYTES,
             flush_each_tick: false,
             deliveries: header.version >= RECORDING_VERSION_DELIVERIES,
         })
@@ -199,6 +210,10 @@ impl<W: Write> RecordingWriter<W> {
                 last.clear();
                 last.extend_from_slice(now);
             }
+        }
+        if self.bytes {
+            bincode::serde::encode_into_std_write(rec.radio_bytes, &mut self.out, cfg())
+                .map_err(std::io::Error::other)?;
         }
         if self.deliveries {
             let d = rec.deliveries.as_ref().unwrap_or(&NO_DELIVERIES);
@@ -244,6 +259,7 @@ pub fn read_header<R: Read>(r: &mut R) -> std::io::Result<RecordingHeader> {
 pub struct TickReader {
     extra: bool,
     layer: Option<Vec<Mark>>,
+    bytes: bool,
     deliveries: bool,
 }
 
@@ -252,6 +268,7 @@ impl TickReader {
         TickReader {
             extra: header.version >= RECORDING_VERSION_EXTRA,
             layer: (header.version >= RECORDING_VERSION_LAYER).then(Vec::new),
+            bytes: header.version >= RECORDING_VERSION_BYTES,
             deliveries: header.version >= RECORDING_VERSION_DELIVERIES,
         }
     }
@@ -286,6 +303,13 @@ impl TickReader {
             }
             t.layer = Some(last.clone());
         }
+        if self.bytes {
+            match bincode::serde::decode_from_std_read(inp, cfg()) {
+                Ok(b) => t.radio_bytes = b,
+                Err(e) if eof(&e) => return Ok(None),
+                Err(e) => return Err(std::io::Error::other(e)),
+            }
+        }
         if self.deliveries {
             match bincode::serde::decode_from_std_read(inp, cfg()) {
                 Ok(d) => t.deliveries = Some(d),
@@ -297,7 +321,7 @@ impl TickReader {
     }
 }
 
-/// One message a robot was handed at a tick (version 6).
+/// One message a robot was handed at a tick (version 7).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 pub struct Heard {
     pub sender: u32,
@@ -355,6 +379,7 @@ mod tests {
                 offered: 5,
                 ..Default::default()
             },
+            radio_bytes: RadioCounters::default(),
             extra: None,
             layer: None,
             deliveries: None,
@@ -391,6 +416,68 @@ mod tests {
     }
 
     #[test]
+    fn version_6_carries_the_byte_counters_and_older_versions_read_them_as_zero() {
+        let h = RecordingHeader {
+            version: RECORDING_VERSION_BYTES,
+            robots: 1,
+            seed: 0,
+            scenario: String::new(),
+        };
+        let t = TickRecord {
+            tick: 0,
+            poses: vec![[0.0; 3]],
+            alive: vec![1],
+            states: vec![0],
+            events: vec![],
+            radio: RadioCounters {
+                offered: 2,
+                delivered: 2,
+                ..Default::default()
+            },
+            radio_bytes: RadioCounters {
+                offered: 300,
+                delivered: 200,
+                dropped_loss: 100,
+                ..Default::default()
+            },
+            extra: Some(TickExtra::default()),
+            layer: Some(vec![]),
+        };
+        let mut buf = Vec::new();
+        let mut w = RecordingWriter::new(&mut buf, &h).unwrap();
+        w.push(&t).unwrap();
+        w.push(&TickRecord {
+            tick: 1,
+            ..t.clone()
+        })
+        .unwrap();
+        w.finish().unwrap();
+        let (_, back) = read_recording(&buf[..]).unwrap();
+        assert_eq!(
+            back,
+            vec![
+                t.clone(),
+                TickRecord {
+                    tick: 1,
+                    ..t.clone()
+                }
+            ]
+        );
+        // The same tick in version 5: no bytes written, none read.
+        let h5 = RecordingHeader {
+            version: RECORDING_VERSION_LAYER,
+            ..h
+        };
+        let mut buf5 = Vec::new();
+        let mut w = RecordingWriter::new(&mut buf5, &h5).unwrap();
+        w.push(&t).unwrap();
+        w.finish().unwrap();
+        let (_, back5) = read_recording(&buf5[..]).unwrap();
+        assert_eq!(back5[0].radio_bytes, RadioCounters::default());
+        assert_eq!(back5[0].radio, t.radio);
+    }
+
+    #[test]
     fn version_3_writes_a_layer_only_when_it_changes_and_reads_every_tick_whole() {
         let h = RecordingHeader {
             version: RECORDING_VERSION_LAYER,
@@ -411,6 +498,7 @@ mod tests {
             states: vec![0],
             events: vec![],
             radio: RadioCounters::default(),
+            radio_bytes: RadioCounters::default(),
             extra: Some(TickExtra::default()),
             layer: Some(m),
             deliveries: None,
@@ -446,7 +534,7 @@ mod tests {
     }
 
     #[test]
-    fn version_6_carries_each_ticks_deliveries_after_its_layer() {
+    fn version_7_carries_each_ticks_deliveries_after_its_byte_counters() {
         let h = RecordingHeader {
             version: RECORDING_VERSION_DELIVERIES,
             robots: 3,
@@ -461,6 +549,7 @@ mod tests {
             states: vec![0; 3],
             events: vec![],
             radio: RadioCounters::default(),
+            radio_bytes: RadioCounters::default(),
             extra: Some(TickExtra::default()),
             layer: Some(vec![]),
             deliveries: d,
@@ -488,10 +577,10 @@ mod tests {
         // Cut inside the last record's deliveries: two ticks.
         let (_, part) = read_recording(&buf[..buf.len() - 1]).unwrap();
         assert_eq!(part.len(), 2);
-        // A version-5 reader's view of the same ticks is smaller by exactly the deliveries.
+        // The same ticks in version 6 are smaller by exactly the deliveries.
         let mut buf5 = Vec::new();
         let h5 = RecordingHeader {
-            version: RECORDING_VERSION_LAYER,
+            version: RECORDING_VERSION_BYTES,
             ..h.clone()
         };
         let mut w = RecordingWriter::new(&mut buf5, &h5).unwrap();

@@ -202,6 +202,57 @@ pub struct RadioParams {
     /// Obstacles block the line of sight between sender and receiver.
     #[serde(default)]
     pub occlusion: bool,
+    /// Agents whose transmissions have a range of their own instead of `comm_radius` (a
+    /// station's stronger transmitter, a robot's weaker one): the medium judges a message by
+    /// its sender's range (`world::medium`). Empty: every agent has `comm_radius`.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub sender_ranges: Vec<SenderRange>,
+    /// How the medium finds the receivers within a sender's range: a grid of the live robots
+    /// (default), or every robot (the scan before the grid, for benchmarks). Both give the
+    /// same deliveries.
+    #[serde(default, skip_serializing_if = "RangeScan::is_grid")]
+    pub range_scan: RangeScan,
+}
+
+/// `[[radio.sender_ranges]]`: one agent's own radio range.
+#[derive(Serialize, Deserialize, Clone, Copy, Debug, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct SenderRange {
+    /// The agent (robot or station id, 0..run.robots).
+    pub agent: u32,
+    /// Its messages reach receivers within this distance (replaces `radio.comm_radius` for
+    /// them; the distance loss model scales with it).
+    pub comm_radius: f64,
+}
+
+/// `radio.range_scan`: how the medium finds the receivers a broadcast may reach.
+#[derive(Serialize, Deserialize, Clone, Copy, Debug, PartialEq, Eq, Default)]
+#[serde(rename_all = "kebab-case")]
+pub enum RangeScan {
+    /// The cells of a grid of the live robots within the sender's range.
+    #[default]
+    Grid,
+    /// Every live robot (O(N^2) a tick; kept for the benchmark and the grid's tests).
+    All,
+}
+
+impl RangeScan {
+    fn is_grid(&self) -> bool {
+        *self == RangeScan::Grid
+    }
+}
+
+impl RadioParams {
+    /// Each agent's radio range, by id (`sender_ranges`, else `comm_radius`), for `n` agents.
+    pub fn ranges(&self, n: usize) -> Vec<f64> {
+        let mut r = vec![self.comm_radius; n];
+        for s in &self.sender_ranges {
+            if let Some(x) = r.get_mut(s.agent as usize) {
+                *x = s.comm_radius;
+            }
+        }
+        r
+    }
 }
 
 fn default_zero_copy_held() -> u32 {
@@ -237,7 +288,7 @@ pub struct RuntimeParams {
     /// so its recording's header) names its rate.
     #[serde(default, skip_serializing_if = "is_zero")]
     pub realtime_hz: f64,
-    /// Record the messages each robot was handed every tick (recording version 6: sender,
+    /// Record the messages each robot was handed every tick (recording version 7: sender,
     /// seq and size of each), for the viewer's "heard this tick". Off by default: a run that
     /// leaves it off records what it did before (and its resolved scenario does not list it).
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
@@ -603,6 +654,31 @@ impl Scenario {
             true,
         )?;
         c.range_u("radio.delay_ticks", self.radio.delay_ticks as u64, 0, 1000)?;
+        for (k, r) in self.radio.sender_ranges.iter().enumerate() {
+            let key = format!("radio.sender_ranges[{k}]");
+            c.range_u(
+                &format!("{key}.agent"),
+                r.agent as u64,
+                0,
+                self.run.robots as u64 - 1,
+            )?;
+            c.range_f(
+                &format!("{key}.comm_radius"),
+                r.comm_radius,
+                0.0,
+                1e7,
+                false,
+            )?;
+            if self.radio.sender_ranges[..k]
+                .iter()
+                .any(|q| q.agent == r.agent)
+            {
+                return Err(c.err(
+                    &format!("{key}.agent"),
+                    format!("= {}: this agent already has a range", r.agent),
+                ));
+            }
+        }
         if let Some(b) = &self.radio.burst {
             for (key, v) in [
                 ("radio.burst.p_good_bad", b.p_good_bad),
@@ -822,6 +898,42 @@ mod tests {
         assert!(e.to_string().contains("p_bad_good"), "{e}");
         let e = Scenario::parse("[radio]\nmax_links = 3\n", "t.toml").unwrap_err();
         assert!(e.to_string().contains("max_links"), "{e}");
+    }
+
+    #[test]
+    fn sender_ranges_parse_and_are_validated() {
+        let text = "[run]\nrobots = 4\n[radio]\ncomm_radius = 50.0\nrange_scan = \"all\"\n\
+                    [[radio.sender_ranges]]\nagent = 3\ncomm_radius = 900.0\n";
+        let sc = Scenario::parse(text, "t.toml").unwrap();
+        sc.validate(&file).unwrap();
+        assert_eq!(sc.radio.ranges(4), vec![50.0, 50.0, 50.0, 900.0]);
+        assert_eq!(sc.radio.range_scan, RangeScan::All);
+        // The resolved scenario keeps them (and omits them when they are the defaults).
+        assert_eq!(Scenario::parse(&sc.to_toml(), "r.toml").unwrap(), sc);
+        assert!(!Scenario::default().to_toml().contains("sender_ranges"));
+        let mut bad = sc.clone();
+        bad.radio.sender_ranges[0].agent = 4;
+        assert_eq!(
+            bad.validate(&file).unwrap_err().key,
+            "radio.sender_ranges[0].agent"
+        );
+        let mut bad = sc.clone();
+        bad.radio.sender_ranges[0].comm_radius = -1.0;
+        assert_eq!(
+            bad.validate(&file).unwrap_err().key,
+            "radio.sender_ranges[0].comm_radius"
+        );
+        let mut bad = sc.clone();
+        bad.radio.sender_ranges.push(bad.radio.sender_ranges[0]);
+        let e = bad.validate(&file).unwrap_err();
+        assert_eq!(e.key, "radio.sender_ranges[1].agent");
+        assert!(e.to_string().contains("already"), "{e}");
+        let e = Scenario::parse(
+            "[[radio.sender_ranges]]\nagent = 1\nrange = 3.0\n",
+            "t.toml",
+        )
+        .unwrap_err();
+        assert!(e.to_string().contains("range"), "{e}");
     }
 
     #[test]

@@ -209,20 +209,33 @@ fn a_paced_run_ticks_no_faster_than_asked_and_records_the_same_ticks() {
 }
 
 /// Per tick of a recording: the offers up to the tick equal the outcomes up to it plus what
-/// is in flight after it.
+/// is in flight after it; in (message, receiver) pairs and in payload bytes alike.
 fn assert_books_balance_per_tick(dir: &std::path::Path) -> swarm::radio::RadioCounters {
     let f = std::fs::File::open(dir.join("recording.bin")).unwrap();
     let (_, ticks) = swarm::recording::read_recording(std::io::BufReader::new(f)).unwrap();
     let mut sum = swarm::radio::RadioCounters::default();
+    let mut bytes = swarm::radio::RadioCounters::default();
     for t in &ticks {
         sum.add(&t.radio);
+        bytes.add(&t.radio_bytes);
         assert_eq!(
             sum.offered,
             sum.accounted(),
             "tick {}: the counters do not add up: {sum:?}",
             t.tick
         );
+        assert_eq!(
+            bytes.offered,
+            bytes.accounted(),
+            "tick {}: the byte counters do not add up: {bytes:?}",
+            t.tick
+        );
+        // A message has a payload of one byte at least: bytes follow pairs.
+        assert!(bytes.delivered >= sum.delivered && bytes.offered >= sum.offered);
     }
+    let b = &summary(dir)["message_bytes"];
+    assert_eq!(b["offered"].as_u64().unwrap(), bytes.offered, "{b}");
+    assert_eq!(b["delivered"].as_u64().unwrap(), bytes.delivered, "{b}");
     sum
 }
 
@@ -356,12 +369,17 @@ fn beacons_with_a_bulk_payload_received_in_place_give_the_same_run() {
         let b = args(roam());
         let o = up(&b, &plain);
         assert!(o.status.success(), "{}", stderr(&o));
-        // The header holds the resolved scenario (it differs); every tick record must not.
+        // The header holds the resolved scenario (it differs); every tick record must not,
+        // but for the byte counters (the payload's bytes are counted).
         let ticks = |dir: &std::path::Path| {
             let f = std::fs::File::open(dir.join("recording.bin")).unwrap();
-            swarm::recording::read_recording(std::io::BufReader::new(f))
+            let mut t = swarm::recording::read_recording(std::io::BufReader::new(f))
                 .unwrap()
-                .1
+                .1;
+            for r in &mut t {
+                r.radio_bytes = Default::default();
+            }
+            t
         };
         let (tp, tq) = (ticks(&p), ticks(&plain));
         assert_eq!(tp.len(), 300);

@@ -508,7 +508,7 @@ fn the_page_shows_whom_the_selected_robot_heard_that_tick() {
         same_recording(&p, &i),
         "the executors recorded other deliveries"
     );
-    // Off by default: the same run without the flag records version 5 and the same ticks.
+    // Off by default: the same run without the flag records version 6 and the same ticks.
     let plain = tmp_dir("view-heard-plain");
     let mut a = args.to_vec();
     a.extend(["--executor", "inprocess"]);
@@ -520,7 +520,7 @@ fn the_page_shows_whom_the_selected_robot_heard_that_tick() {
     let (h, ticks) = read(&i);
     let (h0, ticks0) = read(&plain);
     assert_eq!(h.version, swarm::recording::RECORDING_VERSION_DELIVERIES);
-    assert_eq!(h0.version, swarm::recording::RECORDING_VERSION_LAYER);
+    assert_eq!(h0.version, swarm::recording::RECORDING_VERSION_BYTES);
     assert!(!std::fs::read_to_string(plain.join("scenario.toml"))
         .unwrap()
         .contains("record_deliveries"));

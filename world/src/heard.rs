@@ -1,5 +1,5 @@
 //! Who heard whom: the messages the medium hands each robot at a tick, as the recording keeps
-//! them when `runtime.record_deliveries` is on (recording version 6, for the viewer).
+//! them when `runtime.record_deliveries` is on (recording version 7, for the viewer).
 
 use crate::medium::TickAir;
 use swarm::recording::{Heard, TickDeliveries};

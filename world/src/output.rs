@@ -77,6 +77,9 @@ pub struct Summary {
     pub steady_ticks_per_second: f64,
     pub tick_time: TickTimes,
     pub messages: RadioCounters,
+    /// The same counters in payload bytes (each (message, receiver) pair counts its message's
+    /// encoded length; the 40-byte header of each is not counted).
+    pub message_bytes: RadioCounters,
     pub rejected_actions: BTreeMap<String, u64>,
     pub blocked_moves: u64,
     pub distance_travelled: f64,
@@ -196,6 +199,7 @@ impl RunOutputs {
                 max_us: sorted.last().copied().unwrap_or(0) as f64 / 1e3,
             },
             messages: world.radio,
+            message_bytes: world.radio_bytes,
             rejected_actions: REJECT_NAMES
                 .iter()
                 .zip(world.rejected)

@@ -71,7 +71,14 @@ pub struct World {
     medium: Medium,
     /// The messages due at the current tick (taken from the medium by `begin_tick`).
     due: Option<TickAir>,
+    /// Scratch of `apply`, kept for their allocations: messages per sender, whose radio is
+    /// taken this tick, and the messages handed to the medium.
+    sent_per_robot: Vec<usize>,
+    radio_taken: Vec<bool>,
+    outgoing: Vec<(RadioHeader, usize)>,
     pub radio: RadioCounters,
+    /// The same counters in payload bytes (each pair counts its message's length).
+    pub radio_bytes: RadioCounters,
     pub faults: Vec<Fault>,
     pub rejected: [u64; 6],
     pub blocked_moves: u64,
@@ -203,7 +210,11 @@ impl World {
             scratch: SenseScratch::default(),
             medium: Medium::new(sc, MediumParams::from_scenario(sc)),
             due: None,
+            sent_per_robot: Vec::new(),
+            radio_taken: Vec::new(),
+            outgoing: Vec::new(),
             radio: RadioCounters::default(),
+            radio_bytes: RadioCounters::default(),
             faults: Vec::new(),
             rejected: [0; 6],
             blocked_moves: 0,
@@ -355,6 +366,9 @@ impl World {
     /// Takes the radio messages due at this tick from the medium ([`World::air`]).
     pub fn begin_tick(&mut self) {
         let k = self.tick;
+        if let Some(spent) = self.due.take() {
+            self.medium.recycle(spent);
+        }
         self.due = self.medium.due(k);
         while let Some(&[t, r]) = self.kills.get(self.next_kill) {
             if t > k {
@@ -568,6 +582,7 @@ impl World {
         let k = self.tick;
         let mut events = std::mem::take(&mut self.pending_events);
         let mut radio = RadioCounters::default();
+        let mut bytes = RadioCounters::default();
         // The messages due now: each receiver's list, delivered or malformed as it reports, or
         // lost with it when it is dead or sent no action.
         let radio_ok = |i: usize, a: &Option<Action>| matches!(a, Some(a) if a.robot as usize == i && a.tick == k);
@@ -583,27 +598,40 @@ impl World {
                 if listed == 0 {
                     continue;
                 }
+                let listed_bytes = due.bytes_to(i as u32);
                 let a = actions.get(i).copied().flatten();
                 if self.alive[i] && radio_ok(i, &a) {
                     let bad = (a.expect("checked").radio_malformed as u64).min(listed);
                     radio.malformed += bad;
                     radio.delivered += listed - bad;
+                    // The receiver reports how many it could not decode, not which: all of
+                    // its bytes count as delivered unless all its messages were malformed.
+                    if bad == listed {
+                        bytes.malformed += listed_bytes;
+                    } else {
+                        bytes.delivered += listed_bytes;
+                    }
                 } else {
                     radio.receiver_dead += listed;
+                    bytes.receiver_dead += listed_bytes;
                 }
             }
+            self.medium.recycle(due);
         }
         // The messages sent now: a live robot's, with its own valid action, as many as it
         // says it sent (at most radio.max_messages_per_tick). The world's ground truth fills
         // in sender, tick and position.
-        let mut counts = vec![0usize; self.n];
-        for (h, _) in sent.messages() {
+        let counts = &mut self.sent_per_robot;
+        counts.clear();
+        counts.resize(self.n, 0);
+        for (h, _) in sent.entries() {
             if let Some(c) = counts.get_mut(h.sender as usize) {
                 *c += 1;
             }
         }
-        let mut ok = vec![false; self.n];
         let cap = MAX_SENT.min(self.sc.radio.max_messages_per_tick as usize);
+        self.radio_taken.clear();
+        self.radio_taken.resize(self.n, false);
         for i in 0..self.n {
             if !self.alive[i] {
                 continue;
@@ -625,36 +653,38 @@ impl World {
             }
             let reports = [a, l];
             let each = reports.iter().flatten().map(|r| r.n_sent as usize);
-            if each.clone().any(|n_sent| n_sent > cap) || each.sum::<usize>() != counts[i] {
+            if each.clone().any(|n_sent| n_sent > cap)
+                || each.sum::<usize>() != self.sent_per_robot[i]
+            {
                 self.reject(&mut events, i, RejectReason::BadRadioReport);
                 continue;
             }
-            ok[i] = true;
+            self.radio_taken[i] = true;
         }
         self.late_actions += late.iter().flatten().count() as u64;
         self.robot_ticks += self.alive.iter().filter(|a| **a).count() as u64;
-        let mut owned: Vec<(RadioHeader, &[u8])> = Vec::with_capacity(sent.len());
-        for (h, payload) in sent.messages() {
+        self.outgoing.clear();
+        for &(h, at) in sent.entries() {
             let i = h.sender as usize;
-            if i < self.n && ok[i] {
-                let mut h = *h;
+            if i < self.n && self.radio_taken[i] {
+                let mut h = h;
                 h.tick = k;
                 h.sender_pos = [self.poses[i][0], self.poses[i][1]];
-                owned.push((h, payload));
+                self.outgoing.push((h, at));
             }
         }
-        let c = self.medium.transmit(
-            k,
-            owned.iter().map(|(h, p)| (h, *p)),
-            &self.poses,
-            &self.alive,
-        );
-        radio.offered = c.offered;
-        radio.dropped_range = c.dropped_range;
-        radio.dropped_occluded = c.dropped_occluded;
-        radio.dropped_bandwidth = c.dropped_bandwidth;
-        radio.dropped_loss = c.dropped_loss;
+        let c = self
+            .medium
+            .transmit(k, &self.outgoing, sent.bytes(), &self.poses, &self.alive);
+        for (out, t) in [(&mut radio, &c.pairs), (&mut bytes, &c.bytes)] {
+            out.offered = t.offered;
+            out.dropped_range = t.dropped_range;
+            out.dropped_occluded = t.dropped_occluded;
+            out.dropped_bandwidth = t.dropped_bandwidth;
+            out.dropped_loss = t.dropped_loss;
+        }
         radio.in_flight = self.medium.in_flight();
+        bytes.in_flight = self.medium.in_flight_bytes();
         // Motion.
         for i in 0..self.n {
             if !self.alive[i] {
@@ -712,6 +742,7 @@ impl World {
             TickExtra { body: Some(f) }
         });
         self.radio.add(&radio);
+        self.radio_bytes.add(&bytes);
         if (k + 1).is_multiple_of(self.traj_every) {
             for i in 0..self.n {
                 self.trajectories[i].push([
@@ -729,6 +760,7 @@ impl World {
             states: self.states.clone(),
             events,
             radio,
+            radio_bytes: bytes,
             extra,
             layer: None,
             deliveries,
@@ -761,18 +793,14 @@ impl World {
         self.misses.iter().sum()
     }
 
-    /// The recording version this run writes: 2 (a TickExtra a tick) when robots have a body.
+    /// The recording version this run writes: 6, with the radio's byte counters (and a
+    /// TickExtra and TickLayer a tick, empty when the run has no body and no layer); 7 when it
+    /// records who heard whom (`runtime.record_deliveries`, opt-in).
     pub fn recording_version(&self) -> u32 {
         if self.sc.runtime.record_deliveries {
-            // 6: who heard whom per tick (opt-in), after the layer (empty for roam).
             swarm::recording::RECORDING_VERSION_DELIVERIES
-        } else if !self.mission.live_layer().is_empty() {
-            // 3: the mission's marks per tick too (the viewer draws them).
-            swarm::recording::RECORDING_VERSION_LAYER
-        } else if self.body.is_some() {
-            swarm::recording::RECORDING_VERSION_EXTRA
         } else {
-            swarm::recording::RECORDING_VERSION
+            swarm::recording::RECORDING_VERSION_BYTES
         }
     }
 
@@ -788,6 +816,11 @@ impl World {
     /// taken for a tick that never ran included).
     pub fn finish_radio(&mut self) {
         self.radio.in_flight = self.medium.in_flight() + self.due.as_ref().map_or(0, |a| a.pairs());
+        self.radio_bytes.in_flight = self.medium.in_flight_bytes()
+            + self
+                .due
+                .as_ref()
+                .map_or(0, |a| a.bytes_to.iter().sum::<u64>());
     }
 
     /// Why the run ends after this tick, if it does: the mission is complete, or every robot
@@ -1076,7 +1109,7 @@ mod tests {
         let mut w = World::new(&sc).unwrap();
         assert_eq!(
             w.recording_version(),
-            swarm::recording::RECORDING_VERSION_EXTRA
+            swarm::recording::RECORDING_VERSION_BYTES
         );
         // Robot 0 heads right into the convex block's left edge (x = 294.545 at y = 260):
         // its centre stops 2 (the radius) short, not 0.5 as a point robot does.
@@ -1105,10 +1138,9 @@ mod tests {
         assert_eq!(f.obstacle_overlaps, 0);
         let b = w.body.expect("summary figures");
         assert_eq!((b.max_overlapping_pairs, b.ticks_with_overlap), (1, 1));
-        // A point-robot world writes no figures and keeps recording version 1.
+        // A point-robot world writes no figures (its recording's TickExtra is empty).
         let w = World::new(&Scenario::roam()).unwrap();
         assert!(w.body.is_none());
-        assert_eq!(w.recording_version(), swarm::recording::RECORDING_VERSION);
     }
 
     #[test]

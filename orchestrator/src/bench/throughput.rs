@@ -378,8 +378,13 @@ impl WorldRadio {
                 }
             }
         }
-        self.medium
-            .transmit(k, self.sent.messages(), &self.poses, &self.alive);
+        self.medium.transmit(
+            k,
+            self.sent.entries(),
+            self.sent.bytes(),
+            &self.poses,
+            &self.alive,
+        );
     }
 }
 

@@ -1,7 +1,7 @@
 //! MCAP with JSON messages and JSON-schema channels, one message per tick on each:
 //! `/swarm/poses` (every robot's pose, state, alive), `/swarm/entities` (the mission's marks:
 //! search targets found and not, ...) and `/swarm/radio` (the tick's radio counters); a
-//! recording with deliveries (version 6, `up --record-deliveries`) adds `/swarm/deliveries`
+//! recording with deliveries (version 7, `up --record-deliveries`) adds `/swarm/deliveries`
 //! (per receiver, the messages it was handed: sender, seq, bytes). The recording's header is
 //! the file's `scenario` metadata record.
 

@@ -258,6 +258,7 @@ mod tests {
                 states: vec![0, 1],
                 events: vec![],
                 radio: Default::default(),
+                radio_bytes: Default::default(),
                 extra: None,
                 layer: Some(vec![swarm::layer::Mark::Disc {
                     at: [k as f64 / 10.0, 0.0],

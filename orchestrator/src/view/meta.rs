@@ -57,7 +57,7 @@ pub struct Meta {
     /// What the mission counts in all (search: targets); its done count is the number of
     /// EntityDone events so far.
     pub progress_total: u32,
-    /// The recording says who heard whom each tick (version 6, `--record-deliveries`): the
+    /// The recording says who heard whom each tick (version 7, `--record-deliveries`): the
     /// frames carry `heard`.
     pub deliveries: bool,
 }

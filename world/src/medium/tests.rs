@@ -1,6 +1,7 @@
 use super::*;
 use rand::{Rng, SeedableRng};
 use swarm::frames::RadioHeader;
+use swarm::radio::decide;
 
 fn header(sender: u32, dest: u32, tick: u64, seq: u32, len: u32, pos: [f64; 3]) -> RadioHeader {
     RadioHeader {
@@ -11,6 +12,23 @@ fn header(sender: u32, dest: u32, tick: u64, seq: u32, len: u32, pos: [f64; 3]) 
         len,
         sender_pos: [pos[0], pos[1]],
     }
+}
+
+/// Hands `msgs` to the medium as the world does: headers, and payloads back to back.
+fn send(
+    m: &mut Medium,
+    tick: u64,
+    msgs: &[(RadioHeader, Vec<u8>)],
+    poses: &[[f64; 3]],
+    alive: &[bool],
+) -> Counts {
+    let mut sent = Vec::new();
+    let mut bytes = Vec::new();
+    for (h, p) in msgs {
+        sent.push((*h, bytes.len()));
+        bytes.extend_from_slice(p);
+    }
+    m.transmit(tick, &sent, &bytes, poses, alive)
 }
 
 fn scenario(n: u32) -> Scenario {
@@ -51,15 +69,18 @@ fn the_medium_decides_as_the_receivers_did_and_its_counts_add_up() {
     let mut m = Medium::new(&sc, MediumParams::from_scenario(&sc));
     for tick in 0..20 {
         let (poses, alive, msgs) = traffic(&mut rng, 60, tick);
-        let c = m.transmit(tick, msgs.iter().map(|(h, p)| (h, &p[..])), &poses, &alive);
-        assert_eq!(
-            c.offered,
-            c.scheduled
-                + c.dropped_range
-                + c.dropped_loss
-                + c.dropped_occluded
-                + c.dropped_bandwidth
-        );
+        let c = send(&mut m, tick, &msgs, &poses, &alive);
+        for t in [c.pairs, c.bytes] {
+            assert_eq!(
+                t.offered,
+                t.scheduled
+                    + t.dropped_range
+                    + t.dropped_loss
+                    + t.dropped_occluded
+                    + t.dropped_bandwidth
+            );
+        }
+        let c = c.pairs;
         assert!(c.dropped_loss > 0 && c.scheduled > 0 && c.dropped_range > 0);
         let air = m.due(tick + 1).expect("due one tick later");
         assert_eq!(air.tick, tick);
@@ -110,8 +131,9 @@ fn delay_holds_messages_and_in_flight_counts_what_is_not_due() {
     let poses = vec![[0.0, 0.0, 0.0], [10.0, 0.0, 0.0], [20.0, 0.0, 0.0]];
     let alive = vec![true; 3];
     let h = header(0, BROADCAST, 5, 1, 2, poses[0]);
-    m.transmit(5, [(&h, &[1u8, 2][..])], &poses, &alive);
+    send(&mut m, 5, &[(h, vec![1u8, 2])], &poses, &alive);
     assert_eq!(m.in_flight(), 2);
+    assert_eq!(m.in_flight_bytes(), 4);
     assert!(m.due(6).is_none() && m.due(7).is_none());
     let air = m.due(8).expect("sent at 5, delay 2: due at 8");
     assert_eq!(air.deliveries(1), &[0]);
@@ -128,15 +150,15 @@ fn the_bandwidth_cap_drops_a_senders_excess_in_send_order() {
     p.bandwidth_bytes_per_tick = 100;
     let mut m = Medium::new(&sc, p);
     let poses = vec![[0.0, 0.0, 0.0], [10.0, 0.0, 0.0]];
-    let msgs: Vec<RadioHeader> = (1..=3).map(|q| header(0, 1, 0, q, 10, poses[0])).collect();
-    let payload = [0u8; 10];
-    let c = m.transmit(
-        0,
-        msgs.iter().rev().map(|h| (h, &payload[..])),
-        &poses,
-        &[true, true],
-    );
-    assert_eq!((c.offered, c.scheduled, c.dropped_bandwidth), (3, 2, 1));
+    let msgs: Vec<(RadioHeader, Vec<u8>)> = (1..=3)
+        .rev()
+        .map(|q| (header(0, 1, 0, q, 10, poses[0]), vec![0u8; 10]))
+        .collect();
+    let c = send(&mut m, 0, &msgs, &poses, &[true, true]);
+    let p = c.pairs;
+    assert_eq!((p.offered, p.scheduled, p.dropped_bandwidth), (3, 2, 1));
+    let b = c.bytes;
+    assert_eq!((b.offered, b.scheduled, b.dropped_bandwidth), (30, 20, 10));
     let air = m.due(1).unwrap();
     let seqs: Vec<u32> = air
         .deliveries(1)
@@ -159,7 +181,7 @@ fn a_wall_between_two_robots_in_range_blocks_their_messages() {
     // Robot 1 behind the wall (in range: 100 apart), robot 2 on the same side.
     let poses = vec![[50.0, 100.0, 0.0], [150.0, 100.0, 0.0], [50.0, 150.0, 0.0]];
     let h = header(0, BROADCAST, 0, 1, 1, poses[0]);
-    let c = m.transmit(0, [(&h, &[9u8][..])], &poses, &[true; 3]);
+    let c = send(&mut m, 0, &[(h, vec![9u8])], &poses, &[true; 3]).pairs;
     assert_eq!((c.offered, c.scheduled, c.dropped_occluded), (2, 1, 1));
     let air = m.due(1).unwrap();
     assert!(air.deliveries(1).is_empty());
@@ -182,8 +204,8 @@ fn bursty_loss_on_the_medium_loses_at_the_chains_long_run_rate() {
     let (mut lost, n) = (0u64, 50_000u64);
     for t in 0..n {
         let h = header(0, 1, t, 1, 1, poses[0]);
-        lost += m
-            .transmit(t, [(&h, &[0u8][..])], &poses, &[true, true])
+        lost += send(&mut m, t, &[(h, vec![0u8])], &poses, &[true, true])
+            .pairs
             .dropped_loss;
         m.due(t + 1);
     }
@@ -194,4 +216,149 @@ fn bursty_loss_on_the_medium_loses_at_the_chains_long_run_rate() {
         (lost as f64 / n as f64 - pi).abs() < 5.0 * sd,
         "{lost} of {n} vs {pi}"
     );
+}
+
+/// Every receiver's list of `air` (message headers' (sender, seq)), for comparing two airs.
+fn lists(air: &TickAir, n: u32) -> Vec<Vec<(u32, u32)>> {
+    (0..n)
+        .map(|r| {
+            air.deliveries(r)
+                .iter()
+                .map(|&i| {
+                    let h = air.message(i).unwrap().0;
+                    (h.sender, h.seq)
+                })
+                .collect()
+        })
+        .collect()
+}
+
+#[test]
+fn the_grid_gives_the_deliveries_and_counts_of_the_scan_over_every_robot() {
+    // Random layouts from dense (every robot in range) to sparse, with loss, bursts,
+    // occlusion, per-sender ranges and a delay: the two scans agree message for message.
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(21);
+    for case in 0..40u64 {
+        let n = rng.gen_range(2..90);
+        let mut sc = scenario(n as u32);
+        sc.radio.comm_radius = [300.0, 120.0, 40.0, 5.0][case as usize % 4];
+        sc.radio.loss = 0.2;
+        sc.radio.occlusion = case % 3 == 0;
+        if case % 5 == 1 {
+            sc.radio.burst = Some(BurstParams {
+                p_good_bad: 0.2,
+                p_bad_good: 0.3,
+                loss_good: 0.05,
+                loss_bad: 0.9,
+            });
+        }
+        if case % 2 == 0 {
+            sc.radio.loss_model = swarm::scenario::LossModel::Distance;
+        }
+        sc.radio.sender_ranges = vec![swarm::scenario::SenderRange {
+            agent: (case as u32) % n as u32,
+            comm_radius: 700.0,
+        }];
+        sc.radio.delay_ticks = (case % 2) as u32;
+        let mut all = sc.clone();
+        all.radio.range_scan = swarm::scenario::RangeScan::All;
+        let mut g = Medium::new(&sc, MediumParams::from_scenario(&sc));
+        let mut a = Medium::new(&all, MediumParams::from_scenario(&all));
+        let delay = sc.radio.delay_ticks as u64;
+        for tick in 0..6 {
+            let (poses, alive, msgs) = traffic(&mut rng, n, tick);
+            let cg = send(&mut g, tick, &msgs, &poses, &alive);
+            let ca = send(&mut a, tick, &msgs, &poses, &alive);
+            assert_eq!(cg, ca, "case {case} tick {tick}");
+            match (g.due(tick + 1 + delay), a.due(tick + 1 + delay)) {
+                (Some(x), Some(y)) => {
+                    assert_eq!(lists(&x, n as u32), lists(&y, n as u32), "case {case}");
+                    assert_eq!(x, y, "case {case} tick {tick}: the whole air");
+                    g.recycle(x);
+                    a.recycle(y);
+                }
+                (None, None) => {}
+                _ => panic!("case {case}: one scan has an air, the other not"),
+            }
+        }
+    }
+}
+
+#[test]
+fn a_sender_with_its_own_range_reaches_only_within_it() {
+    let mut sc = scenario(4);
+    sc.radio.comm_radius = 100.0;
+    // Robot 3 (a station, say) reaches 500; robot 0 only 20.
+    sc.radio.sender_ranges = vec![
+        swarm::scenario::SenderRange {
+            agent: 3,
+            comm_radius: 500.0,
+        },
+        swarm::scenario::SenderRange {
+            agent: 0,
+            comm_radius: 20.0,
+        },
+    ];
+    let mut m = Medium::new(&sc, MediumParams::from_scenario(&sc));
+    let poses = vec![
+        [0.0, 0.0, 0.0],
+        [50.0, 0.0, 0.0],
+        [10.0, 0.0, 0.0],
+        [400.0, 0.0, 0.0],
+    ];
+    let alive = [true; 4];
+    let msgs = vec![
+        (header(0, BROADCAST, 0, 1, 5, poses[0]), vec![0; 5]),
+        (header(1, BROADCAST, 0, 1, 7, poses[1]), vec![1; 7]),
+        (header(3, BROADCAST, 0, 1, 11, poses[3]), vec![3; 11]),
+    ];
+    let c = send(&mut m, 0, &msgs, &poses, &alive);
+    // 0 (range 20) reaches 2 (10 away), not 1 (50) or 3 (400). 1 (range 100) reaches 0 and 2,
+    // not 3 (350). 3 (range 500) reaches all three (400, 350, 390 away).
+    let air = m.due(1).unwrap();
+    assert_eq!(
+        lists(&air, 4),
+        vec![
+            vec![(1, 1), (3, 1)],
+            vec![(3, 1)],
+            vec![(0, 1), (1, 1), (3, 1)],
+            vec![],
+        ]
+    );
+    assert_eq!(
+        (c.pairs.offered, c.pairs.scheduled, c.pairs.dropped_range),
+        (9, 6, 3)
+    );
+    // Bytes: 0's 5 to one and out of range to two; 1's 7 to two, one out; 3's 11 to three.
+    assert_eq!(c.bytes.offered, 3 * 5 + 3 * 7 + 3 * 11);
+    assert_eq!(c.bytes.scheduled, 5 + 2 * 7 + 3 * 11);
+    assert_eq!(c.bytes.dropped_range, 2 * 5 + 7);
+    assert_eq!(
+        (0..4).map(|r| air.bytes_to(r)).collect::<Vec<_>>(),
+        vec![7 + 11, 11, 5 + 7 + 11, 0]
+    );
+}
+
+#[test]
+fn a_hunt_auctioneer_with_a_radio_range_transmits_within_it() {
+    let sc = Scenario::parse(
+        include_str!("../../../configs/hunt-example-3a.toml"),
+        "hunt-example-3a.toml",
+    )
+    .unwrap();
+    let station = sc.bodies() as usize;
+    assert!(sender_ranges(&sc, &sc.radio)
+        .iter()
+        .all(|&r| r == sc.radio.comm_radius));
+    let mut sc2 = sc.clone();
+    sc2.hunt.auctioneer.radio_range = 2.0;
+    let r = sender_ranges(&sc2, &sc2.radio);
+    assert_eq!(r[station], sc.radio.comm_radius.min(2.0));
+    assert!(r[..station].iter().all(|&x| x == sc.radio.comm_radius));
+    // An entry of its own wins.
+    sc2.radio.sender_ranges = vec![swarm::scenario::SenderRange {
+        agent: station as u32,
+        comm_radius: 7.0,
+    }];
+    assert_eq!(sender_ranges(&sc2, &sc2.radio)[station], 7.0);
 }

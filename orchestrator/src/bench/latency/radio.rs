@@ -187,7 +187,7 @@ impl World {
     /// Puts `sent` (messages of tick k) on the medium and publishes what is due at k + 1.
     fn carry(&mut self, k: u64, sent: &Air) -> BenchResult<()> {
         self.medium
-            .transmit(k, sent.messages(), &self.poses, &[true, true]);
+            .transmit(k, sent.entries(), sent.bytes(), &self.poses, &[true, true]);
         let due = self.medium.due(k + 1);
         let len = swarm::air::air_len(due.as_ref(), 2);
         let sample = self
