@@ -374,10 +374,7 @@ impl Auctioneer {
     }
     /// The award robot `robot` holds, if any (to resend when its award was lost).
     pub fn award_of(&self, robot: RobotId) -> Option<&Award> {
-        self.coalitions
-            .values()
-            .map(|c| &c.award)
-            .find(|a| a.members.contains(&robot))
+        award_naming(&self.coalitions, robot)
     }
     pub fn round(&self) -> u32 {
         self.round
@@ -398,15 +395,27 @@ impl Auctioneer {
     }
     /// C = sum_j sum_i c_ij x_ij, eq. (3.13).
     pub fn total_cost(&self) -> f64 {
-        self.coalitions.values().flat_map(|c| c.costs.iter()).sum()
+        totals(&self.coalitions).0
     }
     /// Y = sum_j sum_i y_ij x_ij, eq. (3.14).
     pub fn total_utility(&self) -> f64 {
-        self.coalitions
-            .values()
-            .flat_map(|c| c.utilities.iter())
-            .sum()
+        totals(&self.coalitions).1
     }
+}
+
+/// The first award (in task order) of `coalitions` naming `robot`.
+pub fn award_naming(coalitions: &BTreeMap<TaskId, Coalition>, robot: RobotId) -> Option<&Award> {
+    coalitions
+        .values()
+        .map(|c| &c.award)
+        .find(|a| a.members.contains(&robot))
+}
+
+/// (C, Y) of `coalitions`: eqs. (3.13) and (3.14) over the awards made.
+pub fn totals(coalitions: &BTreeMap<TaskId, Coalition>) -> (f64, f64) {
+    let c = coalitions.values().flat_map(|c| c.costs.iter()).sum();
+    let y = coalitions.values().flat_map(|c| c.utilities.iter()).sum();
+    (c, y)
 }
 
 fn coalition_of(task: &Task, reward: f64, winners: &[&Bid], round: u32) -> Coalition {

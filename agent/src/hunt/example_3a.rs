@@ -139,6 +139,20 @@ fn check(out: &AuctionOutcome, tasks: &[Task], robots: &[Robot]) {
     }
 }
 
+/// The hunts an auction's coalitions start, at time 0.
+fn hunts_of(out: &AuctionOutcome) -> Vec<Hunt> {
+    out.coalitions
+        .values()
+        .map(|c| Hunt {
+            task: c.award.task,
+            members: c.award.members.clone(),
+            reward: c.award.reward,
+            captured: false,
+            since: 0.0,
+        })
+        .collect()
+}
+
 #[test]
 fn example_3a_initial_auction() {
     let h = example_3a();
@@ -166,17 +180,7 @@ fn example_3a_replanning_after_t5() {
         tasks: &tasks,
     };
     let initial = run_auction(&h.tasks_at(0.0), &h.robots(), &p);
-    let hunts: Vec<Hunt> = initial
-        .coalitions
-        .values()
-        .map(|c| Hunt {
-            task: c.award.task,
-            members: c.award.members.clone(),
-            reward: c.award.reward,
-            captured: false,
-            since: 0.0,
-        })
-        .collect();
+    let hunts = hunts_of(&initial);
     let out = new_target(&w, &hunts, 5, 5.0, &p);
     let mut s = String::from("Example 3-A, T5 appears:\n");
     s += &format!(
@@ -310,17 +314,7 @@ fn example_3a_t5_split_needs_a_larger_g_on_t5_than_printed() {
             &robots.values().cloned().collect::<Vec<_>>(),
             &p,
         );
-        let hunts: Vec<Hunt> = initial
-            .coalitions
-            .values()
-            .map(|c| Hunt {
-                task: c.award.task,
-                members: c.award.members.clone(),
-                reward: c.award.reward,
-                captured: false,
-                since: 0.0,
-            })
-            .collect();
+        let hunts = hunts_of(&initial);
         let t4 = hunts.iter().find(|x| x.task == 4).unwrap().clone();
         (new_target(&w, &hunts, 5, 5.0, &p), t4)
     };

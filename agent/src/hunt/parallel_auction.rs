@@ -7,8 +7,8 @@
 //! id order among the robots not yet awarded.
 
 use crate::hunt::auction::{
-    select_winners, Announcement, AuctionError, Award, Bid, Closed, Coalition, Finish, RoundRecord,
-    TaskInfo,
+    award_naming, select_winners, totals, Announcement, AuctionError, Award, Bid, Closed,
+    Coalition, Finish, RoundRecord, TaskInfo,
 };
 use crate::hunt::cost::{auctioneer_cost, bid_value};
 use crate::hunt::model::{Robot, RobotId, Task, TaskId};
@@ -172,10 +172,7 @@ impl ParallelAuctioneer {
     }
     /// The first award (in task order) naming `robot`.
     pub fn award_of(&self, robot: RobotId) -> Option<&Award> {
-        self.coalitions
-            .values()
-            .map(|c| &c.award)
-            .find(|a| a.members.contains(&robot))
+        award_naming(&self.coalitions, robot)
     }
     pub fn round(&self) -> u32 {
         self.announced as u32
@@ -196,14 +193,11 @@ impl ParallelAuctioneer {
     }
     /// C (3.13) over the awards as made.
     pub fn total_cost(&self) -> f64 {
-        self.coalitions.values().flat_map(|c| c.costs.iter()).sum()
+        totals(&self.coalitions).0
     }
     /// Y (3.14) over the awards as made.
     pub fn total_utility(&self) -> f64 {
-        self.coalitions
-            .values()
-            .flat_map(|c| c.utilities.iter())
-            .sum()
+        totals(&self.coalitions).1
     }
 }
 
