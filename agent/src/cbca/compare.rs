@@ -136,7 +136,7 @@ pub fn run_method(
 
 /// Robot i's utility at time t under the realised joint schedule of `paths` (Figs. 4.3, 4.5:
 /// "each robot's utility against time"): Σ over its path of w1 V_aj e^(-beta_j min(t, start_j))
-/// - w2 gamma_i d_ij, the reward of a task frozen once the task starts (its coalition has
+/// minus w2 gamma_i d_ij, the reward of a task frozen once the task starts (its coalition has
 /// caught it), so a flat curve means the robot's targets are done. An idle robot's utility is
 /// 0. Tasks without a full coalition earn nothing (as in `baselines::evaluate`).
 pub fn utility_curve(
