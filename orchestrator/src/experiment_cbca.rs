@@ -438,6 +438,9 @@ fn fmt_ms(v: &[f64], digits: usize) -> String {
     format!("{m:.digits$} ± {s:.digits$}")
 }
 
+/// A figure: its number, its (n_r, n_e) points, whether n_r is the varied one.
+type Fig<'a> = (&'a str, Vec<(usize, usize)>, bool);
+
 fn sweeps(
     x: &CbcaExperiment,
     params: &CbcaParams,
@@ -450,8 +453,6 @@ fn sweeps(
         x.seeds
     );
     let _ = writeln!(md, "System utility: (4.1) with (4.12) taken at each task's realised start (the joint schedule: a task starts when its last member arrives), less the path costs (4.14); a target without L_j members earns nothing. Completion: the mean start time over the hunted targets (time units, 1 km of travel each). A CBCA run whose detectors did not all converge within `max_iterations` is censored: counted in its column, scored as it stood.\n");
-    // (figure, its (robots, evaders) points, whether the x axis is the robot count)
-    type Fig<'a> = (&'a str, Vec<(usize, usize)>, bool);
     let figs: [Fig; 2] = [
         (
             "4.6",
