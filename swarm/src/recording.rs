@@ -442,6 +442,7 @@ mod tests {
             },
             extra: Some(TickExtra::default()),
             layer: Some(vec![]),
+            deliveries: None,
         };
         let mut buf = Vec::new();
         let mut w = RecordingWriter::new(&mut buf, &h).unwrap();

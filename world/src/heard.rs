@@ -62,6 +62,7 @@ mod tests {
             bytes: vec![0; 6],
             start: vec![0, 1, 4, 6],
             index: vec![2, 0, 1, 2, 0, 1],
+            bytes_to: vec![2, 6, 4],
         }
     }
 
