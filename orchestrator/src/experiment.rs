@@ -226,15 +226,30 @@ pub fn experiment(a: ExperimentArgs) -> i32 {
     }
 }
 
+/// The experiment file's top-level `kind` ("formation", "hunt", "cbca"; None: a search grid).
+fn kind_of(path: &std::path::Path) -> Option<String> {
+    std::fs::read_to_string(path)
+        .ok()
+        .and_then(|t| t.parse::<toml::Table>().ok())
+        .and_then(|t| t.get("kind").and_then(|k| k.as_str().map(str::to_string)))
+}
+
+/// Mean and sample standard deviation (0 for fewer than two values).
+pub(crate) fn mean_sd(v: &[f64]) -> (f64, f64) {
+    let n = v.len().max(1) as f64;
+    let m = v.iter().sum::<f64>() / n;
+    let var = v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (n - 1.0).max(1.0);
+    (m, var.sqrt())
+}
+
 fn run(a: ExperimentArgs) -> Result<i32, String> {
-    if crate::experiment_formation::is_formation(&a.file) {
-        return crate::experiment_formation::run(&a.file, a.quiet);
-    }
-    if crate::experiment_hunt::is_hunt(&a.file) {
-        return crate::experiment_hunt::run(&a.file, a.out.as_deref(), a.executor, a.runs);
-    }
-    if crate::experiment_cbca::is_cbca(&a.file) {
-        return crate::experiment_cbca::run(&a.file, a.out.as_deref());
+    match kind_of(&a.file).as_deref() {
+        Some("formation") => return crate::experiment_formation::run(&a.file, a.quiet),
+        Some("hunt") => {
+            return crate::experiment_hunt::run(&a.file, a.out.as_deref(), a.executor, a.runs)
+        }
+        Some("cbca") => return crate::experiment_cbca::run(&a.file, a.out.as_deref()),
+        _ => {}
     }
     let x = load(&a.file)?;
     let base = Scenario::load(&x.scenario).map_err(|e| e.to_string())?;

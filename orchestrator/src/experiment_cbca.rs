@@ -63,21 +63,7 @@ pub struct CbcaExperiment {
     pub variants: Vec<crate::experiment::Variant>,
 }
 
-/// Whether the experiment file is CBCA's.
-pub fn is_cbca(path: &Path) -> bool {
-    std::fs::read_to_string(path)
-        .ok()
-        .and_then(|t| t.parse::<toml::Table>().ok())
-        .and_then(|t| t.get("kind").and_then(|k| k.as_str().map(|s| s == "cbca")))
-        .unwrap_or(false)
-}
-
-fn mean_sd(v: &[f64]) -> (f64, f64) {
-    let n = v.len().max(1) as f64;
-    let m = v.iter().sum::<f64>() / n;
-    let var = v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (n - 1.0).max(1.0);
-    (m, var.sqrt())
-}
+use crate::experiment::mean_sd;
 
 fn set(v: &[usize]) -> String {
     let names: Vec<String> = v.iter().map(|i| format!("R{}", i + 1)).collect();

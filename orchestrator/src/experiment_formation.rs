@@ -64,13 +64,6 @@ fn results() -> PathBuf {
 }
 
 /// Whether `path` is a formation experiment file (`kind = "formation"`).
-pub fn is_formation(path: &Path) -> bool {
-    std::fs::read_to_string(path)
-        .ok()
-        .and_then(|t| t.parse::<toml::Table>().ok())
-        .is_some_and(|t| t.get("kind").and_then(|k| k.as_str()) == Some("formation"))
-}
-
 /// One run's figures.
 #[derive(Debug, Clone, Serialize)]
 pub struct FormationRun {

@@ -122,21 +122,7 @@ fn ids(v: &Value) -> Vec<u64> {
         .map_or(Vec::new(), |a| a.iter().filter_map(Value::as_u64).collect())
 }
 
-/// Whether the experiment file is a hunt's.
-pub fn is_hunt(path: &Path) -> bool {
-    std::fs::read_to_string(path)
-        .ok()
-        .and_then(|t| t.parse::<toml::Table>().ok())
-        .and_then(|t| t.get("kind").and_then(|k| k.as_str().map(|s| s == "hunt")))
-        .unwrap_or(false)
-}
-
-fn mean_sd(v: &[f64]) -> (f64, f64) {
-    let n = v.len().max(1) as f64;
-    let m = v.iter().sum::<f64>() / n;
-    let var = v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (n - 1.0).max(1.0);
-    (m, var.sqrt())
-}
+use crate::experiment::mean_sd;
 
 /// Table 3.3 and the thesis's coalitions (sec. 7.1 of docs/hunting.md).
 const TABLE_3_3: [(u32, f64, f64); 5] = [
