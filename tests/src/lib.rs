@@ -197,6 +197,18 @@ pub fn assert_left_nothing(out: &Path) {
     assert!(procs.is_empty(), "run {run_id} left processes: {procs:?}");
 }
 
+/// The registry entry (`/tmp/swarm-runtime/runs/*`) of the run writing to `out`, if it has one.
+pub fn registry_of(out: &Path) -> Option<serde_json::Value> {
+    let dir = out.display().to_string();
+    std::fs::read_dir("/tmp/swarm-runtime/runs")
+        .into_iter()
+        .flatten()
+        .flatten()
+        .filter_map(|e| std::fs::read_to_string(e.path()).ok())
+        .filter_map(|s| serde_json::from_str::<serde_json::Value>(&s).ok())
+        .find(|v| v["run_dir"].as_str() == Some(dir.as_str()))
+}
+
 /// The registry entry of the run writing to `out`, once all its agents are started.
 pub fn registry_entry(out: &Path, robots: usize) -> serde_json::Value {
     let t = Instant::now();
@@ -205,22 +217,10 @@ pub fn registry_entry(out: &Path, robots: usize) -> serde_json::Value {
             t.elapsed() < Duration::from_secs(30),
             "run never registered its agents"
         );
-        for e in std::fs::read_dir("/tmp/swarm-runtime/runs")
-            .into_iter()
-            .flatten()
-            .flatten()
+        if let Some(v) =
+            registry_of(out).filter(|v| v["agent_pids"].as_array().map(|a| a.len()) == Some(robots))
         {
-            let Ok(s) = std::fs::read_to_string(e.path()) else {
-                continue;
-            };
-            let Ok(v) = serde_json::from_str::<serde_json::Value>(&s) else {
-                continue;
-            };
-            if v["run_dir"].as_str() == Some(&out.display().to_string())
-                && v["agent_pids"].as_array().map(|a| a.len()) == Some(robots)
-            {
-                return v;
-            }
+            return v;
         }
         std::thread::sleep(Duration::from_millis(20));
     }
@@ -229,22 +229,7 @@ pub fn registry_entry(out: &Path, robots: usize) -> serde_json::Value {
 /// The tick the run writing to `out` is at, as its registry entry says (refreshed every
 /// 50 ms by the orchestrator); 0 before the entry exists.
 pub fn registry_tick(out: &Path) -> u64 {
-    for e in std::fs::read_dir("/tmp/swarm-runtime/runs")
-        .into_iter()
-        .flatten()
-        .flatten()
-    {
-        let Ok(s) = std::fs::read_to_string(e.path()) else {
-            continue;
-        };
-        let Ok(v) = serde_json::from_str::<serde_json::Value>(&s) else {
-            continue;
-        };
-        if v["run_dir"].as_str() == Some(&out.display().to_string()) {
-            return v["tick"].as_u64().unwrap_or(0);
-        }
-    }
-    0
+    registry_of(out).map_or(0, |v| v["tick"].as_u64().unwrap_or(0))
 }
 
 pub fn stderr(o: &Output) -> String {

@@ -6,25 +6,6 @@ use std::path::Path;
 use std::process::{Child, Command};
 use std::time::{Duration, Instant};
 
-fn registry(out: &Path) -> Option<serde_json::Value> {
-    for e in std::fs::read_dir("/tmp/swarm-runtime/runs")
-        .into_iter()
-        .flatten()
-        .flatten()
-    {
-        let Ok(s) = std::fs::read_to_string(e.path()) else {
-            continue;
-        };
-        let Ok(v) = serde_json::from_str::<serde_json::Value>(&s) else {
-            continue;
-        };
-        if v["run_dir"].as_str() == Some(&out.display().to_string()) {
-            return Some(v);
-        }
-    }
-    None
-}
-
 fn wait_for(what: &str, limit: Duration, mut f: impl FnMut() -> bool) {
     let t = Instant::now();
     while !f() {
@@ -36,7 +17,7 @@ fn wait_for(what: &str, limit: Duration, mut f: impl FnMut() -> bool) {
 fn running(out: &Path, robots: usize) -> serde_json::Value {
     let mut v = None;
     wait_for("the run to tick", Duration::from_secs(30), || {
-        v = registry(out).filter(|r| {
+        v = registry_of(out).filter(|r| {
             r["agent_pids"].as_array().map(|a| a.len()) == Some(robots)
                 && r["tick"].as_u64().unwrap_or(0) > 10
         });
@@ -80,7 +61,9 @@ fn a_robot_restarts_100_times_in_a_row() {
     let entry = running(&out, 6);
     let run_id = entry["run_id"].as_str().unwrap().to_string();
     for i in 0..100u64 {
-        let old = registry(&out).unwrap()["agent_pids"][2].as_u64().unwrap();
+        let old = registry_of(&out).unwrap()["agent_pids"][2]
+            .as_u64()
+            .unwrap();
         let o = Command::new(orchestrator())
             .args(["kill", "--run", &run_id, "--robot", "2"])
             .output()
@@ -90,7 +73,7 @@ fn a_robot_restarts_100_times_in_a_row() {
             &format!("restart #{}", i + 1),
             Duration::from_secs(20),
             || {
-                registry(&out).is_some_and(|r| {
+                registry_of(&out).is_some_and(|r| {
                     r["agent_pids"][2].as_u64() != Some(old)
                         && r["restarted"].as_u64().unwrap_or(0) > i
                         && r["alive"] == 6
@@ -160,7 +143,7 @@ fn killing_the_world_ends_the_run_with_an_error_and_agents_exit() {
         run_shm_entries().iter().all(|n| !n.starts_with(&prefix)),
         "shm left"
     );
-    assert!(registry(&out).is_none(), "registry entry left");
+    assert!(registry_of(&out).is_none(), "registry entry left");
 }
 
 #[test]
@@ -220,7 +203,7 @@ fn killing_the_orchestrator_takes_the_run_down_and_clean_removes_its_leftovers()
         run_shm_entries().iter().all(|n| !n.starts_with(&prefix)),
         "clean left shm"
     );
-    assert!(registry(&out).is_none(), "clean left the registry entry");
+    assert!(registry_of(&out).is_none(), "clean left the registry entry");
     let live_prefix = swarm::transport::prefix_for(live_entry["run_id"].as_str().unwrap());
     assert!(
         run_shm_entries()
@@ -228,9 +211,9 @@ fn killing_the_orchestrator_takes_the_run_down_and_clean_removes_its_leftovers()
             .any(|n| n.starts_with(&live_prefix)),
         "clean touched a live run"
     );
-    let tick = registry(&live_out).unwrap()["tick"].as_u64().unwrap();
+    let tick = registry_of(&live_out).unwrap()["tick"].as_u64().unwrap();
     wait_for("the live run to go on", Duration::from_secs(10), || {
-        registry(&live_out).is_some_and(|r| r["tick"].as_u64().unwrap() > tick + 10)
+        registry_of(&live_out).is_some_and(|r| r["tick"].as_u64().unwrap() > tick + 10)
     });
     // SAFETY: Ctrl-C to our own child.
     unsafe { libc::kill(live.id() as i32, libc::SIGINT) };
@@ -323,7 +306,7 @@ fn status_lists_the_run_and_kill_rejects_bad_input() {
         .unwrap();
     assert!(o.status.success());
     wait_for("two robots dead", Duration::from_secs(10), || {
-        registry(&out).is_some_and(|r| r["dead"] == 2)
+        registry_of(&out).is_some_and(|r| r["dead"] == 2)
     });
     // SAFETY: Ctrl-C to our own child.
     unsafe { libc::kill(child.id() as i32, libc::SIGINT) };
@@ -380,7 +363,7 @@ fn a_hung_agent_is_killed_and_restarted() {
         "the hung agent to be replaced",
         Duration::from_secs(20),
         || {
-            registry(&out).is_some_and(|r| {
+            registry_of(&out).is_some_and(|r| {
                 r["agent_pids"][2].as_u64() != Some(hung as u64)
                     && r["restarted"] == 1
                     && r["alive"] == 6
