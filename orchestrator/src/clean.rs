@@ -49,13 +49,17 @@ pub fn clean_dead_runs() -> CleanReport {
     // alone does not make a prefix dead: it is an orphan only when no live process maps or
     // holds any of its files and none of them changed in the last ORPHAN_GRACE (a run that is
     // creating its first files has not mapped them yet).
-    let in_use = prefixes_in_use();
     let mut orphans: Vec<String> = cleanup::shm_files("sw")
         .iter()
         .filter_map(|n| run_prefix_of(n).map(str::to_string))
-        .filter(|p| !live_prefixes.contains(p) && !in_use.contains(p))
+        .filter(|p| !live_prefixes.contains(p))
         .collect();
     orphans.dedup();
+    if !orphans.is_empty() {
+        // Read /proc only when there is a candidate: `up` runs this on every start.
+        let in_use = prefixes_in_use();
+        orphans.retain(|p| !in_use.contains(p));
+    }
     for p in orphans {
         if touched_recently(&p) {
             continue;
