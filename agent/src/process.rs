@@ -74,15 +74,9 @@ fn run_loop<B: Behaviour>(args: &AgentArgs, mut rt: AgentRuntime<B>) -> Result<i
         })?;
     let act_svc = transport::act_service(&node, robot, false)?;
     let act_pub = transport::act_publisher(&act_svc, sc)?;
-    let air_svc = transport::air_service(&node, sc, false)?;
-    let air_sub = air_svc
-        .subscriber_builder()
-        .buffer_size(1)
-        .create()
-        .map_err(|source| TransportError::Subscriber {
-            service: ServiceId::Air,
-            source,
-        })?;
+    // The air (`radio.air`): the world's ring (a hold cell of this robot's own while a
+    // read or a zero-copy view lasts) or the iceoryx2 air service.
+    let mut air_in = transport::AirSource::open(&node, &args.prefix, sc, robot)?;
     let barrier = TickBarrier::open(&args.prefix)?;
     let world_pid = barrier.world_pid();
     let bell = match sc.runtime.barrier {
@@ -158,32 +152,21 @@ fn run_loop<B: Behaviour>(args: &AgentArgs, mut rt: AgentRuntime<B>) -> Result<i
         // before the release, so it is there unless we attached after).
         inbox.clear();
         let mut malformed = 0;
-        // One receive, as for the Sense frame (buffer 1; borrowed 1 + radio.zero_copy_held).
-        let air = air_sub
-            .receive()
-            .map_err(|source| TransportError::Receive {
-                service: ServiceId::Air,
-                source,
-            })?;
+        // One receive, as for the Sense frame (iceoryx2: buffer 1, borrowed 1 +
+        // radio.zero_copy_held; the ring: the published slot, held in one of this robot's
+        // radio.zero_copy_held + 1 cells until decoded or until its views go).
+        let air = air_in.receive()?;
         match air {
-            Some(a) if a.user_header().tick == k => {
+            Some(a) if a.tick() == k => {
                 ahead_air = None;
-                malformed =
-                    transport::air_inbox(a, robot, rt.zero_copy(), &live, held_limit, &mut inbox);
+                malformed = a.inbox(robot, rt.zero_copy(), &live, held_limit, &mut inbox);
             }
-            Some(a) if a.user_header().tick > k => {
+            Some(a) if a.tick() > k => {
                 // Past tick k's deadline already (real-time mode): the list is for a later
                 // tick, decoded now and kept for it.
-                let t = a.user_header().tick;
+                let t = a.tick();
                 ahead_inbox.clear();
-                let bad = transport::air_inbox(
-                    a,
-                    robot,
-                    rt.zero_copy(),
-                    &live,
-                    held_limit,
-                    &mut ahead_inbox,
-                );
+                let bad = a.inbox(robot, rt.zero_copy(), &live, held_limit, &mut ahead_inbox);
                 ahead_air = Some((t, bad));
             }
             _ => match ahead_air {

@@ -7,6 +7,7 @@
 //! plumbing of the multi-process path.
 
 pub mod air;
+pub mod air_ring;
 pub mod barrier;
 pub mod behaviour;
 pub mod bell;

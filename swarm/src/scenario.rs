@@ -212,6 +212,31 @@ pub struct RadioParams {
     /// same deliveries.
     #[serde(default, skip_serializing_if = "RangeScan::is_grid")]
     pub range_scan: RangeScan,
+    /// How the world hands each tick's air to the agents (multi-process executor): its own
+    /// ring of shared-memory slots (`swarm::air_ring`, default) or an iceoryx2 service (kept
+    /// to measure both). Both carry the same bytes: recordings do not depend on it (and a
+    /// resolved scenario leaves the default out).
+    #[serde(default, skip_serializing_if = "AirTransport::is_ring")]
+    pub air: AirTransport,
+}
+
+/// `radio.air`: the transport of the air from the world to the agents.
+#[derive(Serialize, Deserialize, Clone, Copy, Debug, PartialEq, Eq, Default)]
+#[serde(rename_all = "kebab-case")]
+pub enum AirTransport {
+    /// The world's ring of shared-memory slots: one copy of the air in /dev/shm however many
+    /// agents read it (`swarm::air_ring`).
+    #[default]
+    Ring,
+    /// One iceoryx2 publish-subscribe service, every agent a subscriber: iceoryx2 reserves
+    /// subscribers x (buffer + borrowed) samples of the largest air.
+    Iceoryx2,
+}
+
+impl AirTransport {
+    fn is_ring(&self) -> bool {
+        *self == AirTransport::Ring
+    }
 }
 
 /// `[[radio.sender_ranges]]`: one agent's own radio range.
@@ -908,6 +933,12 @@ mod tests {
         sc.validate(&file).unwrap();
         assert_eq!(sc.radio.ranges(4), vec![50.0, 50.0, 50.0, 900.0]);
         assert_eq!(sc.radio.range_scan, RangeScan::All);
+        assert_eq!(sc.radio.air, AirTransport::Ring, "the default air");
+        let ice = Scenario::parse("[radio]\nair = \"iceoryx2\"\n", "t.toml").unwrap();
+        assert_eq!(ice.radio.air, AirTransport::Iceoryx2);
+        assert!(ice.to_toml().contains("air = \"iceoryx2\""));
+        assert!(!Scenario::default().to_toml().contains("air ="));
+        assert!(Scenario::parse("[radio]\nair = \"links\"\n", "t.toml").is_err());
         // The resolved scenario keeps them (and omits them when they are the defaults).
         assert_eq!(Scenario::parse(&sc.to_toml(), "r.toml").unwrap(), sc);
         assert!(!Scenario::default().to_toml().contains("sender_ranges"));

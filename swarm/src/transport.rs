@@ -6,6 +6,7 @@
 //! runs never see each other and a run's leftovers are easy to find and remove.
 
 use crate::air::AirView;
+use crate::air_ring::AirRead;
 use crate::blob::AsBytes;
 use crate::frames::{Action, AirHeader, Control, Sense, WorldStatus};
 use crate::scenario::Scenario;
@@ -16,8 +17,10 @@ use std::path::PathBuf;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Arc;
 
+mod air_source;
 mod error;
 mod service;
+pub use air_source::{AirGot, AirSink, AirSource};
 pub use error::{Port, TransportError, TransportResult};
 pub use service::{
     event, pub_sub, service_name, EventCapacity, EventService, PubSubCapacity, PubSubService,
@@ -356,33 +359,81 @@ pub fn air_inbox<M: DeserializeOwned>(
     inbox: &mut Vec<Received<M>>,
 ) -> u32 {
     let h = *sample.user_header();
-    let mut malformed = 0;
     if zero_copy && live.load(Ordering::Acquire) < held_limit {
         let owner: Arc<dyn AsBytes> = Arc::new(HeldSample::new(sample, live));
-        let Some(view) = AirView::new(&h, owner.as_bytes()) else {
-            return 0;
-        };
-        for i in view.deliveries(robot) {
-            match view.message(i) {
-                Some((mh, at)) => match decode_in::<M>(&mh, &owner, at) {
-                    Some(m) => inbox.push(Received::new(&mh, m)),
-                    None => malformed += 1,
-                },
-                None => malformed += 1,
-            }
-        }
+        decode_list(&h, robot, Some(&owner), owner.as_bytes(), inbox)
     } else {
-        let Some(view) = AirView::new(&h, sample.payload()) else {
-            return 0;
-        };
-        for i in view.deliveries(robot) {
-            match view.message(i) {
-                Some((mh, at)) => match decode::<M>(&mh, &view.bytes()[at..]) {
-                    Some(m) => inbox.push(Received::new(&mh, m)),
-                    None => malformed += 1,
-                },
-                None => malformed += 1,
-            }
+        decode_list(&h, robot, None, sample.payload(), inbox)
+    }
+}
+
+/// An air read from the world's ring ([`crate::air_ring`]) while zero-copy views hold it,
+/// counted in `live`. Its hold (one of the robot's cells in the ring) ends when the last view
+/// goes, on whatever thread: no iceoryx2 state is involved.
+struct HeldRead {
+    read: AirRead,
+    live: Arc<AtomicUsize>,
+}
+
+impl AsBytes for HeldRead {
+    fn as_bytes(&self) -> &[u8] {
+        self.read.bytes()
+    }
+}
+
+impl Drop for HeldRead {
+    fn drop(&mut self) {
+        self.live.fetch_sub(1, Ordering::AcqRel);
+    }
+}
+
+/// [`air_inbox`] for an air read from the world's ring: the same lists and decoding; the
+/// read's hold on its slot ends here unless views keep it.
+pub fn ring_inbox<M: DeserializeOwned>(
+    air: AirRead,
+    robot: u32,
+    zero_copy: bool,
+    live: &Arc<AtomicUsize>,
+    held_limit: usize,
+    inbox: &mut Vec<Received<M>>,
+) -> u32 {
+    let h = air.header;
+    if zero_copy && live.load(Ordering::Acquire) < held_limit {
+        live.fetch_add(1, Ordering::AcqRel);
+        let owner: Arc<dyn AsBytes> = Arc::new(HeldRead {
+            read: air,
+            live: live.clone(),
+        });
+        decode_list(&h, robot, Some(&owner), owner.as_bytes(), inbox)
+    } else {
+        decode_list(&h, robot, None, air.bytes(), inbox)
+    }
+}
+
+/// Decodes robot `robot`'s list of the air `bytes` (with header `h`): in place as views of
+/// `owner` when given, else as copies. Returns how many were malformed.
+fn decode_list<M: DeserializeOwned>(
+    h: &AirHeader,
+    robot: u32,
+    owner: Option<&Arc<dyn AsBytes>>,
+    bytes: &[u8],
+    inbox: &mut Vec<Received<M>>,
+) -> u32 {
+    let Some(view) = AirView::new(h, bytes) else {
+        return 0;
+    };
+    let mut malformed = 0;
+    for i in view.deliveries(robot) {
+        let decoded = view.message(i).and_then(|(mh, at)| {
+            let m = match owner {
+                Some(owner) => decode_in::<M>(&mh, owner, at),
+                None => decode::<M>(&mh, &view.bytes()[at..]),
+            };
+            m.map(|m| Received::new(&mh, m))
+        });
+        match decoded {
+            Some(r) => inbox.push(r),
+            None => malformed += 1,
         }
     }
     malformed

@@ -9,7 +9,7 @@ use std::io::Write;
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
 use swarm::barrier::TickBarrier;
-use swarm::frames::{Action, AirHeader, Control, Sense, CONTROL_ROBOT_DIED, CONTROL_STOP};
+use swarm::frames::{Action, Control, Sense, CONTROL_ROBOT_DIED, CONTROL_STOP};
 use swarm::mailbox::Air;
 use swarm::scenario::Scenario;
 use swarm::transport::{self, Result};
@@ -31,24 +31,14 @@ struct Robot {
     _act_svc: transport::ActService,
 }
 
-/// Publishes the messages due at tick `k` as one air sample (`swarm::air`), before the tick
-/// is released: every agent reads its list in it.
-fn publish_air(
-    publisher: &Publisher<ipc::Service, [u8], AirHeader>,
-    world: &World,
-    k: u64,
-) -> Result<()> {
+/// Publishes the messages due at tick `k` as one air (`swarm::air`) through the run's air
+/// transport (`radio.air`: the world's ring, or the iceoryx2 service), before the tick is
+/// released: every agent reads its list in it.
+fn publish_air(air: &mut transport::AirSink, world: &World, k: u64) -> Result<()> {
     let len = swarm::air::air_len(world.air(), world.n);
-    let sample = publisher
-        .loan_slice_uninit(len)
-        .map_err(|e| format!("air loan of {len} bytes: {e:?}"))?;
-    // SAFETY: the slot is shared memory of the publisher's data segment, mapped from tmpfs:
-    // its bytes are always initialised, and every u8 value is valid; write_air writes all
-    // `len` of them.
-    let mut sample = unsafe { sample.assume_init() };
-    let h = swarm::air::write_air(world.air(), world.n, k, sample.payload_mut());
-    *sample.user_header_mut() = h;
-    sample.send().map_err(|e| format!("air send: {e:?}"))?;
+    air.publish(k, len, |out| {
+        swarm::air::write_air(world.air(), world.n, k, out)
+    })?;
     Ok(())
 }
 
@@ -360,8 +350,7 @@ pub fn run(args: &WorldArgs) -> Result<i32> {
             _act_svc: act_svc,
         });
     }
-    let air_svc = transport::air_service(&node, sc, true)?;
-    let air_pub = transport::air_publisher(&air_svc, sc)?;
+    let mut air = transport::AirSink::create(&node, &args.prefix, sc)?;
     let status_svc = transport::status_service(&node, true)?;
     let status_pub = status_svc
         .publisher_builder()
@@ -428,6 +417,7 @@ pub fn run(args: &WorldArgs) -> Result<i32> {
     let mut tick_ns = Vec::with_capacity(sc.run.max_ticks.min(10_000_000) as usize);
     let mut actions: Vec<Option<Action>> = vec![None; n as usize];
     let mut sent = Air::default();
+    let mut revived = vec![false; n as usize];
     let deadline = Duration::from_millis(sc.runtime.ack_deadline_ms);
     // Stopped during start-up (Ctrl-C before every agent attached): no tick runs, so no
     // robot that was still starting is declared dead at tick 0 (issue 14 item 8).
@@ -453,6 +443,7 @@ pub fn run(args: &WorldArgs) -> Result<i32> {
                 let c = barrier.attach_count(i);
                 if c > drivers.attached[i as usize] && c > barrier.dead_upto(i) && world.revive(i) {
                     drivers.attached[i as usize] = c;
+                    revived[i as usize] = true;
                     clock.start(i as usize, k);
                 }
             }
@@ -481,7 +472,16 @@ pub fn run(args: &WorldArgs) -> Result<i32> {
             let sample = unsafe { sample.assume_init() };
             sample.send().map_err(|e| format!("sense send: {e:?}"))?;
         }
-        publish_air(&air_pub, &world, k)?;
+        // What dead robots' agents held of the air is free (a SIGKILLed agent never lets
+        // go of its holds; a restarted one starts with none): cleared every tick a robot is
+        // dead, and at the tick it is revived, before the agent reads.
+        for i in 0..n {
+            if !world.alive[i as usize] || revived[i as usize] {
+                air.release_robot(i);
+            }
+        }
+        revived.iter_mut().for_each(|r| *r = false);
+        publish_air(&mut air, &world, k)?;
         barrier.release_with(k, world.alive_count(), bell);
         if realtime {
             if !wait_realtime(

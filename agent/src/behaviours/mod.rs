@@ -55,7 +55,7 @@ macro_rules! registry {
     };
 }
 
-registry!(roam, faulty, search, formation, hunt, cbca);
+registry!(roam, faulty, search, formation, hunt, cbca, keeper);
 
 /// For behaviours whose commands are velocities (vx, vy): refuses unicycle kinematics.
 pub fn require_holonomic(sc: &Scenario, c: &Check, behaviour: &str) -> Result<(), ConfigError> {

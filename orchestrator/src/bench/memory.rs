@@ -244,8 +244,9 @@ fn measure(sc: &Scenario, prefix: &str, tick: u64) -> Result<Row, String> {
     }
     let k = agents.len() as f64;
     let mean = |f: &dyn Fn(&Proc) -> u64| agents.iter().map(|p| f(p) as f64).sum::<f64>() / k;
-    // Subscriptions per agent: the air's subscribers (one per agent since the shared medium;
-    // the link design had one per radio link).
+    // Subscriptions per agent: the iceoryx2 air service's subscribers (one per agent with
+    // radio.air = "iceoryx2"; none with the world's air ring, the default, which has no
+    // service; the link design had one per radio link).
     let config = transport::run_config(prefix).map_err(|e| e.to_string())?;
     let node = transport::node(&config, "bench-memory").map_err(|e| e.to_string())?;
     let subs = transport::air_service(&node, sc, false)

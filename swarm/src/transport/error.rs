@@ -138,6 +138,9 @@ pub enum TransportError {
         service: ServiceId,
         source: ListenerWaitError,
     },
+    /// The world's air ring (`radio.air = "ring"`) could not be made, opened or read.
+    #[error(transparent)]
+    AirRing(#[from] crate::air_ring::AirRingError),
 }
 
 impl TransportError {
@@ -160,6 +163,10 @@ impl TransportError {
             | Receive { service, .. }
             | Notify { service, .. }
             | Wait { service, .. } => Some(service),
+            AirRing(_) => {
+                static AIR: ServiceId = ServiceId::Air;
+                Some(&AIR)
+            }
         }
     }
 

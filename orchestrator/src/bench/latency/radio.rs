@@ -1,15 +1,17 @@
 //! The runtime's radio path through the shared medium: the child (robot 1, an agent) encodes
 //! its echo with `AgentRuntime::step` into its act sample (`ActTx`, as the agent does) and
 //! sends it (hop 1, with the wake-up of the world through the barrier); the parent is the
-//! world (it takes the act sample's messages, `Medium::transmit`, writes the air sample and
-//! publishes it) and robot 0, whose own air subscriber receives the sample and decodes its
-//! list out of shared memory (`transport::air_inbox`; `BlobPing` holds a view). Hop 2 is thus
-//! iceoryx2's publish and receive without a second process wake-up. Three message types: the
-//! payload as serde encodes a `Vec<u8>`, as one byte string, and as a `swarm::Blob`.
+//! world (it hands the act sample's messages, where they lie in the sample, to
+//! `Medium::transmit`, writes the air and publishes it through the run's air, `radio.air`:
+//! the world's ring by default) and robot 0, which reads the air and decodes its list out of
+//! shared memory (`AirGot::inbox`; `BlobPing` holds a view). Hop 2 is thus a publish and a
+//! read without a second process wake-up. The payload is copied twice on the way (into the
+//! medium's tick buffer, into the air) besides its encoding and decoding. Three message
+//! types: the payload as serde encodes a `Vec<u8>`, as one byte string, and as a
+//! `swarm::Blob`.
 
 use super::{open_barrier, wait_parent, Mode, Parent};
 use crate::bench::{now_ns, tick, BenchError, BenchResult, ByteBuf, ChildArgs};
-use iceoryx2::port::publisher::Publisher;
 use iceoryx2::port::subscriber::Subscriber;
 use iceoryx2::prelude::*;
 use serde::de::DeserializeOwned;
@@ -20,11 +22,9 @@ use std::rc::Rc;
 use std::sync::atomic::AtomicUsize;
 use std::sync::Arc;
 use swarm::air::ActTx;
-use swarm::frames::AirHeader;
 use swarm::mailbox::Air;
 use swarm::scenario::Scenario;
-use swarm::transport::{self, AirSample, ServiceId, TransportError};
-use swarm::wire::RadioTx;
+use swarm::transport::{self, ServiceId, TransportError};
 use swarm::{Action, AgentRuntime, Behaviour, Blob, Command, Outbox, Received, Sense};
 use world::medium::{Medium, MediumParams};
 
@@ -175,37 +175,51 @@ fn sense_for(robot: u32, x: f64) -> Box<Sense> {
     s
 }
 
-/// The world's side of the cell: robot 1's act subscription, the air publisher, the medium.
+/// The world's side of the cell: robot 1's act subscription, the air (`radio.air`: the
+/// world's ring by default), the medium.
 struct World {
     act: Subscriber<ipc::Service, [u8], Action>,
-    air: Publisher<ipc::Service, [u8], AirHeader>,
+    air: transport::AirSink,
     medium: Medium,
     poses: Vec<[f64; 3]>,
+    /// The messages of an act sample: header and payload offset in the sample.
+    entries: Vec<(swarm::RadioHeader, usize)>,
 }
 
 impl World {
-    /// Puts `sent` (messages of tick k) on the medium and publishes what is due at k + 1.
-    fn carry(&mut self, k: u64, sent: &Air) -> BenchResult<()> {
+    /// Puts `sent` (messages of tick k, payloads in `bytes`) on the medium and publishes
+    /// what is due at k + 1.
+    fn carry(
+        &mut self,
+        k: u64,
+        sent: &[(swarm::RadioHeader, usize)],
+        bytes: &[u8],
+    ) -> BenchResult<()> {
         self.medium
-            .transmit(k, sent.entries(), sent.bytes(), &self.poses, &[true, true]);
+            .transmit(k, sent, bytes, &self.poses, &[true, true]);
         let due = self.medium.due(k + 1);
         let len = swarm::air::air_len(due.as_ref(), 2);
-        let sample = self
-            .air
-            .loan_slice_uninit(len)
-            .map_err(|source| TransportError::Loan {
-                service: ServiceId::Air,
-                source,
-            })?;
-        // SAFETY: shared memory is always initialised bytes; write_air writes all of them.
-        let mut sample = unsafe { sample.assume_init() };
-        let h = swarm::air::write_air(due.as_ref(), 2, k + 1, sample.payload_mut());
-        *sample.user_header_mut() = h;
-        sample.send().map_err(|source| TransportError::Send {
-            service: ServiceId::Air,
-            source,
+        self.air.publish(k + 1, len, |out| {
+            swarm::air::write_air(due.as_ref(), 2, k + 1, out)
         })?;
+        if let Some(a) = due {
+            self.medium.recycle(a);
+        }
         Ok(())
+    }
+
+    /// [`World::carry`] of an act sample's messages, read where they lie in the sample
+    /// (`act_messages`' payload slices are offsets into it): the payload is copied once
+    /// into the medium and once into the air, not first into a buffer of the tick.
+    fn carry_act(&mut self, k: u64, payload: &[u8]) -> BenchResult<()> {
+        let mut entries = std::mem::take(&mut self.entries);
+        entries.clear();
+        for (h, q) in swarm::air::act_messages(payload).unwrap_or_default() {
+            entries.push((h, q.as_ptr() as usize - payload.as_ptr() as usize));
+        }
+        let r = self.carry(k, &entries, payload);
+        self.entries = entries;
+        r
     }
 }
 
@@ -218,7 +232,6 @@ pub(super) fn parent<M: Payload>(p: &Parent) -> BenchResult<Vec<u64>> {
     let node = transport::node(&config, "bench-lat-0")?;
     let _act0 = transport::act_service(&node, 0, true)?;
     let act1 = transport::act_service(&node, 1, true)?;
-    let air_svc = transport::air_service(&node, &sc, true)?;
     let mut world = World {
         act: act1
             .subscriber_builder()
@@ -228,11 +241,12 @@ pub(super) fn parent<M: Payload>(p: &Parent) -> BenchResult<Vec<u64>> {
                 service: ServiceId::Act(1),
                 source,
             })?,
-        air: transport::air_publisher(&air_svc, &sc)?,
+        air: transport::AirSink::create(&node, p.prefix, &sc)?,
         medium: Medium::new(&sc, MediumParams::from_scenario(&sc)),
         poses: vec![[0.0, 0.0, 0.0], [10.0, 0.0, 0.0]],
+        entries: Vec::new(),
     };
-    let sub = air_subscriber(&air_svc)?;
+    let mut sub = transport::AirSource::open(&node, p.prefix, &sc, 0)?;
     let child = p.spawn()?;
     let fire = Rc::new(Cell::new(false));
     let recv_at = Rc::new(Cell::new(0));
@@ -264,7 +278,7 @@ pub(super) fn parent<M: Payload>(p: &Parent) -> BenchResult<Vec<u64>> {
             rt.step_owned(&sense, &inbox, 0, &mut sent);
             fire.set(false);
             inbox.clear();
-            world.carry(t, &sent)?;
+            world.carry(t, sent.entries(), sent.bytes())?;
             if p.mode == Mode::Block {
                 p.barrier.ack(0, r);
             }
@@ -280,20 +294,16 @@ pub(super) fn parent<M: Payload>(p: &Parent) -> BenchResult<Vec<u64>> {
                 else {
                     return Ok(None);
                 };
-                sent.clear();
                 let used = (a.user_header().radio_bytes as usize).min(a.payload().len());
-                for (h, q) in swarm::air::act_messages(&a.payload()[..used]).unwrap_or_default() {
-                    sent.transmit(&h, &mut |b| b.copy_from_slice(q));
-                }
+                world.carry_act(t + 1, &a.payload()[..used])?;
                 drop(a);
-                world.carry(t + 1, &sent)?;
-                let Some(s) = receive(&sub)? else {
+                let Some(s) = sub.receive()?.filter(|s| s.tick() == t + 2) else {
                     return Err(BenchError::Lost {
                         delivered: r,
                         expected: p.total,
                     });
                 };
-                transport::air_inbox(s, 0, rt.zero_copy(), &live, held, &mut inbox);
+                s.inbox(0, rt.zero_copy(), &live, held, &mut inbox);
                 recv_at.set(now_ns());
                 Ok(Some(()))
             })?;
@@ -330,8 +340,7 @@ pub(super) fn child<M: Payload>(a: &ChildArgs, mode: Mode) -> BenchResult<()> {
     let node = transport::node(&config, "bench-lat-1")?;
     let act_svc = transport::act_service(&node, 1, false)?;
     let act = transport::act_publisher(&act_svc, &sc)?;
-    let air_svc = transport::air_service(&node, &sc, false)?;
-    let sub = air_subscriber(&air_svc)?;
+    let mut sub = transport::AirSource::open(&node, &a.prefix, &sc, 1)?;
     let mut rt = AgentRuntime::new(
         &sc,
         1,
@@ -354,13 +363,10 @@ pub(super) fn child<M: Payload>(a: &ChildArgs, mode: Mode) -> BenchResult<()> {
         let t = 2 * r + 1;
         sense.tick = t;
         wait_parent(&barrier, mode, || {
-            let Some(s) = receive(&sub)? else {
+            let Some(s) = sub.receive()?.filter(|s| s.tick() == t) else {
                 return Ok(None);
             };
-            if s.user_header().tick != t {
-                return Ok(None);
-            }
-            transport::air_inbox(s, 1, rt.zero_copy(), &live, held, &mut inbox);
+            s.inbox(1, rt.zero_copy(), &live, held, &mut inbox);
             Ok(Some(()))
         })?;
         let sample = act
@@ -391,30 +397,4 @@ pub(super) fn child<M: Payload>(a: &ChildArgs, mode: Mode) -> BenchResult<()> {
         }
     }
     Ok(())
-}
-
-/// A subscription to the air.
-fn air_subscriber(
-    svc: &transport::AirService,
-) -> BenchResult<Subscriber<ipc::Service, [u8], AirHeader>> {
-    Ok(svc
-        .subscriber_builder()
-        .buffer_size(1)
-        .create()
-        .map_err(|source| TransportError::Subscriber {
-            service: ServiceId::Air,
-            source,
-        })?)
-}
-
-/// The latest air sample, if there is a new one.
-fn receive(sub: &Subscriber<ipc::Service, [u8], AirHeader>) -> BenchResult<Option<AirSample>> {
-    let mut latest = None;
-    while let Some(s) = sub.receive().map_err(|source| TransportError::Receive {
-        service: ServiceId::Air,
-        source,
-    })? {
-        latest = Some(s);
-    }
-    Ok(latest)
 }
