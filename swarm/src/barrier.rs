@@ -403,7 +403,9 @@ impl TickBarrier {
         bell: Option<&EventBell>,
     ) -> Wake {
         let h = self.header();
-        let deadline = Instant::now() + timeout;
+        // The clock is read only when the agent has to sleep: a tick already released (and
+        // every wake-up that finds its tick) costs no clock_gettime.
+        let mut deadline = None;
         loop {
             if h.shutdown.load(Ordering::Acquire) != 0 {
                 return Wake::Shutdown;
@@ -414,6 +416,7 @@ impl TickBarrier {
                 return Wake::Tick(tick);
             }
             let now = Instant::now();
+            let deadline = *deadline.get_or_insert(now + timeout);
             if now >= deadline {
                 return Wake::Timeout;
             }

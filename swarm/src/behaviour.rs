@@ -128,7 +128,67 @@ pub struct AgentRuntime<B: Behaviour> {
     pub stats: RuntimeStats,
     /// The behaviour's `zero_copy()`.
     zero_copy: bool,
+    /// The allocation of [`AgentRuntime::step_owned`]'s list of references.
+    refs: RefBuf<Received<B::Msg>>,
 }
+
+/// An empty `Vec<&T>`'s allocation kept between calls whose references have different
+/// lifetimes (each tick's inbox is a new borrow). Only empty vectors go in and come out, so no
+/// reference outlives its borrow.
+struct RefBuf<T> {
+    ptr: *mut *const T,
+    cap: usize,
+}
+
+impl<T> Default for RefBuf<T> {
+    fn default() -> Self {
+        RefBuf {
+            ptr: std::ptr::null_mut(),
+            cap: 0,
+        }
+    }
+}
+
+impl<T> RefBuf<T> {
+    /// The kept allocation as an empty vector of references of any lifetime.
+    fn take<'a>(&mut self) -> Vec<&'a T> {
+        if self.cap == 0 {
+            return Vec::new();
+        }
+        let (ptr, cap) = (
+            std::mem::replace(&mut self.ptr, std::ptr::null_mut()),
+            self.cap,
+        );
+        self.cap = 0;
+        // SAFETY: `ptr` and `cap` came from a `Vec<&T>` (`keep`), whose element type has the
+        // layout of `*const T` whatever its lifetime; the length is 0, so no reference is
+        // carried over.
+        unsafe { Vec::from_raw_parts(ptr as *mut &'a T, 0, cap) }
+    }
+
+    /// Keeps `v`'s allocation (its references are dropped).
+    fn keep(&mut self, mut v: Vec<&T>) {
+        v.clear();
+        let mut v = std::mem::ManuallyDrop::new(v);
+        self.free();
+        self.cap = v.capacity();
+        self.ptr = v.as_mut_ptr() as *mut *const T;
+    }
+
+    fn free(&mut self) {
+        drop(self.take());
+    }
+}
+
+impl<T> Drop for RefBuf<T> {
+    fn drop(&mut self) {
+        self.free();
+    }
+}
+
+// SAFETY: a RefBuf holds no T, only an empty allocation.
+unsafe impl<T> Send for RefBuf<T> {}
+unsafe impl<T> Sync for RefBuf<T> {}
 
 impl<B: Behaviour> AgentRuntime<B> {
     pub fn new(sc: &Scenario, robot: u32, behaviour: B) -> Self {
@@ -140,6 +200,7 @@ impl<B: Behaviour> AgentRuntime<B> {
             stats: RuntimeStats::default(),
             zero_copy: behaviour.zero_copy(),
             behaviour,
+            refs: RefBuf::default(),
         }
     }
 
@@ -210,8 +271,13 @@ impl<B: Behaviour> AgentRuntime<B> {
         malformed: u32,
         tx: &mut dyn RadioTx,
     ) -> Action {
-        let refs: Vec<&Received<B::Msg>> = inbox.iter().collect();
-        self.step(sense, &refs, malformed, tx)
+        // The list of references lives in the allocation kept from the last tick (no malloc
+        // a tick once warm: the agent calls this every tick).
+        let mut refs = self.refs.take();
+        refs.extend(inbox.iter());
+        let action = self.step(sense, &refs, malformed, tx);
+        self.refs.keep(refs);
+        action
     }
 }
 
@@ -290,6 +356,33 @@ mod tests {
         let mut tx = Collect(vec![]);
         let a = rt.step_owned(&sense(0, 1, [0.0; 2]), &[], 0, &mut tx);
         assert_eq!((a.n_sent, tx.0.len(), rt.stats.oversize_sends), (0, 0, 2));
+    }
+
+    #[test]
+    fn step_owned_keeps_one_allocation_for_its_references_across_ticks() {
+        let sc = Scenario::default();
+        let mut rt = AgentRuntime::new(&sc, 3, Echo { heard: vec![] });
+        let mut tx = Collect(vec![]);
+        let h = RadioHeader {
+            sender: 1,
+            ..Default::default()
+        };
+        let mut kept = None;
+        for tick in 0..4u64 {
+            // A new inbox (a new borrow) every tick, as the agent's loop makes it.
+            let inbox: Vec<Received<u64>> =
+                (0..5).map(|m| Received::new(&h, tick * 10 + m)).collect();
+            let a = rt.step_owned(&sense(3, tick, [0.0; 2]), &inbox, 0, &mut tx);
+            assert_eq!(a.radio_delivered, 5);
+            let v = rt.refs.take::<'_>();
+            assert!(v.is_empty() && v.capacity() >= 5);
+            let p = v.as_ptr() as usize;
+            assert_eq!(*kept.get_or_insert(p), p, "tick {tick}: a new allocation");
+            rt.refs.keep(v);
+        }
+        let heard: Vec<u64> = rt.behaviour().heard.iter().map(|x| x.1).collect();
+        assert_eq!(heard.len(), 20);
+        assert_eq!(&heard[15..], &[30, 31, 32, 33, 34]);
     }
 
     #[test]

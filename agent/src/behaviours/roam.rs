@@ -3,6 +3,9 @@
 //! and wall points the robot senses. Each robot broadcasts its position every tick.
 
 use crate::kernels::virtual_force;
+#[path = "roam_nearest.rs"]
+mod nearest;
+use nearest::Nearest;
 use rand::Rng;
 use serde::{Deserialize, Serialize};
 use swarm::scenario::{Check, ConfigError, RoamParams, Scenario, ROAM_BEACON_OVERHEAD};
@@ -54,6 +57,10 @@ impl BeaconMsg for BulkBeacon {
         self.pos
     }
 }
+
+/// How many of the nearest robots heard repel a roaming robot: two (docs/search.md 2.3, eq. 5
+/// and Fig. 2 of the search paper).
+const NEAREST_HEARD: usize = 2;
 
 /// The registry's name of this behaviour.
 pub const NAME: &str = "roam";
@@ -152,17 +159,14 @@ impl<M: BeaconMsg> Behaviour for Roam<M> {
         out.broadcast(M::new(s.pos, &self.payload));
         let me = s.pos;
         // The two nearest robots heard (positions they sent last tick); ties by sender id.
-        let mut heard: Vec<(f64, u32, [f64; 2])> = inbox
-            .iter()
-            .map(|r| {
-                let pos = r.msg.pos();
-                (swarm::radio::distance(me, pos), r.from, pos)
-            })
-            .collect();
-        heard.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+        let mut heard = Nearest::<NEAREST_HEARD>::default();
+        for r in inbox {
+            let pos = r.msg.pos();
+            heard.offer((swarm::radio::distance(me, pos), r.from, pos));
+        }
         let d0 = 2.0 * self.p.l_r;
         let mut f = [0.0, 0.0];
-        for &(_, _, pos) in heard.iter().take(2) {
+        for &(_, _, pos) in heard.as_slice() {
             let r = self.repulsion(me, pos, d0);
             f[0] += r[0];
             f[1] += r[1];
