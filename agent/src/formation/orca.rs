@@ -107,6 +107,54 @@ pub fn acceleration_polygon(current: Vec2, reach: f64, sides: usize) -> Vec<Half
         .collect()
 }
 
+/// The buffered-cell half-planes of `me` (see `FormationParams::buffered_cells`), on the
+/// velocity: against robot j at distance d in direction u, u . v <= (d - 2r - slack) / (2 tau)
+/// (each robot of the pair closes at most half the gap in one step; so
+/// ||p_j' - p_i'|| >= u . (p_j' - p_i') >= d - (d - 2r) = 2r), and against a static obstacle
+/// the whole gap, u . v <= (d - r - r_o - slack) / tau. r are the true radii: the discs' radii
+/// less `margin` (ORCA's enlargement). Pairs that cannot close their gap at `max_speed` add
+/// nothing. A gap already below the slack gives u . v <= 0 (never shrink it); an overlap (which
+/// the cells prevent) asks to open it.
+pub fn buffered_cell_half_planes(
+    me: &Disc,
+    robots: &[Disc],
+    obstacles: &[Disc],
+    margin: f64,
+    params: &FormationParams,
+) -> Vec<HalfPlane> {
+    let tau = params.time_step;
+    let reach = params.max_speed * tau;
+    let mut out = Vec::new();
+    let pairs = robots
+        .iter()
+        .map(|o| (o, 2.0))
+        .chain(obstacles.iter().map(|o| (o, 1.0)));
+    for (other, share) in pairs {
+        let p_rel = other.position - me.position;
+        let d = p_rel.norm();
+        if d <= 1e-12 {
+            continue;
+        }
+        let contact = (me.radius - margin) + (other.radius - margin);
+        let gap = d - contact;
+        // The step can close at most `reach` of it from this side.
+        if gap / share > 1.5 * reach {
+            continue;
+        }
+        let bound = if gap >= 0.0 {
+            ((gap - params.cell_slack) / share).max(0.0) / tau
+        } else {
+            gap / share / tau
+        };
+        let u = p_rel / d;
+        out.push(HalfPlane {
+            point: u * bound,
+            normal: -u,
+        });
+    }
+    out
+}
+
 /// The robot's new velocity, eqs. (25)-(26): ORCA against the robots within
 /// `params.neighbour_dist` (c = 1/2, horizon `time_horizon`) and every obstacle (c = 1,
 /// horizon `obstacle_time_horizon`), inside the speed disc V_p and the acceleration polygon.
@@ -146,10 +194,19 @@ fn orca_velocity_within(
         Some(a) => acceleration_polygon(me.velocity, a * tau, params.accel_polygon_sides),
         None => Vec::new(),
     };
-    let hard: Vec<HalfPlane> = obstacles
+    let mut hard: Vec<HalfPlane> = obstacles
         .iter()
         .map(|o| orca_half_plane(me, o, 1.0, params.obstacle_time_horizon, tau))
         .collect();
+    if params.buffered_cells {
+        let margin = (me.radius - params.robot_radius).max(0.0);
+        let near: Vec<Disc> = robots
+            .iter()
+            .filter(|o| (o.position - me.position).norm() <= params.neighbour_dist)
+            .copied()
+            .collect();
+        hard.extend(buffered_cell_half_planes(me, &near, obstacles, margin, params));
+    }
     let soft: Vec<HalfPlane> = robots
         .iter()
         .filter(|o| (o.position - me.position).norm() <= params.neighbour_dist)

@@ -113,6 +113,19 @@ pub struct FormationParams {
     /// [chosen] false for the paper's 9 robots; the 100- and 500-robot scenarios set it (in
     /// their dense crowd the full-horizon fallback let robots overlap, docs/formation.md 9).
     pub shrink_horizon_when_infeasible: bool,
+    /// Keep every robot inside its buffered Voronoi cell (Zhou, Wang, Bandyopadhyay, Schwager
+    /// 2017; not in the paper or RVO2): against a robot at distance d in direction u the step
+    /// may close at most half the gap, u . v tau <= (d - 2r) / 2, and against a static disc at
+    /// most the whole gap. These half-planes hold at the same priority as the obstacles', so
+    /// ORCA's 3-D fallback relaxes only its own half-planes: when both robots of a pair keep
+    /// theirs their discs cannot overlap at the next step, whatever ORCA's fallback chose.
+    /// v = 0 satisfies them all, and lies in the acceleration polygon when a tau >= V_p, so they
+    /// never make the hard set empty. [chosen] true: 500 robots overlapped in ORCA's fallback
+    /// (docs/formation.md 9); false gives ORCA alone.
+    pub buffered_cells: bool,
+    /// Clearance the buffered cells keep beyond 2r (and r + r_o), against rounding: a gap
+    /// smaller than this is treated as closed (the step may not shrink it). Chosen 1e-6.
+    pub cell_slack: f64,
     /// Neighbours farther than this are left out of ORCA. The paper intersects over all robots;
     /// robots farther than 2r + 2 V_p tau_h = 6 cannot collide within the horizon, so 10 leaves
     /// out nobody who matters.
@@ -147,6 +160,8 @@ impl Default for FormationParams {
             time_horizon: 2.0,
             obstacle_time_horizon: 1.0,
             shrink_horizon_when_infeasible: false,
+            buffered_cells: true,
+            cell_slack: 1e-6,
             neighbour_dist: 10.0,
             k_a: 1.0,
             epsilon: 0.05,

@@ -296,7 +296,14 @@ impl Formation {
             .collect();
         // A live robot leaves the list only across its edge: at most one step of each apart
         // from it, plus a margin.
-        let inside = self.sensing_radius - 2.0 * self.v_max_tick - 2.0 * self.p.kernels.robot_radius;
+        let mut inside = self.sensing_radius - 2.0 * self.v_max_tick - 2.0 * self.p.kernels.robot_radius;
+        // A full list holds only the nearest MAX_NEARBY: a live robot also leaves it when
+        // others come nearer, so only one that was nearer than the list's farthest, by more
+        // than both steps, has vanished (in a 500-robot crowd live robots were taken for dead).
+        if sense.n_nearby as usize >= swarm::frames::MAX_NEARBY {
+            let farthest = now.values().map(|p| (p - me).norm()).fold(0.0, f64::max);
+            inside = inside.min(farthest - 2.0 * self.v_max_tick);
+        }
         for (id, pos) in &self.last_nearby {
             if !now.contains_key(id) && (pos - me).norm() < inside {
                 self.ghosts.insert(*id, *pos);
