@@ -374,7 +374,7 @@ mod tests {
                 (0..5).map(|m| Received::new(&h, tick * 10 + m)).collect();
             let a = rt.step_owned(&sense(3, tick, [0.0; 2]), &inbox, 0, &mut tx);
             assert_eq!(a.radio_delivered, 5);
-            let v = rt.refs.take::<'_>();
+            let v: Vec<&Received<u64>> = rt.refs.take();
             assert!(v.is_empty() && v.capacity() >= 5);
             let p = v.as_ptr() as usize;
             assert_eq!(*kept.get_or_insert(p), p, "tick {tick}: a new allocation");
