@@ -11,9 +11,9 @@ import os, re, sys, time
 pid, pfx = int(sys.argv[1]), sys.argv[2]
 SHM = "/dev/shm"
 services = {}      # unique_value -> kind
-dyn_kind = {}      # dynamic file name -> kind
-dyn_bytes = {}     # dynamic file name -> content
-port_kind = {}     # publisher port id -> kind
+seen_services = set()
+dyn_bytes = {}     # dynamic config files read
+port_dyn = {}      # 16-byte window of a dynamic config (a port id) -> that file
 
 
 def kind_of_service(name):
@@ -35,8 +35,9 @@ def learn_services():
     except OSError:
         return
     for n in names:
-        if n in services.values():
+        if n in seen_services:
             continue
+        seen_services.add(n)
         try:
             t = open(os.path.join(d, n), "rb").read().decode("latin1")
         except OSError:
@@ -46,39 +47,43 @@ def learn_services():
             services[int(u.group(1))] = kind_of_service(m.group(1))
 
 
+def learn_dynamic(name):
+    """Reads a dynamic config once, indexing every 8-aligned 16-byte window (port ids)."""
+    if name in dyn_bytes:
+        return
+    try:
+        content = open(os.path.join(SHM, name), "rb").read()
+    except OSError:
+        return
+    dyn_bytes[name] = True
+    for at in range(0, len(content) - 15, 8):
+        port_dyn.setdefault(content[at:at + 16], name)
+
+
+def dyn_service_kind(name):
+    parts = name[len(pfx):].split("_")
+    try:
+        return services.get(int(parts[1].split(".")[0]) >> 64, "other")
+    except (IndexError, ValueError):
+        return "other"
+
+
 def kind(name):
+    """The kind of one file of the run, from what was learned while it ran."""
     if name == pfx + "tick":
         return "barrier"
     if name == pfx + "air" or name.startswith(pfx + "air."):
         return "air"
-    rest = name[len(pfx):]
-    parts = rest.split("_")
-    if name.endswith(".dynamic") and len(parts) >= 2:
-        if name not in dyn_kind:
-            learn_services()
-            k = services.get(int(parts[1].split(".")[0]) >> 64)
-            if k is None:
-                return "other"
-            dyn_kind[name] = k
-            try:
-                dyn_bytes[name] = open(os.path.join(SHM, name), "rb").read()
-            except OSError:
-                dyn_bytes[name] = b""
-        return dyn_kind[name]
+    parts = name[len(pfx):].split("_")
+    if name.endswith(".dynamic"):
+        return dyn_service_kind(name)
     if (name.endswith(".data") and "__" not in name) or name.endswith(".connection"):
         try:
             port = int(parts[1].split(".")[0])
         except (IndexError, ValueError):
             return "other"
-        if port not in port_kind:
-            b = port.to_bytes(16, "little")
-            for d, content in dyn_bytes.items():
-                if b in content:
-                    port_kind[port] = dyn_kind[d]
-                    break
-            else:
-                return "other"
-        return port_kind[port]
+        d = port_dyn.get(port.to_bytes(16, "little"))
+        return dyn_service_kind(d) if d else "other"
     return "other"
 
 
@@ -118,10 +123,11 @@ def alive(p):
 peak_du, peak_app, at_peak = 0, 0, []
 while alive(pid):
     fs = scan()
-    # Dynamic configs first, so data files can find their port in them.
-    for n, _, _, d in sorted(fs, key=lambda f: not f[0].endswith(".dynamic")):
-        if not d:
-            kind(n)
+    # Learn the new services and dynamic configs (each file is read once).
+    learn_services()
+    for n, _, _, d in fs:
+        if not d and n.endswith(".dynamic"):
+            learn_dynamic(n)
     du = sum(f[2] for f in fs)
     app = sum(f[1] for f in fs)
     peak_app = max(peak_app, app)

@@ -18,8 +18,14 @@ OUT=${TMPDIR:-/tmp}/shm-peak-$TAG
 rm -rf $OUT; mkdir -p "$(dirname "$OUT")"
 SWARM_RUN_ID=$ID $BIN/orchestrator up --quiet --out $OUT "$@" > $OUT.up.txt 2>&1 &
 P=$!
+# The old sampler beside it (du alone, cheap): a cross-check of the peak.
+( MAX=0; while kill -0 $P 2>/dev/null; do
+    K=$(du -sk /dev/shm/${PFX}* 2>/dev/null | awk '{s+=$1} END {print s+0}')
+    [ "$K" -gt "$MAX" ] && MAX=$K; sleep 0.25
+  done; echo "du_loop_max_kib=$MAX" ) &
+D=$!
 python3 "$DIR/shm-peak.py" $P $PFX
-wait $P; echo "rc=$?"
+wait $P; echo "rc=$?"; wait $D
 python3 -c "
 import json; s=json.load(open('$OUT/summary.json'))
 print('startup_s', s.get('startup_seconds'), 'wall_s', s.get('wall_seconds'), 'ticks', s.get('ticks'), 'steady_tps', s.get('steady_ticks_per_second'), 'p50_us', s['tick_time']['p50_us'])
