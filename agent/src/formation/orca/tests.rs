@@ -329,7 +329,10 @@ fn buffered_cells_give_the_hand_computed_half_gap_bound() {
     // obstacle (radius 2) 3.1 above: gap 0.1, all of it: v_y <= (0.1 - 1e-6) / 0.25.
     let params = FormationParams::default();
     let me = disc(0.0, 0.0, 0.0, 0.0, 1.05);
-    let robots = [disc(2.2, 0.0, 0.0, 0.0, 1.05), disc(9.0, 0.0, 0.0, 0.0, 1.05)];
+    let robots = [
+        disc(2.2, 0.0, 0.0, 0.0, 1.05),
+        disc(9.0, 0.0, 0.0, 0.0, 1.05),
+    ];
     let obstacles = [disc(0.0, 3.1, 0.0, 0.0, 2.05)];
     let cells = buffered_cell_half_planes(&me, &robots, &obstacles, 0.05, &params);
     // The far robot (gap 7) cannot be reached in one step: no half-plane.
