@@ -205,7 +205,9 @@ fn orca_velocity_within(
             .filter(|o| (o.position - me.position).norm() <= params.neighbour_dist)
             .copied()
             .collect();
-        hard.extend(buffered_cell_half_planes(me, &near, obstacles, margin, params));
+        hard.extend(buffered_cell_half_planes(
+            me, &near, obstacles, margin, params,
+        ));
     }
     let soft: Vec<HalfPlane> = robots
         .iter()

@@ -186,6 +186,55 @@ impl SwapAgent {
         self.pending.is_some() || self.granted.is_some()
     }
 
+    /// A robot killed mid-run (issue 16: "the pattern re-plans for the robots left"), for the
+    /// swaps mode, which has no coordinator to re-plan: `wrecks` are the dead robots this one
+    /// knows of, each with where it lies and the target it last held (its last status).
+    /// Every other target of the pattern stays; the dead robot's target is vacant. If a wreck
+    /// lies within `blocked_within` of this robot's own target (the wreck's disc leaves no room
+    /// for it there), this robot takes the dead robot's vacant target instead, so the wreck's
+    /// neighbourhood loses one slot, not the dead robot's: only when the robot is not in a
+    /// handshake, the vacant target is not blocked by a wreck itself, no live neighbour
+    /// (`neighbours`) holds it, and no live neighbour of lower id has a target blocked by the
+    /// same wreck (that one takes it). Returns whether it took a vacancy. A dead robot's pending
+    /// handshake needs nothing more: a proposal to it passes its deadline, an acceptance it
+    /// granted stands after the settle time ([`SwapAgent::step`]).
+    pub fn take_vacancy(
+        &mut self,
+        targets: &[Vec2],
+        wrecks: &[(Vec2, usize)],
+        neighbours: &[NeighbourView],
+        blocked_within: f64,
+    ) -> bool {
+        if self.is_busy() || self.target >= targets.len() {
+            return false;
+        }
+        let blocked = |t: usize| {
+            targets
+                .get(t)
+                .is_some_and(|q| wrecks.iter().any(|(w, _)| (q - w).norm() < blocked_within))
+        };
+        let Some(&(wreck, vacant)) = wrecks
+            .iter()
+            .find(|(w, _)| (targets[self.target] - w).norm() < blocked_within)
+        else {
+            return false;
+        };
+        let free = vacant < targets.len()
+            && vacant != self.target
+            && !blocked(vacant)
+            && neighbours.iter().all(|n| n.target != vacant);
+        let first = neighbours.iter().all(|n| {
+            n.id > self.id
+                || targets
+                    .get(n.target)
+                    .is_none_or(|q| (q - wreck).norm() >= blocked_within)
+        });
+        if free && first {
+            self.target = vacant;
+        }
+        free && first
+    }
+
     /// One step at tick `now`: handle the frames addressed to this robot (in the order given),
     /// settle a granted acceptance from the proposer's status, give up a proposal past its
     /// deadline, then retry the pending proposal or make a new one to the best neighbour of
@@ -515,6 +564,65 @@ mod tests {
         b.step(3, pb, &q, &[view(0, pa, 1, 2)], &[], &p);
         assert!(!b.is_busy());
         assert_eq!((a.target, b.target), (1, 0));
+    }
+
+    #[test]
+    fn a_proposer_killed_after_the_acceptance_leaves_the_receiver_settled_on_its_new_target() {
+        // a proposes at tick 0 and dies: b accepted at tick 1, hears nothing more of a, and at
+        // deadline + settle_ticks = 16 is free again, on a's old target 0 (the swap stands; a's
+        // side is vacant). A proposal to a dead robot is given up at its deadline the same way
+        // (a_lost_answer_is_given_up_and_the_receiver_takes_its_target_back).
+        let p = no_gain_limit();
+        let q = [Vec2::new(10.0, 0.0), Vec2::zeros()];
+        let (pa, pb) = (Vec2::zeros(), Vec2::new(10.0, 0.0));
+        let mut a = SwapAgent::new(0, 0);
+        let mut b = SwapAgent::new(1, 1);
+        let out = a.step(0, pa, &q, &[view(1, pb, 1, 0)], &[], &p);
+        b.step(1, pb, &q, &[view(0, pa, 0, 0)], &out, &p);
+        for now in 2..16 {
+            b.step(now, pb, &q, &[], &[], &p);
+            assert!(b.is_busy(), "tick {now}");
+        }
+        b.step(16, pb, &q, &[], &[], &p);
+        assert_eq!((b.target, b.is_busy()), (0, false));
+    }
+
+    #[test]
+    fn a_robot_whose_target_a_wreck_blocks_takes_the_dead_robots_vacant_target() {
+        // Targets on a line 2.2 apart; "blocked" is within 2.1 of a wreck. Robot 3 (holding
+        // target 3) died at (6.0, 0.5): target 2 at (4.4, 0) is 1.68 from it, target 3 at
+        // (6.6, 0) 0.78.
+        let q: Vec<Vec2> = (0..6).map(|i| Vec2::new(2.2 * i as f64, 0.0)).collect();
+        let wreck = (Vec2::new(6.0, 0.5), 3);
+        let near = |id, target| view(id, q[target], target, 0);
+        // Robot 2's target is blocked, but so is the vacancy: nobody moves.
+        let mut r2 = SwapAgent::new(2, 2);
+        assert!(!r2.take_vacancy(&q, &[wreck], &[near(4, 4)], 2.1));
+        assert_eq!(r2.target, 2);
+        // The wreck at (5.0, 1.2): target 2 at 1.34, target 3 at 2.00 (blocked), target 1 at
+        // 3.05 (free). With the dead robot's last target 1 (it had swapped), robot 2 takes 1.
+        let wreck = (Vec2::new(5.0, 1.2), 1);
+        assert!((q[3] - wreck.0).norm() < 2.1 && (q[1] - wreck.0).norm() > 2.1);
+        let mut r2 = SwapAgent::new(2, 2);
+        assert!(r2.take_vacancy(&q, &[wreck], &[near(4, 4), near(6, 3)], 2.1));
+        assert_eq!(r2.target, 1);
+        // Robot 6 (target 3, also blocked) defers to robot 2, the lower id.
+        let mut r6 = SwapAgent::new(6, 3);
+        assert!(!r6.take_vacancy(&q, &[wreck], &[near(2, 2)], 2.1));
+        assert_eq!(r6.target, 3);
+        // Not while a live robot still holds the vacancy (the dead one still heard, or a
+        // partner of its last handshake): here robot 7 on target 1.
+        let mut r2 = SwapAgent::new(2, 2);
+        assert!(!r2.take_vacancy(&q, &[wreck], &[near(7, 1)], 2.1));
+        // Not in a handshake.
+        let mut r2 = SwapAgent::new(2, 2);
+        r2.step(0, q[0], &q, &[view(9, q[2], 0, 0)], &[], &no_gain_limit());
+        assert!(r2.is_busy());
+        assert!(!r2.take_vacancy(&q, &[wreck], &[], 2.1));
+        // A robot whose target no wreck blocks keeps it.
+        let mut r0 = SwapAgent::new(0, 0);
+        assert!(!r0.take_vacancy(&q, &[wreck], &[], 2.1));
+        assert_eq!(r0.target, 0);
     }
 
     #[test]

@@ -525,7 +525,21 @@ impl Formation {
                 tick: h.tick,
             })
             .collect();
+        // The dead this robot knows of (vanished from its sensors inside their radius): where
+        // the wreck lies and the slot it last held, heard from its status.
+        let wrecks: Vec<(Vec2, usize)> = self
+            .ghosts
+            .iter()
+            .filter_map(|(id, at)| {
+                let h = self.heard.get(id)?;
+                (h.slot >= 0).then_some((*at, h.slot as usize))
+            })
+            .collect();
+        let blocked_within = 2.0 * (self.p.kernels.robot_radius + self.p.orca_margin);
         let Some(agent) = &mut self.swap else { return };
+        if !wrecks.is_empty() {
+            agent.take_vacancy(&self.targets, &wrecks, &neighbours, blocked_within);
+        }
         let msgs = agent.step(k, me, &self.targets, &neighbours, inbox, &self.p.swaps);
         self.slot = Some(agent.target);
         for m in msgs {

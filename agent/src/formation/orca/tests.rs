@@ -321,3 +321,95 @@ fn a_squeezed_robot_finds_a_one_step_safe_velocity_by_shrinking_the_horizon() {
         )
     );
 }
+
+#[test]
+fn buffered_cells_give_the_hand_computed_half_gap_bound() {
+    // A neighbour 2.2 to the right (true radii 1, ORCA radii 1.05): gap 0.2, this robot may
+    // close half of it in one 0.25 s step: v_x <= (0.2 - 1e-6) / 2 / 0.25 = 0.399998. A disc
+    // obstacle (radius 2) 3.1 above: gap 0.1, all of it: v_y <= (0.1 - 1e-6) / 0.25.
+    let params = FormationParams::default();
+    let me = disc(0.0, 0.0, 0.0, 0.0, 1.05);
+    let robots = [
+        disc(2.2, 0.0, 0.0, 0.0, 1.05),
+        disc(9.0, 0.0, 0.0, 0.0, 1.05),
+    ];
+    let obstacles = [disc(0.0, 3.1, 0.0, 0.0, 2.05)];
+    let cells = buffered_cell_half_planes(&me, &robots, &obstacles, 0.05, &params);
+    // The far robot (gap 7) cannot be reached in one step: no half-plane.
+    assert_eq!(cells.len(), 2, "{cells:?}");
+    assert!((cells[0].normal - Vec2::new(-1.0, 0.0)).norm() < 1e-12);
+    assert!((cells[0].violation(Vec2::new(0.399998, 0.0))).abs() < 1e-9);
+    assert!((cells[1].normal - Vec2::new(0.0, -1.0)).norm() < 1e-12);
+    assert!((cells[1].violation(Vec2::new(0.0, 0.399996))).abs() < 1e-9);
+    // Touching (gap below the slack): the step may not shrink it at all.
+    let touching = [disc(2.0 + 1e-7, 0.0, 0.0, 0.0, 1.05)];
+    let cells = buffered_cell_half_planes(&me, &touching, &[], 0.05, &params);
+    assert!(cells[0].violation(Vec2::zeros()).abs() < 1e-12);
+    assert!(cells[0].violation(Vec2::new(1e-6, 0.0)) > 0.0);
+}
+
+#[test]
+fn in_a_crowd_with_buffered_cells_no_step_makes_an_overlap_even_when_orca_is_infeasible() {
+    // Random packed crowds of 20, every robot crossing through the centre to the far side at
+    // full speed, 40 steps: ORCA is often infeasible; with the buffered cells no pair is ever
+    // closer than 2r after a step. Without them (ORCA and its 3-D fallback alone) some pairs
+    // are, so the test can fail.
+    let mut rng = ChaCha8Rng::seed_from_u64(16);
+    let (mut infeasible, mut overlaps_without) = (0, 0);
+    for _ in 0..30 {
+        let mut start: Vec<Vec2> = Vec::new();
+        while start.len() < 20 {
+            let p = Vec2::new(rng.gen_range(0.0..13.0), rng.gen_range(0.0..13.0));
+            if start.iter().all(|q| (p - q).norm() >= 2.0) {
+                start.push(p);
+            }
+        }
+        let centre = Vec2::new(6.5, 6.5);
+        let goals: Vec<Vec2> = start.iter().map(|p| centre * 2.0 - p).collect();
+        for cells in [true, false] {
+            let params = FormationParams {
+                buffered_cells: cells,
+                ..FormationParams::default()
+            };
+            let mut pos = start.clone();
+            let mut vel = vec![Vec2::zeros(); pos.len()];
+            for _ in 0..40 {
+                let discs: Vec<Disc> = (0..pos.len())
+                    .map(|i| Disc {
+                        position: pos[i],
+                        velocity: vel[i],
+                        radius: 1.05,
+                    })
+                    .collect();
+                for i in 0..pos.len() {
+                    let others: Vec<Disc> = (0..pos.len())
+                        .filter(|j| *j != i)
+                        .map(|j| discs[j])
+                        .collect();
+                    let pref = preferred_velocity(pos[i], goals[i], 1.0, 1.0);
+                    let s = orca_velocity(&discs[i], pref, &others, &[], &params);
+                    if cells && s.selection != Selection::Feasible {
+                        infeasible += 1;
+                    }
+                    assert!(s.velocity.norm() <= 1.0 + 1e-9);
+                    vel[i] = s.velocity;
+                }
+                for i in 0..pos.len() {
+                    pos[i] += vel[i] * params.time_step;
+                }
+                for i in 0..pos.len() {
+                    for j in i + 1..pos.len() {
+                        let d = (pos[i] - pos[j]).norm();
+                        if cells {
+                            assert!(d >= 2.0, "{i} {j}: {d}");
+                        } else if d < 2.0 {
+                            overlaps_without += 1;
+                        }
+                    }
+                }
+            }
+        }
+    }
+    assert!(infeasible > 50, "{infeasible}");
+    assert!(overlaps_without > 0, "{overlaps_without}");
+}
