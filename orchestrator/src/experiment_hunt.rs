@@ -13,7 +13,7 @@
 //! 3. **Live, and beyond the thesis**: runs of the scenario with each auction of `auctions`
 //!    (the improved one and the parallel baseline, over the radio: `hunt.params.auction`)
 //!    under each variant (radio loss, robots killed): C and Y of the auctions as made,
-//!    messages, auction rounds, capture rate and time.
+//!    messages and bytes (the medium's counts), auction rounds, capture rate and time.
 
 use agent::hunt::auction::run_auction;
 use agent::hunt::instance::{random_instance, InstanceParams};
@@ -261,8 +261,9 @@ fn example_3a(sc: &Scenario, run: &Runner, out: &Path, md: &mut String) -> Resul
     }
     let _ = writeln!(
         md,
-        "\nAuction rounds the auctioneer ran (all its auctions): {}. Messages offered {}, delivered {}.\n",
-        m["auction_rounds"], s["messages"]["offered"], s["messages"]["delivered"]
+        "\nAuction rounds the auctioneer ran (all its auctions): {}. Messages offered {}, delivered {}; bytes offered {}, delivered {}.\n",
+        m["auction_rounds"], s["messages"]["offered"], s["messages"]["delivered"],
+        s["message_bytes"]["offered"], s["message_bytes"]["delivered"]
     );
     // Fig. 3.6: the initial auction's rewards round by round (the kernel, lossless: the same
     // rounds as the auctioneer's first auction over a lossless radio).
@@ -425,6 +426,8 @@ struct LiveRow {
     paid: Vec<f64>,
     offered: Vec<f64>,
     delivered: Vec<f64>,
+    bytes_offered: Vec<f64>,
+    bytes_delivered: Vec<f64>,
     rounds: Vec<f64>,
     killed: Vec<f64>,
 }
@@ -446,6 +449,10 @@ impl LiveRow {
             .push(s["messages"]["offered"].as_f64().unwrap_or(0.0));
         self.delivered
             .push(s["messages"]["delivered"].as_f64().unwrap_or(0.0));
+        self.bytes_offered
+            .push(s["message_bytes"]["offered"].as_f64().unwrap_or(0.0));
+        self.bytes_delivered
+            .push(s["message_bytes"]["delivered"].as_f64().unwrap_or(0.0));
         self.rounds
             .push(m["auction_rounds"].as_f64().unwrap_or(0.0));
         self.killed
@@ -471,7 +478,7 @@ fn variants(
         x.variant_seeds
     );
     let _ = writeln!(md, "C and Y are those of the auctioneer's auctions as it made the awards (3.13, 3.14; all its auctions: the initial one and the new target's). Reward paid: the sum over the tasks of the last z_j the auctioneer reported (assistance raises it).\n");
-    let _ = writeln!(md, "| auction | variant | runs | captured (mean of {}) | all captured | time to the last capture, min (mean over runs that captured all) | C | Y | reward paid | messages offered | delivered | auction rounds | robots killed |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|", base.hunt.evaders.len());
+    let _ = writeln!(md, "| auction | variant | runs | captured (mean of {}) | all captured | time to the last capture, min (mean over runs that captured all) | C | Y | reward paid | messages offered | delivered | kB offered | kB delivered | bytes a delivered message | auction rounds | robots killed |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|", base.hunt.evaders.len());
     for auction in &auctions {
         for v in &x.variants {
             let mut row = LiveRow::default();
@@ -497,7 +504,7 @@ fn variants(
             };
             let _ = writeln!(
                 md,
-                "| {auction:?} | {} | {} | {:.2} | {} | {} | {} | {} | {} | {:.0} | {:.0} | {:.1} | {:.1} |",
+                "| {auction:?} | {} | {} | {:.2} | {} | {} | {} | {} | {} | {:.0} | {:.0} | {:.0} | {:.0} | {:.1} | {:.1} | {:.1} |",
                 v.name,
                 x.variant_seeds,
                 mean_sd(&row.captured).0,
@@ -512,6 +519,9 @@ fn variants(
                 ms(&row.paid),
                 mean_sd(&row.offered).0,
                 mean_sd(&row.delivered).0,
+                mean_sd(&row.bytes_offered).0 / 1000.0,
+                mean_sd(&row.bytes_delivered).0 / 1000.0,
+                mean_sd(&row.bytes_delivered).0 / mean_sd(&row.delivered).0.max(1.0),
                 mean_sd(&row.rounds).0,
                 mean_sd(&row.killed).0
             );
@@ -519,7 +529,7 @@ fn variants(
     }
     let _ = writeln!(
         md,
-        "\nMessages are (message, receiver) pairs (a broadcast counts once per other live agent). Bytes are not measured: the world counts messages, not their sizes.\n"
+        "\nMessages are (message, receiver) pairs (a broadcast counts once per other live agent). Bytes are the medium's count (summary `message_bytes`): each pair's encoded payload (bincode, the size the sender's radio header carries), offered and delivered, in kB (1000 bytes), means over the runs.\n"
     );
     Ok(())
 }

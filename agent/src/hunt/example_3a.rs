@@ -340,3 +340,91 @@ fn example_3a_t5_split_needs_a_larger_g_on_t5_than_printed() {
         raised.rounds.len()
     );
 }
+
+/// Fig. 3.4(c-d): the thesis swaps R15 (Phi1, T1) and R9 (Phi3, T3), reporting U = 216.67 for
+/// R15 on T3 and 198.86 for R9 on T1. Table 3.2 prints g_15,3 = 0.1 and g_9,1 = 0.1, which
+/// cap those benefits (3.8) at 0.1 x z_3max = 82 and 0.1 x z_1max = 52 whatever the reward,
+/// so neither figure can come from the printed table. With the printed g the swap rule of
+/// sec. 3.2.5 step 4 loses 0.3 (z_1 + z_3) in benefit (both leave a 0.4 task for a 0.1 one),
+/// while the cost terms can win back at most m3 (2 d(T1, T3)) / (v_j - v_i) plus the small
+/// E and T' differences: about 27 against about 274. So no geometry swaps them. Giving each
+/// of the two robots 0.4 (its largest coefficient) on the other's target, the same rule
+/// swaps them at once.
+#[test]
+fn example_3a_r15_r9_swap_needs_other_g_than_printed() {
+    use crate::hunt::cost::{benefit, bid_value};
+    use swarm::geometry::Vec2;
+    let h = example_3a();
+    let p = HuntParams::default();
+    let tasks: BTreeMap<TaskId, Task> = h.tasks().into_iter().map(|t| (t.id, t)).collect();
+    let printed: BTreeMap<u32, Robot> = h.robots().into_iter().map(|r| (r.id, r)).collect();
+    // The printed coefficients and the caps they put on the thesis's two utilities.
+    assert_eq!(printed[&15].matching(3), 0.1);
+    assert_eq!(printed[&9].matching(1), 0.1);
+    assert!((benefit(&printed[&15], &tasks[&3], 820.0) - 82.0).abs() < 1e-9);
+    assert!((benefit(&printed[&9], &tasks[&1], 520.0) - 52.0).abs() < 1e-9);
+    // The most favourable geometry for the swap: R15 next to T3 (closer to R9's hunting
+    // point than R9), R9 next to T1. Our paid rewards (Example 3-A live: z_1 = 460.7,
+    // z_3 = 450.7).
+    let place = |mut robots: BTreeMap<u32, Robot>| {
+        robots.get_mut(&15).unwrap().position = tasks[&3].position + Vec2::new(0.5, 0.0);
+        robots.get_mut(&9).unwrap().position = tasks[&1].position + Vec2::new(0.5, 0.0);
+        robots
+    };
+    let hunts = || {
+        vec![
+            Hunt {
+                task: 1,
+                members: vec![1, 2, 15],
+                reward: 460.7,
+                captured: false,
+                since: 0.0,
+            },
+            Hunt {
+                task: 3,
+                members: vec![8, 9, 12, 13],
+                reward: 450.7,
+                captured: false,
+                since: 0.0,
+            },
+        ]
+    };
+    let r9_point: BTreeMap<u32, Vec2> = [(9, tasks[&3].position + Vec2::new(0.3, 0.0))].into();
+    let robots = place(printed.clone());
+    let w = World {
+        robots: &robots,
+        tasks: &tasks,
+    };
+    let u = |i: u32, j: TaskId, z: f64| bid_value(&robots[&i], &tasks[&j], z, &p).unwrap();
+    let gain = u(9, 1, 460.7) + u(15, 3, 450.7) - u(9, 3, 450.7) - u(15, 1, 460.7);
+    assert!(gain < -200.0, "printed g: the swap loses {gain:.1}");
+    let mut hs = hunts();
+    let swaps = apply_swaps(&w, &mut hs, &r9_point, &p);
+    let r9_r15 = |s: &crate::hunt::replan::Swap| {
+        let mut pair = [(s.i, s.from_task), (s.k, s.to_task)];
+        pair.sort();
+        pair == [(9, 3), (15, 1)]
+    };
+    assert!(
+        !swaps.iter().any(r9_r15),
+        "printed g: no R9/R15 swap, got {swaps:?}"
+    );
+    // g_15,3 = g_9,1 = 0.4: the rule swaps them first (the best gain).
+    let mut raised = printed;
+    raised.get_mut(&15).unwrap().matching[2] = 0.4;
+    raised.get_mut(&9).unwrap().matching[0] = 0.4;
+    let robots = place(raised);
+    let w = World {
+        robots: &robots,
+        tasks: &tasks,
+    };
+    let mut hs = hunts();
+    let swaps = apply_swaps(&w, &mut hs, &r9_point, &p);
+    // Either may trigger it (R9 is also closer to T1, R15's goal, than R15 is).
+    assert!(swaps.first().is_some_and(r9_r15), "{swaps:?}");
+    println!(
+        "printed g: R9/R15 swap gain {gain:.1}; g_15,3 = g_9,1 = 0.4: {swaps:?}; U(R15, T3) = {:.2}, U(R9, T1) = {:.2} (thesis 216.67, 198.86)",
+        bid_value(&robots[&15], &tasks[&3], 450.7, &p).unwrap(),
+        bid_value(&robots[&9], &tasks[&1], 460.7, &p).unwrap()
+    );
+}

@@ -17,6 +17,7 @@ pub mod model;
 pub mod parallel_auction;
 pub mod params;
 pub mod replan;
+pub mod ring_by_wall;
 pub mod scenario;
 
 pub use params::HuntParams;

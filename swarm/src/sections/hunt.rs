@@ -393,6 +393,20 @@ pub struct HuntParams {
     /// A wall closer to an evader than this is a blocked bearing of its escape (eq. 2.17),
     /// km. [chosen] 0.5 km (`world::mission::hunt_escape::EscapeParams::wall_margin`).
     pub evader_wall_margin: f64,
+    /// Hunting points by a wall (sec. 3.2.4 says nothing of walls). true: where the r_s circle
+    /// (3.18)-(3.19) around the target crosses the arena's edge, the leader spreads the n_j
+    /// points evenly over the longest arc of the circle that lies at least
+    /// `hunting_point_wall_clearance` inside the arena, and the world's capture rule counts a
+    /// wall closer than r_s to the target as a blocked bearing (as the escape does), so a
+    /// target pinned to a wall can be captured. false: the printed ring, whose points beyond a
+    /// wall no robot can reach. [chosen] true: measured, the replacement run of Example 3-A
+    /// (R3 killed at tick 150) never captures T4, pinned to the top wall, with false
+    /// (docs/hunting.md section 13).
+    pub hunting_points_inside_arena: bool,
+    /// How far inside the arena's edge a hunting point must lie, km, when
+    /// `hunting_points_inside_arena` moves points off a wall. [chosen] 0.1 km: two robot steps
+    /// (0.045 km a tick), so a robot reaching its point is not blocked by the wall.
+    pub hunting_point_wall_clearance: f64,
     /// Robots sense the evaders (Sense entities, with positions) within this distance, km.
     /// [chosen] 20 km, more than the 10 km arena's diagonal: chapter 3 gives every robot the
     /// targets' information (the auctioneer "holds information on all targets" and
@@ -449,6 +463,8 @@ impl Default for HuntParams {
             assistance_timeout: 30.0,
             minutes_per_tick: 0.05,
             evader_wall_margin: 0.5,
+            hunting_points_inside_arena: true,
+            hunting_point_wall_clearance: 0.1,
             detection_radius: 20.0,
             bid_window_ticks: 3,
             status_period_ticks: 5,

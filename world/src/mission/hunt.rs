@@ -43,6 +43,9 @@ pub const ENTRY: MissionEntry = MissionEntry {
 const LIMIT_SLACK: f64 = 1e-9;
 /// Ticks between two samples of an evader's path (for run.svg).
 const PATH_EVERY: u64 = 5;
+/// Samples of an evader's path the viewer's layer shows (`Mission::live_layer`): its last
+/// 5 minutes at 0.05 min a tick. [chosen] 20: run.svg keeps the whole path.
+const LIVE_TRAIL_SAMPLES: usize = 20;
 
 /// Checks the `[hunt]` section against the rest of the scenario.
 fn validate(sc: &Scenario, c: &Check) -> Result<(), ConfigError> {
@@ -301,8 +304,77 @@ impl HuntMission {
         if carried.iter().zip(&e.spec.resources).any(|(c, w)| c < w) {
             return None;
         }
+        // A wall that cuts the r_s circle encloses the target like a pursuer (the hunting
+        // points then lie on the circle's arc inside the arena: `hunting_points_inside_arena`).
+        if self.p.hunting_points_inside_arena {
+            bearings.extend(super::hunt_escape::wall_bearings(&e.pos, &self.arena, self.p.r_s));
+        }
         let (_, gap) = super::hunt_escape::largest_gap(&mut bearings);
         (gap < PI).then(|| members.iter().map(|&i| i as u32).collect())
+    }
+
+    /// The layer's marks (run.svg, the viewer), each evader's path cut to its last `trail`
+    /// samples.
+    fn marks(&self, trail: usize) -> Vec<Mark> {
+        let mut marks = Vec::new();
+        for (j, e) in self.evaders.iter().enumerate() {
+            let col = colour_of(e.spec.id);
+            let mut path = e.path[e.path.len().saturating_sub(trail)..].to_vec();
+            path.push([e.pos.x, e.pos.y]);
+            marks.push(Mark::Path {
+                points: path,
+                colour: col,
+            });
+            marks.push(Mark::Circle {
+                at: [e.pos.x, e.pos.y],
+                radius: self.p.effective_range(e.spec.required_robots),
+                colour: col,
+            });
+            marks.push(Mark::Circle {
+                at: [e.pos.x, e.pos.y],
+                radius: self.p.r_s,
+                colour: BLACK,
+            });
+            // The hunting points the members last reported.
+            for &i in &self.members[j] {
+                let r = self.reports[i as usize];
+                if r[1].is_finite() && r[2].is_finite() && r[0] >= 1.0 {
+                    marks.push(Mark::Ring {
+                        at: [r[1], r[2]],
+                        px: 3,
+                        colour: col,
+                        width: 1,
+                    });
+                }
+            }
+            marks.push(if e.captured.is_some() {
+                Mark::Disc {
+                    at: [e.pos.x, e.pos.y],
+                    px: 5,
+                    fill: BLACK,
+                    outline: None,
+                }
+            } else {
+                Mark::Ring {
+                    at: [e.pos.x, e.pos.y],
+                    px: 5,
+                    colour: BLACK,
+                    width: 2,
+                }
+            });
+        }
+        // Robots as triangles along their heading, by coalition colour (Figs. 3.3-3.5).
+        for (i, q) in self.last_poses.iter().enumerate() {
+            let task = self.reports[i][0];
+            let state = if task >= 1.0 { task as u32 } else { 0 };
+            marks.push(Mark::Triangle {
+                at: [q[0], q[1]],
+                heading: q[2],
+                px: 9,
+                fill: colour_of(state),
+            });
+        }
+        marks
     }
 
     fn track_coalitions(&mut self, tick: u64, alive: &[bool]) {
@@ -586,65 +658,13 @@ impl Mission for HuntMission {
         STATES
     }
     fn layer(&self) -> Vec<Mark> {
-        let mut marks = Vec::new();
-        for (j, e) in self.evaders.iter().enumerate() {
-            let col = colour_of(e.spec.id);
-            let mut path = e.path.clone();
-            path.push([e.pos.x, e.pos.y]);
-            marks.push(Mark::Path {
-                points: path,
-                colour: col,
-            });
-            marks.push(Mark::Circle {
-                at: [e.pos.x, e.pos.y],
-                radius: self.p.effective_range(e.spec.required_robots),
-                colour: col,
-            });
-            marks.push(Mark::Circle {
-                at: [e.pos.x, e.pos.y],
-                radius: self.p.r_s,
-                colour: BLACK,
-            });
-            // The hunting points the members last reported.
-            for &i in &self.members[j] {
-                let r = self.reports[i as usize];
-                if r[1].is_finite() && r[2].is_finite() && r[0] >= 1.0 {
-                    marks.push(Mark::Ring {
-                        at: [r[1], r[2]],
-                        px: 3,
-                        colour: col,
-                        width: 1,
-                    });
-                }
-            }
-            marks.push(if e.captured.is_some() {
-                Mark::Disc {
-                    at: [e.pos.x, e.pos.y],
-                    px: 5,
-                    fill: BLACK,
-                    outline: None,
-                }
-            } else {
-                Mark::Ring {
-                    at: [e.pos.x, e.pos.y],
-                    px: 5,
-                    colour: BLACK,
-                    width: 2,
-                }
-            });
-        }
-        // Robots as triangles along their heading, by coalition colour (Figs. 3.3-3.5).
-        for (i, q) in self.last_poses.iter().enumerate() {
-            let task = self.reports[i][0];
-            let state = if task >= 1.0 { task as u32 } else { 0 };
-            marks.push(Mark::Triangle {
-                at: [q[0], q[1]],
-                heading: q[2],
-                px: 9,
-                fill: colour_of(state),
-            });
-        }
-        marks
+        self.marks(usize::MAX)
+    }
+    /// The viewer's layer: run.svg's marks with each evader's path cut to its last
+    /// `LIVE_TRAIL_SAMPLES` samples, so a tick's record stays the same size all run long
+    /// (with the whole path, recording.bin grew with the square of the run's length).
+    fn live_layer(&self) -> Vec<Mark> {
+        self.marks(LIVE_TRAIL_SAMPLES)
     }
     fn legend(&self) -> Vec<LegendEntry> {
         vec![
@@ -802,6 +822,33 @@ mod tests {
             m.observe(*i as u32, [1.0, pt.x, pt.y, 0.0]);
         }
         assert_eq!(m.captured_now(0, &poses, &alive), None);
+    }
+
+    #[test]
+    fn a_wall_closer_than_r_s_encloses_like_a_pursuer() {
+        // T1 (L = 3, R1 + R2 + R3 cover E_1) moved onto the north wall (y = 10). Its three
+        // robots stand on the r_s circle's arc below the wall at bearings -160, -90 and -20
+        // degrees: among themselves the largest gap is 220 degrees (> pi, not enclosed), but
+        // the wall's bearing (+90) splits it into 110 + 110.
+        let sc = example();
+        let alive = vec![true; 16];
+        let place = |inside: bool| {
+            let mut sc = sc.clone();
+            sc.hunt.params.hunting_points_inside_arena = inside;
+            let mut m = HuntMission::new(&sc);
+            m.evaders[0].pos = Vec2::new(5.0, 10.0);
+            let c = m.evaders[0].pos;
+            let mut poses = vec![[0.0; 3]; m.bodies];
+            for (k, deg) in [-160.0f64, -90.0, -20.0].iter().enumerate() {
+                let a = deg.to_radians();
+                let pt = c + m.p.r_s * Vec2::new(a.cos(), a.sin());
+                poses[k] = [pt.x, pt.y, 0.0];
+                m.observe(k as u32, [1.0, pt.x, pt.y, 0.0]);
+            }
+            m.captured_now(0, &poses, &alive)
+        };
+        assert_eq!(place(true), Some(vec![0, 1, 2]));
+        assert_eq!(place(false), None, "the printed rule: a 220-degree gap");
     }
 
     #[test]

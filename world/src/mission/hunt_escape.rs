@@ -83,24 +83,29 @@ pub fn escape(
         return None;
     }
     // Walls within the margin block the bearing of their outward normal.
-    let walls = [
-        (evader.x, PI),                      // west wall, bearing 180 degrees
-        (arena.width - evader.x, 0.0),       // east
-        (evader.y, -PI / 2.0),               // south
-        (arena.height - evader.y, PI / 2.0), // north
-    ];
-    bearings.extend(
-        walls
-            .iter()
-            .filter(|(d, _)| *d < p.wall_margin)
-            .map(|(_, b)| *b),
-    );
+    bearings.extend(wall_bearings(evader, arena, p.wall_margin));
     let (start, gap) = largest_gap(&mut bearings);
     Some(Escape {
         heading: wrap(start + gap / 2.0),
         largest_gap: gap,
         speed_factor: (gap / TAU).powf(p.encirclement_slowdown),
     })
+}
+
+/// The bearings (outward normals) of the arena's walls closer than `within` to `at`: each
+/// blocks that direction like a pursuer would (the escape's walls, and the capture rule's
+/// when hunting points are kept inside the arena).
+pub fn wall_bearings(at: &Vec2, arena: &ArenaBox, within: f64) -> Vec<f64> {
+    [
+        (at.x, PI),                      // west wall, bearing 180 degrees
+        (arena.width - at.x, 0.0),       // east
+        (at.y, -PI / 2.0),               // south
+        (arena.height - at.y, PI / 2.0), // north
+    ]
+    .iter()
+    .filter(|(d, _)| *d < within)
+    .map(|(_, b)| *b)
+    .collect()
 }
 
 /// The largest angular gap between bearing-adjacent directions: (bearing it starts at, going

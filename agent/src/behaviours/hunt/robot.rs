@@ -21,7 +21,8 @@ use crate::hunt::apf::{to_command, total_force};
 use crate::hunt::auction::{Announcement, Bidder, BidderState};
 use crate::hunt::parallel_auction::parallel_bids;
 use crate::hunt::cost::bid_value;
-use crate::hunt::hunting_points::{assign, hunting_points, leader_angle};
+use crate::hunt::hunting_points::{assign, leader_angle};
+use crate::hunt::ring_by_wall::{ring_points, Walls};
 use crate::hunt::model::{Robot, RobotId, Task, TaskId};
 use crate::hunt::params::HuntParams;
 use crate::hunt::scenario::robot_of;
@@ -30,7 +31,7 @@ use swarm::frames::ENTITY_HAS_POS;
 use swarm::geometry::Vec2;
 use swarm::scenario::Scenario;
 use swarm::sections::hunt::{
-    AuctionKind, AuctioneerSpec, ENTITY_EVADER, EVADER_CAPTURED, REPORT_AT_POINT, REPORT_LEADER, STATE_FREE,
+    AuctionKind, ENTITY_EVADER, EVADER_CAPTURED, REPORT_AT_POINT, REPORT_LEADER, STATE_FREE,
 };
 use swarm::{Command, Outbox, Received, Sense};
 
@@ -58,8 +59,10 @@ struct Plan {
 pub struct HuntRobot {
     id: RobotId,
     station: u32,
-    auctioneer: AuctioneerSpec,
     p: HuntParams,
+    /// The arena's walls for hunting points by a wall (None: `hunting_points_inside_arena`
+    /// off).
+    walls: Option<Walls>,
     robot: Robot,
     /// The auction it takes part in and its Bidder.
     auction: Option<(u32, Bidder)>,
@@ -84,7 +87,11 @@ impl HuntRobot {
         HuntRobot {
             id: spec.id,
             station: sc.bodies(),
-            auctioneer: sc.hunt.auctioneer.clone(),
+            walls: sc.hunt.params.hunting_points_inside_arena.then_some(Walls {
+                width: sc.arena.width,
+                height: sc.arena.height,
+                clearance: sc.hunt.params.hunting_point_wall_clearance,
+            }),
             p: sc.hunt.params.clone(),
             auction: None,
             pending: None,
@@ -96,11 +103,6 @@ impl HuntRobot {
             seen: BTreeMap::new(),
             robot,
         }
-    }
-
-    /// Whether a message from `from` may be taken: the auctioneer's only within its range.
-    fn hears(&self, from: u32, own: [f64; 2]) -> bool {
-        from != self.station || self.auctioneer.reaches(own)
     }
 
     fn take_assignment(&mut self, a: Assignment) {
@@ -116,10 +118,9 @@ impl HuntRobot {
     }
 
     fn listen(&mut self, s: &Sense, inbox: &[&Received<HuntMsg>]) {
+        // The auctioneer's radio range (`hunt.auctioneer.radio_range`) is the medium's
+        // per-sender range of the station: what arrives here was in range.
         for r in inbox {
-            if !self.hears(r.from, s.pos) {
-                continue;
-            }
             match &r.msg {
                 HuntMsg::Status(st) => {
                     self.peers.insert(st.robot, (st.pos, s.tick));
@@ -321,7 +322,13 @@ impl HuntRobot {
                 _ => leader_angle(&target, &own),
             };
             let members = self.live_members(&a, s.tick, own);
-            let points = hunting_points(&target, members.len(), self.p.r_s, anchor);
+            let points = ring_points(
+                &target,
+                members.len(),
+                self.p.r_s,
+                anchor,
+                self.walls.as_ref(),
+            );
             let got = assign(&members, &points, self.p.contested_point_to_farthest);
             let mut order = vec![0; points.len()];
             for (robot, k) in &got {
@@ -347,7 +354,13 @@ impl HuntRobot {
         let Some(k) = plan.order.iter().position(|r| *r == self.id) else {
             return (Some(target), None, false, msg);
         };
-        let point = hunting_points(&target, plan.order.len(), self.p.r_s, plan.anchor)[k];
+        let point = ring_points(
+            &target,
+            plan.order.len(),
+            self.p.r_s,
+            plan.anchor,
+            self.walls.as_ref(),
+        )[k];
         (Some(point), Some(point), plan.leader == self.id, msg)
     }
 
