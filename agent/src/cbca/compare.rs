@@ -6,9 +6,9 @@
 use serde::Serialize;
 use swarm::geometry::Vec2;
 
+use super::baselines::eta;
 use super::baselines::{self, Allocation, Evaluation};
 use super::consensus::CbcaRobot;
-use super::baselines::eta;
 use super::grouping::{comm_graph, components, robot_knowledge, PriorInfo};
 use super::model::{Robot, RobotId, Task, TaskBook, TaskId};
 use super::params::CbcaParams;
@@ -296,10 +296,16 @@ pub fn replanned_utility_curve(
     let mut phases: Vec<(f64, Vec<Vec<f64>>)> = Vec::new();
     let mut from = f64::NEG_INFINITY;
     for m in merges {
-        phases.push((from, utility_curve(robots, tasks, &m.paths_before, params, times)?));
+        phases.push((
+            from,
+            utility_curve(robots, tasks, &m.paths_before, params, times)?,
+        ));
         from = from.max(m.meet_time);
     }
-    phases.push((from, utility_curve(robots, tasks, final_paths, params, times)?));
+    phases.push((
+        from,
+        utility_curve(robots, tasks, final_paths, params, times)?,
+    ));
     Some(
         (0..robots.len())
             .map(|i| {
@@ -438,10 +444,21 @@ mod deadlock_across_groups {
 
         let p = CbcaParams::default();
         assert!(p.merge_on_conflict);
-        let (cbca, stats, merges) =
-            run_cbca(&inst.robots, &inst.tasks, PriorInfo::DetectionPlusNearest, &Radio::perfect(), &p);
+        let (cbca, stats, merges) = run_cbca(
+            &inst.robots,
+            &inst.tasks,
+            PriorInfo::DetectionPlusNearest,
+            &Radio::perfect(),
+            &p,
+        );
         assert!(stats.converged && !merges.is_empty());
-        let r = run_method(Method::CbcaGrouped, &inst.robots, &inst.tasks, &Radio::perfect(), &p);
+        let r = run_method(
+            Method::CbcaGrouped,
+            &inst.robots,
+            &inst.tasks,
+            &Radio::perfect(),
+            &p,
+        );
         assert!(r.evaluation.is_some(), "no deadlock after the merges");
         for (j, ms) in r.allocation.coalitions() {
             assert!(ms.len() <= inst.tasks[j].robots_needed);
