@@ -3,6 +3,8 @@
 //! `baselines::evaluate` (the realised joint schedule, (4.1) with (4.12) at each task's start,
 //! less (4.14)). This is what the comparative sweeps of Figs. 4.6-4.7 run per seed.
 
+use std::collections::BTreeSet;
+
 use serde::Serialize;
 use swarm::geometry::Vec2;
 
@@ -98,23 +100,11 @@ pub fn run_cbca(
     let n = robots.len();
     let knowledge = robot_knowledge(&pos, tasks, params.detection_radius_km, prior);
     let mut neighbours: Vec<Vec<RobotId>> = if prior == PriorInfo::Global {
-        (0..n)
-            .map(|i| (0..n).filter(|&j| j != i).collect())
-            .collect()
+        complete_graph(n)
     } else {
         comm_graph(&pos, params.comm_radius_km)
     };
-    let mut cbca: Vec<CbcaRobot> = robots
-        .iter()
-        .map(|r| {
-            let book = tasks
-                .iter()
-                .filter(|t| knowledge[r.id].contains(&t.id))
-                .map(|t| (t.id, t.clone()))
-                .collect();
-            CbcaRobot::new(r.clone(), n, tasks.len(), book, params.clone())
-        })
-        .collect();
+    let mut cbca = cbca_robots(robots, tasks, &knowledge, params);
     let mut stats = run(&mut cbca, &neighbours, radio, params.max_iterations);
     let mut merges = Vec::new();
     while params.merge_on_conflict && stats.converged {
@@ -143,6 +133,33 @@ pub fn run_cbca(
         stats.add(&later);
     }
     (cbca, stats, merges)
+}
+
+/// Every robot hears every other (CBCA without grouping).
+pub fn complete_graph(n: usize) -> Vec<Vec<RobotId>> {
+    (0..n)
+        .map(|i| (0..n).filter(|&j| j != i).collect())
+        .collect()
+}
+
+/// One CBCA robot per row, each with the tasks of `knowledge[i]` in its book.
+pub fn cbca_robots(
+    robots: &[Robot],
+    tasks: &[Task],
+    knowledge: &[BTreeSet<TaskId>],
+    params: &CbcaParams,
+) -> Vec<CbcaRobot> {
+    robots
+        .iter()
+        .map(|r| {
+            let book = tasks
+                .iter()
+                .filter(|t| knowledge[r.id].contains(&t.id))
+                .map(|t| (t.id, t.clone()))
+                .collect();
+            CbcaRobot::new(r.clone(), robots.len(), tasks.len(), book, params.clone())
+        })
+        .collect()
 }
 
 /// The targets claimed by more than one of `groups` under `paths`, with the groups' meeting
