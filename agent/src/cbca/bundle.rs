@@ -13,12 +13,17 @@
 //! - the minimum runs over the current winners only; ties go to the smaller id;
 //! - with `params.cap_bids` the bid is min(c_ij, the bids already in the bundle);
 //! - with `params.substitution_check` a displacement also needs E_i ∩ E_k* != ∅, the test
-//!   Algorithm 2 applies to the same situation.
+//!   Algorithm 2 applies to the same situation;
+//! - with `params.enforce_coverage` a bid that completes a coalition (its L_j-th member) or
+//!   displaces a member needs the resulting coalition to cover E_j (2.6).
 
 use std::cell::{Cell, RefCell};
 
 use super::dag;
-use super::model::{check_path, overlaps, Infeasible, Resources, Robot, RobotId, TaskBook, TaskId};
+use super::model::{
+    check_path, coverage_shortfall, overlaps, Infeasible, Resources, Robot, RobotId, TaskBook,
+    TaskId,
+};
 use super::params::CbcaParams;
 use super::score::{marginal_gain, Insertion};
 use super::winners::{outbids, Winners};
@@ -93,6 +98,13 @@ pub enum Candidate {
     },
     /// Full; the bid beats the weakest, but it carries no type the weakest carries.
     NoSubstitute { bid: f64, weakest: RobotId },
+    /// The bid would complete the coalition (or replace `displaces` in it), but the members'
+    /// resources would not cover E_j (2.6, `params.enforce_coverage`): short by `shortfall`.
+    Uncovered {
+        bid: f64,
+        displaces: Option<RobotId>,
+        shortfall: Resources,
+    },
     /// Open: h_ij = 1 with this bid, displacing `displaces` if the coalition is full.
     Open {
         bid: f64,
@@ -166,6 +178,15 @@ pub fn evaluate(
     }
     let others = winners.count(j) - usize::from(winners.is_winner(me.id, j));
     if others < task.robots_needed {
+        if others + 1 == task.robots_needed {
+            if let Some(shortfall) = uncovered(me, j, None, winners, book, peers, params) {
+                return Candidate::Uncovered {
+                    bid,
+                    displaces: None,
+                    shortfall,
+                };
+            }
+        }
         return Candidate::Open {
             bid,
             insertion,
@@ -187,11 +208,46 @@ pub fn evaluate(
             }
         }
     }
+    if let Some(shortfall) = uncovered(me, j, Some(weakest), winners, book, peers, params) {
+        return Candidate::Uncovered {
+            bid,
+            displaces: Some(weakest),
+            shortfall,
+        };
+    }
     Candidate::Open {
         bid,
         insertion,
         displaces: Some(weakest),
     }
+}
+
+/// (2.6) for the coalition robot `me` would complete on task j (replacing `displaced` if
+/// given): None when it covers E_j or `params.enforce_coverage` is off, else the shortfall per
+/// type. Members contribute their carried resources E_i' as (2.6) writes it; a member whose
+/// resources robot i has not heard yet counts as carrying nothing (i cannot vouch for it).
+fn uncovered(
+    me: &Robot,
+    j: TaskId,
+    displaced: Option<RobotId>,
+    winners: &Winners,
+    book: &TaskBook,
+    peers: &dyn Peers,
+    params: &CbcaParams,
+) -> Option<Resources> {
+    if !params.enforce_coverage {
+        return None;
+    }
+    let mut members: Vec<Resources> = winners
+        .winners_of(j)
+        .into_iter()
+        .filter(|&(m, _)| m != me.id && Some(m) != displaced)
+        .map(|(m, _)| peers.resources(m).unwrap_or_default())
+        .collect();
+    members.push(me.resources);
+    let refs: Vec<&Resources> = members.iter().collect();
+    let short = coverage_shortfall(&refs, &book[&j]);
+    short.iter().any(|s| *s > 0.0).then_some(short)
 }
 
 /// (4.6) for robot `me` taking path `p`, against the other robots' known paths.
@@ -471,5 +527,74 @@ pub(crate) mod tests {
                 weakest: 1
             }
         );
+    }
+
+    /// (2.6) enforced: T1 at (0, 0) needs E = {4, 4, 0, 0, 0, 0} from L = 2 robots (beta 0).
+    /// R1 holds T1 with {2, 2, ...} (bid 90). R2 carries {1, 1, ...} and is close (d 1, gamma 1:
+    /// bid 99 > 90): completing with R1 gives {3, 3} < {4, 4}, so h = 0 (shortfall 1 in types 1
+    /// and 2), although without the rule it would join. R3 carries {2, 2, ...} and is farther
+    /// (d 3, gamma 1: bid 97): {4, 4} covers, so it completes the coalition. With T1 full of R1
+    /// and R3, R2 (99) beats the weakest R1 (90) but R3's {2,2} + {1,1} fails again: h = 0;
+    /// R4 ({3, 3, ...}, d 2, bid 98 > 90) displaces R1 because {2,2} + {3,3} covers.
+    #[test]
+    fn coverage_rule_blocks_a_completing_or_displacing_bid_that_leaves_e_j_uncovered() {
+        let mut t1 = task(0, [0.0, 0.0], [4.0, 4.0, 0.0, 0.0, 0.0, 0.0], 2);
+        t1.beta = 0.0;
+        let book: TaskBook = [(0, t1)].into_iter().collect();
+        let mut robots = vec![
+            robot(0, [0.0, 10.0], [2.0; 6]),
+            robot(1, [0.0, 1.0], [1.0; 6]),
+            robot(2, [0.0, 3.0], [2.0; 6]),
+            robot(3, [0.0, 2.0], [3.0; 6]),
+        ];
+        for r in &mut robots {
+            r.gamma = 1.0;
+        }
+        let known = StaticPeers {
+            resources: robots.iter().map(|r| r.resources).collect(),
+            paths: vec![vec![0], vec![], vec![], vec![]],
+        };
+        let params = CbcaParams::default();
+        let mut winners = Winners::new(4, 1);
+        winners.set(0, 0, 90.0);
+        let empty = Plan::default();
+        assert_eq!(
+            evaluate(&robots[1], &empty, 0, &winners, &book, &known, &params),
+            Candidate::Uncovered {
+                bid: 99.0,
+                displaces: None,
+                shortfall: [1.0, 1.0, 0.0, 0.0, 0.0, 0.0]
+            }
+        );
+        let lax = CbcaParams {
+            enforce_coverage: false,
+            ..params.clone()
+        };
+        assert!(matches!(
+            evaluate(&robots[1], &empty, 0, &winners, &book, &known, &lax),
+            Candidate::Open {
+                displaces: None,
+                ..
+            }
+        ));
+        let mut plan = Plan::default();
+        let added = build_bundle(&robots[2], &mut plan, &mut winners, &book, &known, &params);
+        assert_eq!(added.len(), 1);
+        assert_eq!((added[0].task, added[0].bid), (0, 97.0));
+        assert_eq!(
+            evaluate(&robots[1], &empty, 0, &winners, &book, &known, &params),
+            Candidate::Uncovered {
+                bid: 99.0,
+                displaces: Some(0),
+                shortfall: [1.0, 1.0, 0.0, 0.0, 0.0, 0.0]
+            }
+        );
+        assert!(matches!(
+            evaluate(&robots[3], &empty, 0, &winners, &book, &known, &params),
+            Candidate::Open {
+                displaces: Some(0),
+                ..
+            }
+        ));
     }
 }

@@ -3,15 +3,18 @@
 //! `baselines::evaluate` (the realised joint schedule, (4.1) with (4.12) at each task's start,
 //! less (4.14)). This is what the comparative sweeps of Figs. 4.6-4.7 run per seed.
 
+use std::collections::BTreeSet;
+
 use serde::Serialize;
 use swarm::geometry::Vec2;
 
+use super::baselines::eta;
 use super::baselines::{self, Allocation, Evaluation};
 use super::consensus::CbcaRobot;
-use super::grouping::{comm_graph, robot_knowledge, PriorInfo};
-use super::model::{Robot, RobotId, Task};
+use super::grouping::{comm_graph, components, robot_knowledge, PriorInfo};
+use super::model::{Robot, RobotId, Task, TaskBook, TaskId};
 use super::params::CbcaParams;
-use super::rounds::{run, Radio, RunStats};
+use super::rounds::{run, run_from, Radio, RunStats};
 
 /// The methods of the comparison.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Serialize)]
@@ -59,28 +62,94 @@ pub struct MethodRun {
     /// CBCA only: rounds, broadcasts, bytes, copies, and whether every detector converged
     /// before the cap (a run that did not is *censored*: reported, not dropped).
     pub consensus: Option<RunStats>,
+    /// Grouped CBCA only: the conflict merges, in order (empty for the others).
+    pub merges: Vec<ConflictMerge>,
+}
+
+/// One conflict merge of a grouped run: after the groups converged, targets claimed by robots
+/// of more than one temporary group. Those robots are all heading for the target, so the
+/// groups meet there and merge (sec. 4.2.5 case 2.2): consensus runs again with radio links
+/// between the claimers of each shared target.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ConflictMerge {
+    /// Each shared target with the groups (their members) that claim it.
+    pub shared: Vec<(TaskId, Vec<Vec<RobotId>>)>,
+    /// Every robot's path before the merge.
+    pub paths_before: Vec<Vec<TaskId>>,
+    /// When the groups meet: the earliest time at which members of two claiming groups have
+    /// both reached a shared target (own travel and holds along the paths before the merge).
+    pub meet_time: f64,
 }
 
 /// CBCA on `robots` / `tasks`: grouped (radio graph of `params.comm_radius_km`, knowledge
-/// `prior`) or, with `prior = PriorInfo::Global`, on the complete graph.
+/// `prior`) or, with `prior = PriorInfo::Global`, on the complete graph. With
+/// `params.merge_on_conflict` a grouped run merges the groups that claim a common target
+/// ([`ConflictMerge`]) and runs consensus again until no target is claimed by two groups: the
+/// thesis's groups move and merge when they meet, while the round runs do not move, and
+/// without the merge groups that never talk share targets (over-full coalitions, and paths
+/// that deadlock when scored together since (4.6) is checked inside a group only). The
+/// round counts of the phases add up in the returned stats.
 pub fn run_cbca(
     robots: &[Robot],
     tasks: &[Task],
     prior: PriorInfo,
     radio: &Radio,
     params: &CbcaParams,
-) -> (Vec<CbcaRobot>, RunStats) {
+) -> (Vec<CbcaRobot>, RunStats, Vec<ConflictMerge>) {
     let pos: Vec<Vec2> = robots.iter().map(|r| r.position).collect();
     let n = robots.len();
     let knowledge = robot_knowledge(&pos, tasks, params.detection_radius_km, prior);
-    let neighbours: Vec<Vec<RobotId>> = if prior == PriorInfo::Global {
-        (0..n)
-            .map(|i| (0..n).filter(|&j| j != i).collect())
-            .collect()
+    let mut neighbours: Vec<Vec<RobotId>> = if prior == PriorInfo::Global {
+        complete_graph(n)
     } else {
         comm_graph(&pos, params.comm_radius_km)
     };
-    let mut cbca: Vec<CbcaRobot> = robots
+    let mut cbca = cbca_robots(robots, tasks, &knowledge, params);
+    let mut stats = run(&mut cbca, &neighbours, radio, params.max_iterations);
+    let mut merges = Vec::new();
+    while params.merge_on_conflict && stats.converged {
+        let paths: Vec<Vec<TaskId>> = cbca.iter().map(|r| r.plan().path.clone()).collect();
+        let Some(merge) = conflict(robots, tasks, &paths, &components(&neighbours)) else {
+            break;
+        };
+        for (j, _) in &merge.shared {
+            let claimers: Vec<RobotId> = (0..n).filter(|&i| paths[i].contains(j)).collect();
+            for &a in &claimers {
+                for &b in &claimers {
+                    if a != b && !neighbours[a].contains(&b) {
+                        neighbours[a].push(b);
+                    }
+                }
+            }
+        }
+        merges.push(merge);
+        let later = run_from(
+            &mut cbca,
+            &neighbours,
+            radio,
+            stats.rounds,
+            params.max_iterations,
+        );
+        stats.add(&later);
+    }
+    (cbca, stats, merges)
+}
+
+/// Every robot hears every other (CBCA without grouping).
+pub fn complete_graph(n: usize) -> Vec<Vec<RobotId>> {
+    (0..n)
+        .map(|i| (0..n).filter(|&j| j != i).collect())
+        .collect()
+}
+
+/// One CBCA robot per row, each with the tasks of `knowledge[i]` in its book.
+pub fn cbca_robots(
+    robots: &[Robot],
+    tasks: &[Task],
+    knowledge: &[BTreeSet<TaskId>],
+    params: &CbcaParams,
+) -> Vec<CbcaRobot> {
+    robots
         .iter()
         .map(|r| {
             let book = tasks
@@ -88,11 +157,51 @@ pub fn run_cbca(
                 .filter(|t| knowledge[r.id].contains(&t.id))
                 .map(|t| (t.id, t.clone()))
                 .collect();
-            CbcaRobot::new(r.clone(), n, tasks.len(), book, params.clone())
+            CbcaRobot::new(r.clone(), robots.len(), tasks.len(), book, params.clone())
         })
-        .collect();
-    let stats = run(&mut cbca, &neighbours, radio, params.max_iterations);
-    (cbca, stats)
+        .collect()
+}
+
+/// The targets claimed by more than one of `groups` under `paths`, with the groups' meeting
+/// time; None when every target's claimers are in one group.
+pub fn conflict(
+    robots: &[Robot],
+    tasks: &[Task],
+    paths: &[Vec<TaskId>],
+    groups: &[Vec<RobotId>],
+) -> Option<ConflictMerge> {
+    let book: TaskBook = tasks.iter().map(|t| (t.id, t.clone())).collect();
+    let mut shared = Vec::new();
+    let mut meet_time = f64::INFINITY;
+    for t in tasks {
+        let claiming: Vec<&Vec<RobotId>> = groups
+            .iter()
+            .filter(|g| g.iter().any(|&i| paths[i].contains(&t.id)))
+            .collect();
+        if claiming.len() < 2 {
+            continue;
+        }
+        // Each group's first arrival at the target; the groups meet at the second earliest.
+        let mut firsts: Vec<f64> = claiming
+            .iter()
+            .map(|g| {
+                g.iter()
+                    .filter_map(|&i| {
+                        let k = paths[i].iter().position(|&j| j == t.id)?;
+                        Some(eta(&robots[i], &paths[i][..k], t.id, &book))
+                    })
+                    .fold(f64::INFINITY, f64::min)
+            })
+            .collect();
+        firsts.sort_by(f64::total_cmp);
+        meet_time = meet_time.min(firsts[1]);
+        shared.push((t.id, claiming.into_iter().cloned().collect()));
+    }
+    (!shared.is_empty()).then(|| ConflictMerge {
+        shared,
+        paths_before: paths.to_vec(),
+        meet_time,
+    })
 }
 
 /// Runs `method` on the instance and scores it.
@@ -104,6 +213,7 @@ pub fn run_method(
     params: &CbcaParams,
 ) -> MethodRun {
     let book = tasks.iter().map(|t| (t.id, t.clone())).collect();
+    let mut merges = Vec::new();
     let (allocation, consensus) = match method {
         Method::CbcaGrouped | Method::CbcaGlobal => {
             let prior = if method == Method::CbcaGrouped {
@@ -111,7 +221,8 @@ pub fn run_method(
             } else {
                 PriorInfo::Global
             };
-            let (cbca, stats) = run_cbca(robots, tasks, prior, radio, params);
+            let (cbca, stats, m) = run_cbca(robots, tasks, prior, radio, params);
+            merges = m;
             let alloc = Allocation {
                 paths: cbca.iter().map(|r| r.plan().path.clone()).collect(),
                 messages: stats.broadcasts,
@@ -131,6 +242,7 @@ pub fn run_method(
         allocation,
         evaluation,
         consensus,
+        merges,
     }
 }
 
@@ -184,6 +296,53 @@ pub fn utility_curve(
     )
 }
 
+/// Figs. 4.5's reading with re-planning: robot i's utility against time when the plan changes
+/// at the conflict merges. Before the first merge's `meet_time` the curve is that of the paths
+/// before it, between merges that of the next paths, after the last merge that of `final_paths`
+/// (each by [`utility_curve`]), so a robot whose path changes at a merge jumps there. The round
+/// runs do not move: every plan's schedule is counted from the start positions. None if some
+/// plan deadlocks.
+pub fn replanned_utility_curve(
+    robots: &[Robot],
+    tasks: &[Task],
+    merges: &[ConflictMerge],
+    final_paths: &[Vec<TaskId>],
+    params: &CbcaParams,
+    times: &[f64],
+) -> Option<Vec<Vec<f64>>> {
+    let mut phases: Vec<(f64, Vec<Vec<f64>>)> = Vec::new();
+    let mut from = f64::NEG_INFINITY;
+    for m in merges {
+        phases.push((
+            from,
+            utility_curve(robots, tasks, &m.paths_before, params, times)?,
+        ));
+        from = from.max(m.meet_time);
+    }
+    phases.push((
+        from,
+        utility_curve(robots, tasks, final_paths, params, times)?,
+    ));
+    Some(
+        (0..robots.len())
+            .map(|i| {
+                times
+                    .iter()
+                    .enumerate()
+                    .map(|(k, &t)| {
+                        let (_, c) = phases
+                            .iter()
+                            .rev()
+                            .find(|(start, _)| *start <= t)
+                            .expect("the first phase starts at -inf");
+                        c[i][k]
+                    })
+                    .collect()
+            })
+            .collect(),
+    )
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -204,6 +363,37 @@ mod tests {
                 assert!(s.converged, "{m:?}: {s:?}");
             }
         }
+    }
+
+    #[test]
+    fn replanned_curve_switches_plans_at_the_meeting() {
+        // The by-hand case below: before the merge at t = 2 only R1 is on T1 (incomplete: no
+        // reward, cost 1.5 -> -1.5); after it both are (98.5 at 0 decaying to 12.0335 at 4),
+        // so R1's curve is -1.5, -1.5, then 35.2879 at t = 2 (a jump), 12.0335 at t = 4.
+        let tasks = vec![task(0, [0.0, 3.0], [1.0; 6], 2)];
+        let robots = vec![
+            robot(0, [0.0, 0.0], [1.0; 6]),
+            robot(1, [4.0, 3.0], [1.0; 6]),
+        ];
+        let merge = ConflictMerge {
+            shared: vec![],
+            paths_before: vec![vec![0], vec![]],
+            meet_time: 2.0,
+        };
+        let c = replanned_utility_curve(
+            &robots,
+            &tasks,
+            &[merge],
+            &[vec![0], vec![0]],
+            &CbcaParams::default(),
+            &[0.0, 1.0, 2.0, 4.0],
+        )
+        .unwrap();
+        let want = [-1.5, -1.5, 35.2879, 12.0335];
+        for (got, w) in c[0].iter().zip(want) {
+            assert!((got - w).abs() < 1e-4, "{got} vs {w}");
+        }
+        assert_eq!(c[1][..2], [0.0, 0.0]);
     }
 
     #[test]
@@ -230,5 +420,67 @@ mod tests {
         }
         // R2 pays 2.0 instead of 1.5.
         assert!((c[1][3] - (100.0 * (-2.0f64).exp() - 2.0)).abs() < 1e-9);
+    }
+}
+
+#[cfg(test)]
+mod deadlock_across_groups {
+    use super::*;
+    use crate::cbca::grouping::temporary_groups;
+    use crate::cbca::instance::{random_instance, InstanceParams};
+
+    /// Seed 13 of the Fig. 4.6 sweep at n_r = 40, n_e = 30 (traced, docs/hunting.md 14.3):
+    /// with the groups fixed at the start, R24 and R30 (one group) go T20 -> T5 -> T16 and R39
+    /// (another group, out of radio range) goes T16 -> T20; each group's task graph is a DAG,
+    /// their union has the cycle T5 -> T16 -> T20 -> T5, and joint arrival deadlocks. Merging
+    /// the groups that claim a common target removes it.
+    #[test]
+    fn groups_that_never_talk_deadlock_and_the_conflict_merge_resolves_it() {
+        let fixed = CbcaParams {
+            merge_on_conflict: false,
+            ..CbcaParams::default()
+        };
+        let inst = random_instance(40, 30, 13, &InstanceParams::default(), &fixed);
+        let pos: Vec<Vec2> = inst.robots.iter().map(|r| r.position).collect();
+        let groups = temporary_groups(&pos, fixed.comm_radius_km);
+        let group_of = |i: usize| groups.iter().position(|g| g.contains(&i));
+        let r = run_method(
+            Method::CbcaGrouped,
+            &inst.robots,
+            &inst.tasks,
+            &Radio::perfect(),
+            &fixed,
+        );
+        assert!(r.evaluation.is_none(), "the fixed groups deadlock");
+        let paths = &r.allocation.paths;
+        assert!(paths[23].windows(2).any(|w| w == [19, 4]));
+        assert!(paths[23].windows(2).any(|w| w == [4, 15]));
+        assert!(paths[38].windows(2).any(|w| w == [15, 19]));
+        assert_ne!(group_of(23), group_of(38));
+        assert!(conflict(&inst.robots, &inst.tasks, paths, &groups).is_some());
+
+        let p = CbcaParams::default();
+        assert!(p.merge_on_conflict);
+        let (cbca, stats, merges) = run_cbca(
+            &inst.robots,
+            &inst.tasks,
+            PriorInfo::DetectionPlusNearest,
+            &Radio::perfect(),
+            &p,
+        );
+        assert!(stats.converged && !merges.is_empty());
+        let r = run_method(
+            Method::CbcaGrouped,
+            &inst.robots,
+            &inst.tasks,
+            &Radio::perfect(),
+            &p,
+        );
+        assert!(r.evaluation.is_some(), "no deadlock after the merges");
+        for (j, ms) in r.allocation.coalitions() {
+            assert!(ms.len() <= inst.tasks[j].robots_needed);
+        }
+        let final_paths: Vec<Vec<TaskId>> = cbca.iter().map(|r| r.plan().path.clone()).collect();
+        assert_eq!(final_paths, r.allocation.paths);
     }
 }

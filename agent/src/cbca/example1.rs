@@ -43,22 +43,10 @@ fn setup(robots: &[Robot], tasks: &[Task], setup: Setup) -> (Vec<CbcaRobot>, Vec
         ),
         Setup::Global => (
             robot_knowledge(&pos, tasks, 0.0, PriorInfo::Global),
-            (0..n)
-                .map(|i| (0..n).filter(|&j| j != i).collect())
-                .collect(),
+            super::compare::complete_graph(n),
         ),
     };
-    let cbca = robots
-        .iter()
-        .map(|r| {
-            let book = tasks
-                .iter()
-                .filter(|t| knowledge[r.id].contains(&t.id))
-                .map(|t| (t.id, t.clone()))
-                .collect();
-            CbcaRobot::new(r.clone(), n, tasks.len(), book, s.params.clone())
-        })
-        .collect();
+    let cbca = super::compare::cbca_robots(robots, tasks, &knowledge, &s.params);
     (cbca, neighbours)
 }
 

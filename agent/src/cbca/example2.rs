@@ -50,22 +50,10 @@ fn cbca(
         ),
         None => (
             robot_knowledge(&pos, tasks, 0.0, PriorInfo::Global),
-            (0..n)
-                .map(|i| (0..n).filter(|&j| j != i).collect())
-                .collect(),
+            super::compare::complete_graph(n),
         ),
     };
-    let mut cb: Vec<CbcaRobot> = robots
-        .iter()
-        .map(|r| {
-            let book = tasks
-                .iter()
-                .filter(|t| knowledge[r.id].contains(&t.id))
-                .map(|t| (t.id, t.clone()))
-                .collect();
-            CbcaRobot::new(r.clone(), n, tasks.len(), book, params.clone())
-        })
-        .collect();
+    let mut cb: Vec<CbcaRobot> = super::compare::cbca_robots(robots, tasks, &knowledge, &params);
     let stats = run(
         &mut cb,
         &neighbours,

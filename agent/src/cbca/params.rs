@@ -62,6 +62,18 @@ pub struct CbcaParams {
     /// newcomer carries a type the displaced robot carries). The thesis prints it in
     /// Algorithm 2; we apply it in both places so that both judge a displacement alike.
     pub substitution_check: bool,
+    /// Coalition resources (2.6) enforced in Algorithm 1 (bundle.rs): a bid that would complete
+    /// a coalition (its L_j-th member) or displace its weakest member is open only if the
+    /// members' carried resources E_i' then sum to E_j in every type. Not-completing bids stay
+    /// open (a partial coalition may still be completed by a robot that covers the rest). The
+    /// thesis states (2.6) but not how a robot would enforce it (spec 12 item 8); on by default.
+    pub enforce_coverage: bool,
+    /// Round runs (compare.rs) only: after a grouped run converges, temporary groups that
+    /// claim a common target merge (they would meet at it) and consensus runs again, until no
+    /// target is claimed by two groups. The thesis's groups move and merge (sec. 4.2.5); the
+    /// round runs do not move, so this stands in for the meeting. On by default; off gives the
+    /// groups-fixed-at-the-start runs (which can deadlock across groups).
+    pub merge_on_conflict: bool,
     /// Convergence DETECTOR (consensus.rs): a robot declares convergence when its own state has
     /// not changed for this many of its iterations AND the last message from each current
     /// neighbour carries the same state digest and arrived after its last change. With every
@@ -122,6 +134,8 @@ impl Default for CbcaParams {
             detection_radius_km: 1.2,
             cap_bids: true,
             substitution_check: true,
+            enforce_coverage: true,
+            merge_on_conflict: true,
             quiet_iterations: 3,
             max_iterations: 1000,
             loyalty: LoyaltyParams::default(),

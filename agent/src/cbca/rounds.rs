@@ -48,6 +48,19 @@ pub fn message_bytes(m: &CbcaMessage) -> usize {
         .len()
 }
 
+impl RunStats {
+    /// Adds a later phase's counts (the conflict merges of compare.rs run consensus again):
+    /// rounds, broadcasts, bytes and copies add up; converged only if both converged.
+    pub fn add(&mut self, later: &RunStats) {
+        self.rounds += later.rounds;
+        self.converged = self.converged && later.converged;
+        self.broadcasts += later.broadcasts;
+        self.bytes += later.bytes;
+        self.delivered += later.delivered;
+        self.dropped += later.dropped;
+    }
+}
+
 /// Runs consensus on `robots` over the graph `neighbours` (indices into `robots`) until every
 /// robot's detector converges, for at most `max_rounds` rounds.
 pub fn run(
@@ -56,15 +69,28 @@ pub fn run(
     radio: &Radio,
     max_rounds: u64,
 ) -> RunStats {
-    let mut rng = ChaCha8Rng::seed_from_u64(radio.seed);
+    run_from(robots, neighbours, radio, 0, max_rounds)
+}
+
+/// [`run`] continuing after `rounds_before` earlier rounds (the time stamps go on from there,
+/// so a later phase's messages are newer than everything the robots hold); `stats.rounds`
+/// counts this call's rounds only.
+pub fn run_from(
+    robots: &mut [CbcaRobot],
+    neighbours: &[Vec<RobotId>],
+    radio: &Radio,
+    rounds_before: u64,
+    max_rounds: u64,
+) -> RunStats {
+    let mut rng = ChaCha8Rng::seed_from_u64(radio.seed.wrapping_add(rounds_before));
     let mut stats = RunStats::default();
     let mut queue: Vec<(u64, RobotId, std::rc::Rc<CbcaMessage>)> = Vec::new();
-    for round in 1..=max_rounds {
+    for round in rounds_before + 1..=rounds_before + max_rounds {
         let now = round as f64;
         for r in robots.iter_mut() {
             r.iterate(now);
         }
-        stats.rounds = round;
+        stats.rounds = round - rounds_before;
         let ids =
             |i: usize| -> Vec<RobotId> { neighbours[i].iter().map(|&n| robots[n].id()).collect() };
         if robots.iter().enumerate().all(|(i, r)| r.converged(&ids(i))) {
