@@ -53,7 +53,7 @@ fn cbca(
             super::compare::complete_graph(n),
         ),
     };
-    let mut cb: Vec<CbcaRobot> = super::compare::cbca_robots(robots, tasks, &knowledge, &params);
+    let mut cb: Vec<CbcaRobot> = super::compare::cbca_robots(robots, tasks, &knowledge, params);
     let stats = run(
         &mut cb,
         &neighbours,
