@@ -359,12 +359,7 @@ pub fn air_inbox<M: DeserializeOwned>(
     inbox: &mut Vec<Received<M>>,
 ) -> u32 {
     let h = *sample.user_header();
-    if zero_copy && live.load(Ordering::Acquire) < held_limit {
-        let owner: Arc<dyn AsBytes> = Arc::new(HeldSample::new(sample, live));
-        decode_list(&h, robot, Some(&owner), owner.as_bytes(), inbox)
-    } else {
-        decode_list(&h, robot, None, sample.payload(), inbox)
-    }
+    inbox_of(sample, &h, robot, zero_copy, live, held_limit, inbox)
 }
 
 /// An air read from the world's ring ([`crate::air_ring`]) while zero-copy views hold it,
@@ -398,15 +393,54 @@ pub fn ring_inbox<M: DeserializeOwned>(
     inbox: &mut Vec<Received<M>>,
 ) -> u32 {
     let h = air.header;
-    if zero_copy && live.load(Ordering::Acquire) < held_limit {
+    inbox_of(air, &h, robot, zero_copy, live, held_limit, inbox)
+}
+
+/// An air as either transport hands it to an agent: its bytes, and how views keep it alive.
+trait HeldAir: Sized {
+    fn air_bytes(&self) -> &[u8];
+    /// The air as the owner of zero-copy views, counted in `live` while any view lives.
+    fn hold_for_views(self, live: &Arc<AtomicUsize>) -> Arc<dyn AsBytes>;
+}
+
+impl HeldAir for AirSample {
+    fn air_bytes(&self) -> &[u8] {
+        self.payload()
+    }
+    fn hold_for_views(self, live: &Arc<AtomicUsize>) -> Arc<dyn AsBytes> {
+        Arc::new(HeldSample::new(self, live))
+    }
+}
+
+impl HeldAir for AirRead {
+    fn air_bytes(&self) -> &[u8] {
+        self.bytes()
+    }
+    fn hold_for_views(self, live: &Arc<AtomicUsize>) -> Arc<dyn AsBytes> {
         live.fetch_add(1, Ordering::AcqRel);
-        let owner: Arc<dyn AsBytes> = Arc::new(HeldRead {
-            read: air,
+        Arc::new(HeldRead {
+            read: self,
             live: live.clone(),
-        });
-        decode_list(&h, robot, Some(&owner), owner.as_bytes(), inbox)
+        })
+    }
+}
+
+/// Robot `robot`'s inbox from `air` (header `h`): decoded in place as views when `zero_copy`
+/// and fewer than `held_limit` airs are held by views (`live`), else as copies.
+fn inbox_of<A: HeldAir, M: DeserializeOwned>(
+    air: A,
+    h: &AirHeader,
+    robot: u32,
+    zero_copy: bool,
+    live: &Arc<AtomicUsize>,
+    held_limit: usize,
+    inbox: &mut Vec<Received<M>>,
+) -> u32 {
+    if zero_copy && live.load(Ordering::Acquire) < held_limit {
+        let owner = air.hold_for_views(live);
+        decode_list(h, robot, Some(&owner), owner.as_bytes(), inbox)
     } else {
-        decode_list(&h, robot, None, air.bytes(), inbox)
+        decode_list(h, robot, None, air.air_bytes(), inbox)
     }
 }
 

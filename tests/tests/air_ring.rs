@@ -131,7 +131,7 @@ fn agents_killed_while_holding_the_air_never_exhaust_the_ring() {
         "the radio works after {} kills: {:?}",
         kills.len(),
         late.iter()
-            .map(|r| (r.tick, r.alive.clone(), r.radio.clone()))
+            .map(|r| (r.tick, r.alive.clone(), r.radio))
             .collect::<Vec<_>>()
     );
     let m = &s["messages"];
