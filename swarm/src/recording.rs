@@ -233,8 +233,20 @@ impl<W: Write> RecordingWriter<W> {
 /// Reads a whole recording.
 pub fn read_recording<R: Read>(r: R) -> std::io::Result<(RecordingHeader, Vec<TickRecord>)> {
     let mut inp = BufReader::new(r);
+    let header = read_finished_header(&mut inp)?;
+    let mut ticks = Vec::new();
+    let mut reader = TickReader::new(&header);
+    while let Some(t) = reader.next(&mut inp)? {
+        ticks.push(t);
+    }
+    Ok((header, ticks))
+}
+
+/// Reads the header of a finished recording, refusing versions this build cannot read; the
+/// ticks follow, one at a time, from a [`TickReader`].
+pub fn read_finished_header<R: Read>(r: &mut R) -> std::io::Result<RecordingHeader> {
     let header: RecordingHeader =
-        bincode::serde::decode_from_std_read(&mut inp, cfg()).map_err(std::io::Error::other)?;
+        bincode::serde::decode_from_std_read(r, cfg()).map_err(std::io::Error::other)?;
     if header.version < RECORDING_VERSION_OLDEST {
         return Err(std::io::Error::other(format!(
             "recording version {} is older than {RECORDING_VERSION_OLDEST} (the link design's radio counters): \
@@ -242,12 +254,7 @@ pub fn read_recording<R: Read>(r: R) -> std::io::Result<(RecordingHeader, Vec<Ti
             header.version
         )));
     }
-    let mut ticks = Vec::new();
-    let mut reader = TickReader::new(&header);
-    while let Some(t) = reader.next(&mut inp)? {
-        ticks.push(t);
-    }
-    Ok((header, ticks))
+    Ok(header)
 }
 
 /// Reads the header of a recording (a live run's file, still growing).

@@ -4,14 +4,22 @@
 //! The follower reads the file on its own thread and never talks to the world: the world only
 //! flushes each tick (`world --live`), so a page that is slow, or gone, cannot slow the run.
 //! Every stream request reads the shared list from its own position; none waits for another.
+//!
+//! The frames' JSON is not held in memory: each is appended to an unnamed spill file (created in
+//! the temp dir and unlinked at once, so nothing is left behind even on SIGKILL), and the feed
+//! keeps only each frame's (offset, length). A 500-robot, 3,000-tick run's ~150 MB of JSON
+//! costs the server 48 KB of index; the kernel's page cache serves the chunks the page asks
+//! for again.
 
 use super::frame::Framer;
 use super::meta::{Meta, MetaError};
+use std::fs::File;
 use std::io::Read;
+use std::os::unix::fs::FileExt;
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, Condvar, Mutex};
 use std::time::Duration;
-use swarm::recording::{read_header, RecordingHeader, TickReader};
+use swarm::recording::{read_finished_header, read_header, RecordingHeader, TickReader};
 #[cfg(test)]
 use swarm::scenario::Scenario;
 
@@ -25,10 +33,63 @@ pub const CHUNK_BYTES: usize = 512 * 1024;
 /// A chunk's length in ticks stays within these bounds, whatever the frames' size.
 pub const CHUNK_TICKS: std::ops::RangeInclusive<usize> = 10..=500;
 
+/// Most frames one [`Feed::since`] hands a stream (it asks again for the rest).
+const SINCE_MAX: usize = 64;
+
+/// Where the frames' JSON lives: an unlinked file, and each frame's (offset, length) in it.
+struct Spill {
+    file: File,
+    index: Vec<(u64, u32)>,
+    end: u64,
+}
+
+impl Spill {
+    fn new() -> std::io::Result<Spill> {
+        static N: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+        let n = N.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        let path = std::env::temp_dir().join(format!("swarm-view-{}-{n}.json", std::process::id()));
+        let file = std::fs::OpenOptions::new()
+            .read(true)
+            .write(true)
+            .create_new(true)
+            .open(&path)?;
+        // Unlinked at once: the open file lives until the feed is dropped, then it is gone.
+        std::fs::remove_file(&path)?;
+        Ok(Spill {
+            file,
+            index: Vec::new(),
+            end: 0,
+        })
+    }
+
+    fn push(&mut self, f: &str) -> std::io::Result<()> {
+        self.file.write_all_at(f.as_bytes(), self.end)?;
+        self.index.push((self.end, f.len() as u32));
+        self.end += f.len() as u64;
+        Ok(())
+    }
+
+    fn get(&self, i: usize) -> String {
+        let (at, len) = self.index[i];
+        let mut b = vec![0u8; len as usize];
+        match self.file.read_exact_at(&mut b, at) {
+            // Written from a String by push: UTF-8.
+            Ok(()) => String::from_utf8(b).unwrap_or_default(),
+            Err(_) => String::new(),
+        }
+    }
+
+    fn range(&self, from: usize, to: usize) -> Vec<String> {
+        let to = to.min(self.index.len());
+        (from.min(to)..to).map(|i| self.get(i)).collect()
+    }
+}
+
 #[derive(Default)]
 struct State {
     meta: Option<String>,
-    frames: Vec<String>,
+    /// None until the first frame (or when the temp dir cannot take the spill file: `error`).
+    frames: Option<Spill>,
     /// No more frames will come (the recording is complete, or the run ended).
     ended: bool,
     /// Ticks per chunk given by the user (`view --chunk`), instead of [`CHUNK_BYTES`]'.
@@ -56,17 +117,23 @@ impl Feed {
         self.lock().error.clone()
     }
 
-    /// Frames from index `from` on (a copy), and whether the feed has ended.
+    /// Up to [`SINCE_MAX`] frames from index `from` on, and whether the feed has ended.
     pub fn since(&self, from: usize) -> (Vec<String>, bool) {
         let s = self.lock();
-        (s.frames.get(from..).unwrap_or(&[]).to_vec(), s.ended)
+        let frames = s.frames.as_ref().map_or(Vec::new(), |sp| {
+            sp.range(from, from.saturating_add(SINCE_MAX))
+        });
+        // Ended only counts once every frame has been handed out.
+        let ended = s.ended && from + frames.len() >= s.count();
+        (frames, ended)
     }
 
-    /// Frames `from..to` (clipped to those there are; a copy).
+    /// Frames `from..to` (clipped to those there are).
     pub fn range(&self, from: usize, to: usize) -> Vec<String> {
         let s = self.lock();
-        let to = to.min(s.frames.len());
-        s.frames.get(from.min(to)..to).unwrap_or(&[]).to_vec()
+        s.frames
+            .as_ref()
+            .map_or(Vec::new(), |sp| sp.range(from, to))
     }
 
     /// Chunks of `ticks` ticks from now on (`view --chunk`; 0: from [`CHUNK_BYTES`]).
@@ -80,7 +147,7 @@ impl Feed {
     }
 
     pub fn len(&self) -> usize {
-        self.lock().frames.len()
+        self.lock().count()
     }
 
     /// Ticks per chunk: [`CHUNK_BYTES`] over the first frame's size (the bounds' smallest
@@ -90,7 +157,8 @@ impl Feed {
         if let Some(c) = s.chunk {
             return c.max(1);
         }
-        let per = s.frames.first().map_or(usize::MAX, |f| f.len().max(1));
+        let first = s.frames.as_ref().and_then(|sp| sp.index.first());
+        let per = first.map_or(usize::MAX, |&(_, len)| (len as usize).max(1));
         (CHUNK_BYTES / per).clamp(*CHUNK_TICKS.start(), *CHUNK_TICKS.end())
     }
 
@@ -100,7 +168,7 @@ impl Feed {
         let _ = self
             .inner
             .1
-            .wait_timeout_while(s, timeout, |s| s.frames.len() <= seen && !s.ended);
+            .wait_timeout_while(s, timeout, |s| s.count() <= seen && !s.ended);
     }
 
     fn set_meta(&self, m: String) {
@@ -109,7 +177,20 @@ impl Feed {
     }
 
     fn push(&self, f: String) {
-        self.lock().frames.push(f);
+        let mut s = self.lock();
+        if s.error.is_some() {
+            return;
+        }
+        if s.frames.is_none() {
+            match Spill::new() {
+                Ok(sp) => s.frames = Some(sp),
+                Err(e) => s.set_error(format!("the viewer's spill file: {e}")),
+            }
+        }
+        if let Some(Err(e)) = s.frames.as_mut().map(|sp| sp.push(&f)) {
+            s.set_error(format!("the viewer's spill file: {e}"));
+        }
+        drop(s);
         self.inner.1.notify_all();
     }
 
@@ -120,10 +201,19 @@ impl Feed {
     }
 
     fn fail(&self, e: String) {
-        let mut s = self.lock();
-        s.error = Some(e);
-        s.ended = true;
+        self.lock().set_error(e);
         self.inner.1.notify_all();
+    }
+}
+
+impl State {
+    fn count(&self) -> usize {
+        self.frames.as_ref().map_or(0, |sp| sp.index.len())
+    }
+
+    fn set_error(&mut self, e: String) {
+        self.error = Some(e);
+        self.ended = true;
     }
 }
 
@@ -146,19 +236,25 @@ pub fn finished(path: &Path, run: &str) -> Result<Feed, FeedError> {
         source,
     };
     let f = std::fs::File::open(path).map_err(read)?;
-    let (header, ticks) = swarm::recording::read_recording(f).map_err(read)?;
+    let mut inp = std::io::BufReader::new(f);
+    let header = read_finished_header(&mut inp).map_err(read)?;
     let meta = Meta::of(&header, run, false).map_err(|source| FeedError::Meta {
         path: path.to_path_buf(),
         source,
     })?;
     let feed = Feed::default();
     feed.set_meta(serde_json::to_string(&meta).expect("meta JSON"));
+    // One tick at a time: neither the records nor their JSON are held.
     let mut framer = Framer::default();
-    for t in &ticks {
-        feed.push(framer.json(t));
+    let mut reader = TickReader::new(&header);
+    while let Some(t) = reader.next(&mut inp).map_err(read)? {
+        feed.push(framer.json(&t));
     }
     feed.end();
-    Ok(feed)
+    match feed.error() {
+        Some(e) => Err(read(std::io::Error::other(e))),
+        None => Ok(feed),
+    }
 }
 
 /// Follows a live run's recording at `path` (it may not exist yet) on a thread of its own,
@@ -238,6 +334,35 @@ mod tests {
     use super::*;
     use std::io::Write;
     use swarm::recording::{RecordingWriter, TickRecord, RECORDING_VERSION_LAYER};
+
+    #[test]
+    fn frames_live_in_an_unlinked_spill_file_and_a_stream_gets_them_in_pieces() {
+        let feed = Feed::default();
+        let frames: Vec<String> = (0..100).map(|k| format!("{{\"tick\":{k}}}")).collect();
+        for f in &frames {
+            feed.push(f.clone());
+        }
+        // Nothing of the spill file is left in the temp dir while it is in use.
+        let me = format!("swarm-view-{}-", std::process::id());
+        let left = std::fs::read_dir(std::env::temp_dir())
+            .unwrap()
+            .filter_map(|e| e.ok())
+            .filter(|e| e.file_name().to_string_lossy().starts_with(&me))
+            .count();
+        assert_eq!(left, 0);
+        assert_eq!(feed.len(), 100);
+        assert_eq!(feed.range(40, 43), frames[40..43].to_vec());
+        assert_eq!(feed.range(98, 500), frames[98..].to_vec());
+        assert!(feed.range(120, 130).is_empty());
+        feed.end();
+        // A stream from 0 gets SINCE_MAX frames, then the rest with the end.
+        let (a, ended) = feed.since(0);
+        assert_eq!((a.len(), ended), (SINCE_MAX, false));
+        let (b, ended) = feed.since(SINCE_MAX);
+        assert_eq!((b.len(), ended), (100 - SINCE_MAX, true));
+        assert_eq!([a, b].concat(), frames);
+        assert_eq!(feed.since(100), (vec![], true));
+    }
 
     #[test]
     fn a_growing_recording_is_followed_across_pieces_cut_inside_the_header_and_records() {
