@@ -235,25 +235,6 @@ pub fn write_svg(world: &World, path: &Path) -> Result<(), String> {
                 .map_err(e)?;
         }
     }
-    // The mission's layer, in pixels of the chart's area.
-    let to_px = (SIZE as f64 - 20.0) / w;
-    for mark in world.mission.layer() {
-        let (at, pts) = match &mark {
-            Mark::Disc { at, .. }
-            | Mark::Ring { at, .. }
-            | Mark::Circle { at, .. }
-            | Mark::Triangle { at, .. } => (*at, vec![]),
-            Mark::Path { points, .. } => {
-                (points.first().copied().unwrap_or([0.0; 2]), points.clone())
-            }
-        };
-        let c = chart.backend_coord(&(at[0], at[1]));
-        let path: Vec<(i32, i32)> = pts
-            .iter()
-            .map(|p| chart.backend_coord(&(p[0], p[1])))
-            .collect();
-        draw_mark(&root, &mark, c, to_px, &path).map_err(e)?;
-    }
     for (i, s) in world.start.iter().enumerate() {
         let col = robot_colour(i, n);
         chart
@@ -273,6 +254,26 @@ pub fn write_svg(world: &World, path: &Path) -> Result<(), String> {
                 .draw_series(std::iter::once(Cross::new(p, 5, BLACK.stroke_width(2))))
                 .map_err(e)?;
         }
+    }
+    // The mission's layer last, in pixels of the chart's area: its marks (hunt's robot
+    // triangles, search's targets) lie over the start and end dots, not under them.
+    let to_px = (SIZE as f64 - 20.0) / w;
+    for mark in world.mission.layer() {
+        let (at, pts) = match &mark {
+            Mark::Disc { at, .. }
+            | Mark::Ring { at, .. }
+            | Mark::Circle { at, .. }
+            | Mark::Triangle { at, .. } => (*at, vec![]),
+            Mark::Path { points, .. } => {
+                (points.first().copied().unwrap_or([0.0; 2]), points.clone())
+            }
+        };
+        let c = chart.backend_coord(&(at[0], at[1]));
+        let path: Vec<(i32, i32)> = pts
+            .iter()
+            .map(|p| chart.backend_coord(&(p[0], p[1])))
+            .collect();
+        draw_mark(&root, &mark, c, to_px, &path).map_err(e)?;
     }
     root.present().map_err(e)?;
     Ok(())
