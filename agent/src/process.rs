@@ -63,15 +63,10 @@ fn run_loop<B: Behaviour>(args: &AgentArgs, mut rt: AgentRuntime<B>) -> Result<i
     let robot = args.robot;
     let config = transport::run_config(&args.prefix)?;
     let node = transport::node(&config, &format!("agent-{robot}"))?;
-    let sense_svc = transport::sense_service(&node, robot, false)?;
-    let sense_sub = sense_svc
-        .subscriber_builder()
-        .buffer_size(1)
-        .create()
-        .map_err(|source| TransportError::Subscriber {
-            service: ServiceId::Sense(robot),
-            source,
-        })?;
+    // Sense frames (`runtime.sense`): this robot's record in the world's ring (copied into
+    // `frame`), or its own iceoryx2 service (read in place).
+    let mut sense_in = transport::SenseSource::open(&node, &args.prefix, sc, robot)?;
+    let mut frame = swarm::frames::Sense::zeroed();
     let act_svc = transport::act_service(&node, robot, false)?;
     let act_pub = transport::act_publisher(&act_svc, sc)?;
     // The air (`radio.air`): the world's ring (a hold cell of this robot's own while a
@@ -118,24 +113,24 @@ fn run_loop<B: Behaviour>(args: &AgentArgs, mut rt: AgentRuntime<B>) -> Result<i
         // One receive: the subscriber's buffer holds 1 (the newest frame replaces an unread
         // one). Draining in a loop could hold two samples at once when the world publishes
         // the next tick's in between (real-time mode), beyond the air's borrow limit.
-        let latest = sense_sub
-            .receive()
-            .map_err(|source| TransportError::Receive {
-                service: ServiceId::Sense(robot),
-                source,
-            })?;
-        if let Some(s) = latest.as_ref().filter(|s| s.robot == robot && s.tick > k) {
+        let got = sense_in.receive(&mut frame)?;
+        let latest: Option<&swarm::frames::Sense> = match &got {
+            Some(transport::SenseGot::Sample(s)) => Some(s.payload()),
+            Some(transport::SenseGot::Copied) => Some(&frame),
+            None => None,
+        };
+        if let Some(s) = latest.filter(|s| s.robot == robot && s.tick > k) {
             // The world is past tick k already: keep this Sense for its own tick.
             let mut copy = ahead_sense
                 .take()
                 .unwrap_or_else(swarm::frames::Sense::zeroed);
-            copy.as_mut().clone_from(s.payload());
+            copy.as_mut().clone_from(s);
             ahead_sense = Some(copy);
             done = k + 1;
             continue;
         }
         let kept = ahead_sense.take();
-        let sense: &swarm::frames::Sense = match (&latest, &kept) {
+        let sense: &swarm::frames::Sense = match (latest, &kept) {
             (Some(s), _) => s,
             // Not for us yet (a restarted agent attaching mid-tick): wait for the next one.
             (None, None) => {
@@ -199,7 +194,7 @@ fn run_loop<B: Behaviour>(args: &AgentArgs, mut rt: AgentRuntime<B>) -> Result<i
             service: ServiceId::Act(robot),
             source,
         })?;
-        drop(latest);
+        drop(got);
         drop(kept);
         barrier.ack_with(robot, k, bell);
         done = k + 1;

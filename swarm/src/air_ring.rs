@@ -138,12 +138,16 @@ fn shm_name(name: &str) -> CString {
     CString::new(format!("/{name}")).expect("prefix has no NUL")
 }
 
+/// The ring of the air (`/dev/shm/<prefix>air`); a sibling ring of the same protocol names
+/// itself otherwise (the Sense frames' ring is `sense`, [`sense`]).
+pub const AIR_RING: &str = "air";
+
 fn control_name(prefix: &str) -> String {
-    format!("{prefix}air")
+    prefix.to_string()
 }
 
 fn data_name(prefix: &str, slot: u32, generation: u32) -> String {
-    format!("{prefix}air.{slot}.{generation}")
+    format!("{prefix}.{slot}.{generation}")
 }
 
 /// Opens (or with `create`, creates exclusively at `len` bytes) a /dev/shm file and maps it.
@@ -277,6 +281,19 @@ impl AirWriter {
     /// Creates the ring for `robots` agents that may each hold `held` airs through zero-copy
     /// views (and one more while reading).
     pub fn create(prefix: &str, robots: u32, held: u32) -> Result<AirWriter, AirRingError> {
+        Self::create_named(prefix, AIR_RING, robots, held)
+    }
+
+    /// [`AirWriter::create`] for a ring named `kind` (`/dev/shm/<prefix><kind>` and its data
+    /// files): the same protocol for another per-tick publication (the Sense frames).
+    pub fn create_named(
+        prefix: &str,
+        kind: &str,
+        robots: u32,
+        held: u32,
+    ) -> Result<AirWriter, AirRingError> {
+        let prefix = format!("{prefix}{kind}");
+        let prefix = prefix.as_str();
         let cells = held.saturating_add(1);
         let slots = robots.saturating_mul(cells).saturating_add(2);
         let name = control_name(prefix);
@@ -431,6 +448,13 @@ pub struct AirReader {
 
 impl AirReader {
     pub fn open(prefix: &str, robot: u32) -> Result<AirReader, AirRingError> {
+        Self::open_named(prefix, AIR_RING, robot)
+    }
+
+    /// [`AirReader::open`] for the ring named `kind` ([`AirWriter::create_named`]).
+    pub fn open_named(prefix: &str, kind: &str, robot: u32) -> Result<AirReader, AirRingError> {
+        let prefix = format!("{prefix}{kind}");
+        let prefix = prefix.as_str();
         let name = control_name(prefix);
         let control = map(&name, None)?;
         if control.len < std::mem::size_of::<Control>() {
@@ -550,6 +574,8 @@ impl crate::blob::AsBytes for AirRead {
         self.bytes()
     }
 }
+
+pub mod sense;
 
 #[cfg(test)]
 mod tests;

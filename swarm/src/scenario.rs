@@ -318,6 +318,31 @@ pub struct RuntimeParams {
     /// leaves it off records what it did before (and its resolved scenario does not list it).
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub record_deliveries: bool,
+    /// How the world hands each robot its Sense frame (multi-process executor): in the
+    /// world's ring beside the air (`swarm::air_ring::sense`, default: one shared-memory
+    /// publication a tick for every robot) or one iceoryx2 service per robot (kept to
+    /// measure both). The same frames either way: recordings do not depend on it (and a
+    /// resolved scenario leaves the default out).
+    #[serde(default, skip_serializing_if = "FrameTransport::is_ring")]
+    pub sense: FrameTransport,
+}
+
+/// `runtime.sense`: the transport of a per-tick frame between the world and the agents.
+#[derive(Serialize, Deserialize, Clone, Copy, Debug, PartialEq, Eq, Default)]
+#[serde(rename_all = "kebab-case")]
+pub enum FrameTransport {
+    /// A world-owned ring of shared-memory slots (`swarm::air_ring`'s protocol): the world
+    /// writes every robot's frame once a tick, each agent reads its own in place.
+    #[default]
+    Ring,
+    /// One iceoryx2 publish-subscribe service per robot.
+    Iceoryx2,
+}
+
+impl FrameTransport {
+    fn is_ring(&self) -> bool {
+        *self == FrameTransport::Ring
+    }
 }
 
 impl RuntimeParams {

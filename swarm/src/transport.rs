@@ -19,9 +19,11 @@ use std::sync::Arc;
 
 mod air_source;
 mod error;
+mod sense_source;
 mod service;
 pub use air_source::{AirGot, AirSink, AirSource};
 pub use error::{Port, TransportError, TransportResult};
+pub use sense_source::{SenseGot, SenseSink, SenseSource};
 pub use service::{
     event, pub_sub, service_name, EventCapacity, EventService, PubSubCapacity, PubSubService,
     Reach, ServiceId, ShmPayload, AIR_NAME, CONTROL_NAME, STATUS_NAME,

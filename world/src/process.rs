@@ -2,14 +2,13 @@
 
 use crate::output::{RunOutputs, Timing};
 use crate::world::World;
-use iceoryx2::port::publisher::Publisher;
 use iceoryx2::port::subscriber::Subscriber;
 use iceoryx2::prelude::*;
 use std::io::Write;
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
 use swarm::barrier::TickBarrier;
-use swarm::frames::{Action, Control, Sense, CONTROL_ROBOT_DIED, CONTROL_STOP};
+use swarm::frames::{Action, Control, CONTROL_ROBOT_DIED, CONTROL_STOP};
 use swarm::mailbox::Air;
 use swarm::scenario::Scenario;
 use swarm::transport::{self, Result};
@@ -25,9 +24,7 @@ pub struct WorldArgs {
 }
 
 struct Robot {
-    sense: Publisher<ipc::Service, Sense, ()>,
     act: Subscriber<ipc::Service, [u8], Action>,
-    _sense_svc: transport::SenseService,
     _act_svc: transport::ActService,
 }
 
@@ -330,23 +327,17 @@ pub fn run(args: &WorldArgs) -> Result<i32> {
     let config = transport::run_config(&args.prefix)?;
     let node = transport::node(&config, "world")?;
     let mut robots = Vec::with_capacity(n as usize);
+    // Sense frames (`runtime.sense`): the world's ring beside the air, or a service a robot.
+    let mut senses = transport::SenseSink::create(&node, &args.prefix, sc)?;
     for i in 0..n {
-        let sense_svc = transport::sense_service(&node, i, true)?;
         let act_svc = transport::act_service(&node, i, true)?;
-        let sense = sense_svc
-            .publisher_builder()
-            .max_loaned_samples(1)
-            .create()
-            .map_err(|e| format!("sense publisher: {e:?}"))?;
         let act = act_svc
             .subscriber_builder()
             .buffer_size(2)
             .create()
             .map_err(|e| format!("act subscriber: {e:?}"))?;
         robots.push(Robot {
-            sense,
             act,
-            _sense_svc: sense_svc,
             _act_svc: act_svc,
         });
     }
@@ -418,6 +409,8 @@ pub fn run(args: &WorldArgs) -> Result<i32> {
     let mut actions: Vec<Option<Action>> = vec![None; n as usize];
     let mut sent = Air::default();
     let mut revived = vec![false; n as usize];
+    // Who is alive as this tick's frames are written (a copy: sensing needs the world).
+    let mut alive_now: Vec<bool> = Vec::with_capacity(n as usize);
     let deadline = Duration::from_millis(sc.runtime.ack_deadline_ms);
     // Stopped during start-up (Ctrl-C before every agent attached): no tick runs, so no
     // robot that was still starting is declared dead at tick 0 (issue 14 item 8).
@@ -451,33 +444,19 @@ pub fn run(args: &WorldArgs) -> Result<i32> {
         if ctl.stop || k + 1 == sc.run.max_ticks {
             world.set_stopping();
         }
-        // Sense_k, written in place into each live robot's loaned sample.
-        for (i, robot) in robots.iter().enumerate() {
-            if !world.alive[i] {
-                continue;
-            }
-            let mut sample = robot
-                .sense
-                .loan_uninit()
-                .map_err(|e| format!("sense loan: {e:?}"))?;
-            let p = sample.payload_mut().as_mut_ptr();
-            // SAFETY: Sense is plain old data, valid when zeroed; we zero the fixed part
-            // (the lists are written up to their counts) and then write through a reference.
-            let s = unsafe {
-                std::ptr::write_bytes(p as *mut u8, 0, swarm::frames::SENSE_FIXED_BYTES);
-                &mut *p
-            };
-            world.sense(i, s);
-            // SAFETY: fully initialised above.
-            let sample = unsafe { sample.assume_init() };
-            sample.send().map_err(|e| format!("sense send: {e:?}"))?;
-        }
+        // Sense_k of every live robot (`runtime.sense`: packed once into the world's ring, or
+        // written in place into each robot's loaned iceoryx2 sample). Frames first, then the
+        // holds of dead robots are cleared below, before anyone is released.
+        alive_now.clear();
+        alive_now.extend_from_slice(&world.alive);
+        senses.publish(k, &alive_now, |i, s| world.sense(i as usize, s))?;
         // What dead robots' agents held of the air is free (a SIGKILLed agent never lets
         // go of its holds; a restarted one starts with none): cleared every tick a robot is
         // dead, and at the tick it is revived, before the agent reads.
         for i in 0..n {
             if !world.alive[i as usize] || revived[i as usize] {
                 air.release_robot(i);
+                senses.release_robot(i);
             }
         }
         revived.iter_mut().for_each(|r| *r = false);
