@@ -101,9 +101,13 @@ pub struct TickAir {
     /// The send tick.
     pub tick: u64,
     /// Every message sent at the tick that reaches someone, in (sender, seq) order, with its
-    /// payload's range in `bytes`.
+    /// payload's range in `bytes` (in the sender's buffer when `lent`).
     pub messages: Vec<(RadioHeader, Range<usize>)>,
     pub bytes: Vec<u8>,
+    /// The payloads were not copied into `bytes`: the ranges index the buffer the messages
+    /// were sent in, which its owner writes into the air itself ([`write_air_from`];
+    /// `world::medium::Medium::transmit_lent`).
+    pub lent: bool,
     /// Receiver r's messages are `index[start[r]..start[r + 1]]` (indices into `messages`).
     pub start: Vec<u32>,
     pub index: Vec<u32>,
@@ -115,6 +119,7 @@ impl TickAir {
     /// Empties it, keeping its allocations.
     pub fn clear(&mut self) {
         self.tick = 0;
+        self.lent = false;
         self.messages.clear();
         self.bytes.clear();
         self.start.clear();
@@ -133,10 +138,15 @@ impl TickAir {
             _ => &[],
         }
     }
-    /// Message `i`'s header and payload.
+    /// Message `i`'s header and payload (not of a `lent` air: its payloads are elsewhere).
     pub fn message(&self, i: u32) -> Option<(&RadioHeader, &[u8])> {
+        debug_assert!(!self.lent, "a lent air's payloads are in its sender's buffer");
         let (h, r) = self.messages.get(i as usize)?;
-        Some((h, &self.bytes[r.clone()]))
+        Some((h, self.bytes.get(r.clone())?))
+    }
+    /// Payload bytes of its messages, back to back as the air sample carries them.
+    pub fn payload_len(&self) -> usize {
+        self.messages.iter().map(|(_, r)| r.len()).sum()
     }
     /// (message, receiver) pairs it carries.
     pub fn pairs(&self) -> u64 {
@@ -172,17 +182,38 @@ fn layout(robots: usize, index_len: usize, messages: usize, payload_bytes: usize
 /// Bytes of `air`'s sample for a run of `robots` robots.
 pub fn air_len(air: Option<&TickAir>, robots: usize) -> usize {
     match air {
-        Some(a) => layout(robots, a.index.len(), a.messages.len(), a.bytes.len()).end,
+        Some(a) => layout(robots, a.index.len(), a.messages.len(), a.payload_len()).end,
         None => layout(robots, 0, 0, 0).end,
     }
 }
 
 /// Writes `air` (None: nothing due) into an air sample's payload `out` (at least
-/// [`air_len`] bytes) and returns its header. `due` is the tick it is due at.
+/// [`air_len`] bytes) and returns its header. `due` is the tick it is due at. The air must
+/// hold its payloads (not `lent`: see [`write_air_from`]).
 pub fn write_air(air: Option<&TickAir>, robots: usize, due: u64, out: &mut [u8]) -> AirHeader {
+    assert!(
+        air.is_none_or(|a| !a.lent),
+        "a lent air is written with write_air_from"
+    );
+    write_air_from(air, &[], robots, due, out)
+}
+
+/// [`write_air`] of an air whose payloads may be `lent` (`Medium::transmit_lent`): then its
+/// message ranges index `sent`, the buffer its messages were sent in, and each payload is
+/// copied from there straight into `out` (the medium copied none). An air that holds its
+/// payloads ignores `sent`. Either way the sample's bytes are the same.
+pub fn write_air_from(
+    air: Option<&TickAir>,
+    sent: &[u8],
+    robots: usize,
+    due: u64,
+    out: &mut [u8],
+) -> AirHeader {
     let empty = TickAir::default();
     let a = air.unwrap_or(&empty);
-    let l = layout(robots, a.index.len(), a.messages.len(), a.bytes.len());
+    let src: &[u8] = if a.lent { sent } else { &a.bytes };
+    let payload_len = a.payload_len();
+    let l = layout(robots, a.index.len(), a.messages.len(), payload_len);
     assert!(out.len() >= l.end, "air sample too small");
     for r in 0..=robots {
         let v = a.start.get(r).copied().unwrap_or(a.index.len() as u32);
@@ -193,10 +224,13 @@ pub fn write_air(air: Option<&TickAir>, robots: usize, due: u64, out: &mut [u8])
         out[at..at + 4].copy_from_slice(&v.to_ne_bytes());
     }
     out[l.index + 4 * a.index.len()..l.entries].fill(0);
+    // Payloads back to back in message order: for an air that holds them this is `bytes`
+    // itself (the medium appends them in that order).
+    let mut offset = 0;
     for (k, (h, range)) in a.messages.iter().enumerate() {
         let e = AirEntry {
             header: *h,
-            offset: range.start as u32,
+            offset: offset as u32,
             reserved: 0,
         };
         let at = l.entries + ENTRY * k;
@@ -204,15 +238,17 @@ pub fn write_air(air: Option<&TickAir>, robots: usize, due: u64, out: &mut [u8])
         let bytes =
             unsafe { std::slice::from_raw_parts(&e as *const AirEntry as *const u8, ENTRY) };
         out[at..at + ENTRY].copy_from_slice(bytes);
+        let p = l.payloads + offset;
+        out[p..p + range.len()].copy_from_slice(&src[range.clone()]);
+        offset += range.len();
     }
-    out[l.payloads..l.end].copy_from_slice(&a.bytes);
     AirHeader {
         tick: due,
         sent_tick: a.tick,
         robots: robots as u32,
         messages: a.messages.len() as u32,
         index_len: a.index.len() as u32,
-        payload_bytes: a.bytes.len() as u32,
+        payload_bytes: payload_len as u32,
     }
 }
 
@@ -367,5 +403,55 @@ mod tests {
             ..h
         };
         assert!(AirView::new(&bad, &out).is_none());
+    }
+
+    /// A lent air (payload ranges into the sender's buffer, some of it not sent on) writes
+    /// the same sample bytes as the same air holding its payloads.
+    #[test]
+    fn a_lent_air_writes_the_same_sample_as_one_holding_its_payloads() {
+        let sent: Vec<u8> = (0..64u8).collect();
+        // Messages at 5..8, 20..20 and 30..41 of the sender's buffer; the rest reached nobody.
+        let ranges = [5..8usize, 20..20, 30..41];
+        let mut lent = TickAir {
+            tick: 9,
+            lent: true,
+            ..Default::default()
+        };
+        let mut owned = TickAir {
+            tick: 9,
+            ..Default::default()
+        };
+        for (k, r) in ranges.iter().enumerate() {
+            let h = header(k as u32, k as u32, r.len() as u32);
+            lent.messages.push((h, r.clone()));
+            let at = owned.bytes.len();
+            owned.bytes.extend_from_slice(&sent[r.clone()]);
+            owned.messages.push((h, at..owned.bytes.len()));
+        }
+        for a in [&mut lent, &mut owned] {
+            a.start = vec![0, 2, 3, 3];
+            a.index = vec![0, 2, 1];
+        }
+        assert_eq!(air_len(Some(&lent), 3), air_len(Some(&owned), 3));
+        let mut a = vec![0xee; air_len(Some(&owned), 3)];
+        let mut b = vec![0x11; a.len()];
+        let ha = write_air(Some(&owned), 3, 10, &mut a);
+        let hb = write_air_from(Some(&lent), &sent, 3, 10, &mut b);
+        assert_eq!(ha, hb);
+        assert_eq!(a, b);
+        let v = AirView::new(&hb, &b).unwrap();
+        let (h, at) = v.message(2).unwrap();
+        assert_eq!(&b[at..at + h.len as usize], &sent[30..41]);
+    }
+
+    #[test]
+    #[should_panic(expected = "write_air_from")]
+    fn a_lent_air_is_not_written_without_its_buffer() {
+        let air = TickAir {
+            lent: true,
+            ..Default::default()
+        };
+        let mut out = vec![0; air_len(Some(&air), 1)];
+        write_air(Some(&air), 1, 1, &mut out);
     }
 }

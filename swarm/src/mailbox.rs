@@ -105,7 +105,8 @@ impl<M: DeserializeOwned> Mailbox<M> {
         self
     }
 
-    /// Posts the messages due at this tick (None: nothing is), decoding each once.
+    /// Posts the messages due at this tick (None: nothing is), decoding each once. The air
+    /// holds its payloads (the world's `Medium::transmit`, not a `lent` air).
     pub fn post(&mut self, air: Option<&TickAir>) {
         self.msgs.clear();
         self.start.clear();
@@ -113,6 +114,7 @@ impl<M: DeserializeOwned> Mailbox<M> {
         let Some(air) = air else {
             return;
         };
+        assert!(!air.lent, "a lent air's payloads are not in it");
         let shared: Option<Arc<dyn AsBytes>> = self
             .zero_copy
             .then(|| Arc::new(air.bytes.clone()) as Arc<dyn AsBytes>);

@@ -216,29 +216,34 @@ pub struct RadioCounters {
 }
 
 impl RadioCounters {
+    /// Every pair's outcome counter (each pair ends in exactly one of them), named once for
+    /// [`RadioCounters::add`] and [`RadioCounters::accounted`].
+    fn outcomes_mut(&mut self) -> [&mut u64; 7] {
+        [
+            &mut self.delivered,
+            &mut self.dropped_range,
+            &mut self.dropped_occluded,
+            &mut self.dropped_bandwidth,
+            &mut self.dropped_loss,
+            &mut self.malformed,
+            &mut self.receiver_dead,
+        ]
+    }
+
     /// Adds a tick's counts; `in_flight` becomes the tick's.
     pub fn add(&mut self, o: &RadioCounters) {
+        let mut o = *o;
         self.offered += o.offered;
-        self.delivered += o.delivered;
-        self.dropped_range += o.dropped_range;
-        self.dropped_occluded += o.dropped_occluded;
-        self.dropped_bandwidth += o.dropped_bandwidth;
-        self.dropped_loss += o.dropped_loss;
-        self.malformed += o.malformed;
-        self.receiver_dead += o.receiver_dead;
+        for (a, b) in self.outcomes_mut().into_iter().zip(o.outcomes_mut()) {
+            *a += *b;
+        }
         self.in_flight = o.in_flight;
     }
 
     /// Every pair's outcome so far, in flight included: equals `offered` when the books balance.
     pub fn accounted(&self) -> u64 {
-        self.delivered
-            + self.dropped_range
-            + self.dropped_occluded
-            + self.dropped_bandwidth
-            + self.dropped_loss
-            + self.malformed
-            + self.receiver_dead
-            + self.in_flight
+        let mut c = *self;
+        c.outcomes_mut().into_iter().map(|v| *v).sum::<u64>() + self.in_flight
     }
 }
 
@@ -246,6 +251,50 @@ impl RadioCounters {
 mod tests {
     use super::*;
     use crate::scenario::Scenario;
+
+    /// Hand-made counters: `add` sums every outcome and takes the later `in_flight`;
+    /// `accounted` is the seven outcomes plus `in_flight`.
+    #[test]
+    fn counters_add_field_by_field_and_account_for_every_outcome() {
+        let a = RadioCounters {
+            offered: 100,
+            delivered: 1,
+            dropped_range: 2,
+            dropped_occluded: 3,
+            dropped_bandwidth: 4,
+            dropped_loss: 5,
+            malformed: 6,
+            receiver_dead: 7,
+            in_flight: 8,
+        };
+        let b = RadioCounters {
+            offered: 1000,
+            delivered: 10,
+            dropped_range: 20,
+            dropped_occluded: 30,
+            dropped_bandwidth: 40,
+            dropped_loss: 50,
+            malformed: 60,
+            receiver_dead: 70,
+            in_flight: 80,
+        };
+        assert_eq!(a.accounted(), 36);
+        let mut s = a;
+        s.add(&b);
+        let want = RadioCounters {
+            offered: 1100,
+            delivered: 11,
+            dropped_range: 22,
+            dropped_occluded: 33,
+            dropped_bandwidth: 44,
+            dropped_loss: 55,
+            malformed: 66,
+            receiver_dead: 77,
+            in_flight: 80,
+        };
+        assert_eq!(s, want);
+        assert_eq!(s.accounted(), 11 + 22 + 33 + 44 + 55 + 66 + 77 + 80);
+    }
 
     #[test]
     fn loss_draw_is_a_pure_function_of_its_inputs() {

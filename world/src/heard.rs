@@ -63,6 +63,7 @@ mod tests {
             start: vec![0, 1, 4, 6],
             index: vec![2, 0, 1, 2, 0, 1],
             bytes_to: vec![2, 6, 4],
+            lent: false,
         }
     }
 

@@ -3,12 +3,14 @@
 //!
 //! The runtime rows carry the traffic through the shared medium, as a run does: N child
 //! processes (`__bench-child tput`) each run the agent's radio loop (wait for the tick on the
-//! runtime's futex barrier, decode its list of the tick's air sample, `AgentRuntime::step` a
-//! behaviour that broadcasts one payload-sized message into its act sample, send it,
-//! acknowledge); the parent is the world's radio (publish the air, release the tick, take every
-//! act sample's messages, `Medium::transmit` them). Every robot is within range of every other
-//! one, so a tick delivers N (N - 1) messages. No physics, no Sense frames: the numbers are
-//! the radio's.
+//! runtime's futex barrier, read the tick's air through `transport::AirSource` and decode its
+//! list, `AgentRuntime::step` a behaviour that broadcasts one payload-sized message into its
+//! act sample, send it, acknowledge); the parent is the world's radio (publish the air through
+//! `transport::AirSink::publish`, release the tick, take every act sample's messages as the
+//! world process does, `Medium::transmit` them). The air is the run's (`radio.air`): the
+//! world's ring (the default, column `air` = ring) or the iceoryx2 air service (iceoryx2), so
+//! both are measured in one run. Every robot is within range of every other one, so a tick
+//! delivers N (N - 1) messages. No physics, no Sense frames: the numbers are the radio's.
 //!
 //! The `raw` rows move the same traffic with raw iceoryx2 and one service per robot (the link
 //! design's wiring, without its runtime): loan the payload's bytes, copy them in, send; take
@@ -27,7 +29,7 @@ use swarm::air::ActTx;
 use swarm::barrier::{TickBarrier, Wake};
 use swarm::frames::RadioHeader;
 use swarm::mailbox::Air;
-use swarm::scenario::Scenario;
+use swarm::scenario::{AirTransport, Scenario};
 use swarm::transport::{PubSubCapacity, Reach, ServiceId, TransportError};
 use swarm::{cleanup, transport, AgentRuntime, Behaviour, Blob, Command, Outbox, Received, Sense};
 use world::medium::{Medium, MediumParams};
@@ -36,25 +38,41 @@ use world::output::percentile;
 /// Most robots a throughput run takes (the raw rows subscribe every robot to every other).
 const MAX_ROBOTS: u32 = 129;
 
-/// (payload bytes, encoding): `seq` is a `Vec<u8>` as serde encodes it (element by element),
-/// `bytes` the same bytes as one byte string, `blob` the same wire bytes received in place
-/// (`swarm::Blob`, zero-copy), `raw` raw iceoryx2 without the runtime.
-pub const CASES: [(usize, &str); 8] = [
-    (64, "seq"),
-    (4096, "seq"),
-    (64, "bytes"),
-    (4096, "bytes"),
-    (64, "blob"),
-    (4096, "blob"),
-    (64, "raw"),
-    (4096, "raw"),
+/// (payload bytes, encoding, air): `seq` is a `Vec<u8>` as serde encodes it (element by
+/// element), `bytes` the same bytes as one byte string, `blob` the same wire bytes received in
+/// place (`swarm::Blob`, zero-copy), `raw` raw iceoryx2 without the runtime (no air). The air
+/// is `radio.air`: the world's ring (the runtime's default) or the iceoryx2 air service.
+pub const CASES: [(usize, &str, Option<AirTransport>); 12] = [
+    (64, "seq", Some(AirTransport::Ring)),
+    (4096, "seq", Some(AirTransport::Ring)),
+    (64, "bytes", Some(AirTransport::Ring)),
+    (4096, "bytes", Some(AirTransport::Ring)),
+    (64, "bytes", Some(AirTransport::Iceoryx2)),
+    (4096, "bytes", Some(AirTransport::Iceoryx2)),
+    (64, "blob", Some(AirTransport::Ring)),
+    (4096, "blob", Some(AirTransport::Ring)),
+    (64, "blob", Some(AirTransport::Iceoryx2)),
+    (4096, "blob", Some(AirTransport::Iceoryx2)),
+    (64, "raw", None),
+    (4096, "raw", None),
 ];
+
+/// The air's name in the table and in a child's `--mode` (`enc:air`).
+fn air_name(air: Option<AirTransport>) -> &'static str {
+    match air {
+        Some(AirTransport::Ring) => "ring",
+        Some(AirTransport::Iceoryx2) => "iceoryx2",
+        None => "-",
+    }
+}
 
 #[derive(Debug, Clone, Serialize)]
 pub struct Row {
     pub robots: u32,
     pub payload_bytes: usize,
     pub encoding: String,
+    /// The air's transport: ring, iceoryx2, or - (raw rows: no air).
+    pub air: String,
     pub ticks: u64,
     pub seconds: f64,
     pub ticks_per_s: f64,
@@ -70,8 +88,9 @@ fn warm_for(ticks: u64) -> u64 {
     (ticks / 10).max(10)
 }
 
-fn scenario(robots: u32, size: usize) -> Scenario {
+fn scenario(robots: u32, size: usize, air: AirTransport) -> Scenario {
     let mut sc = Scenario::roam();
+    sc.radio.air = air;
     sc.run.robots = robots;
     sc.radio.max_message_bytes = size.max(64) as u32;
     sc.radio.max_messages_per_tick = 1;
@@ -87,16 +106,23 @@ pub fn run(robots: u32, quick: bool) -> BenchResult<Vec<Row>> {
     if !(min..=max).contains(&robots) {
         return Err(BenchError::Robots { robots, min, max });
     }
+    // `SWARM_TPUT_ONLY=enc:air` (e.g. `bytes:ring`, `raw:-`) runs only those rows: to
+    // profile one path (`perf record -a` over the run), not for the tables.
+    let only = std::env::var("SWARM_TPUT_ONLY").ok();
     CASES
         .iter()
-        .map(|&(size, enc)| {
+        .filter(|&&(_, enc, air)| {
+            only.as_deref()
+                .is_none_or(|o| o.split(',').any(|c| c == format!("{enc}:{}", air_name(air))))
+        })
+        .map(|&(size, enc, air)| {
             let ticks = match (quick, size > 1024 && enc == "seq") {
                 (true, true) => 100,
                 (true, false) => 300,
                 (false, true) => 500,
                 (false, false) => 2000,
             };
-            one(robots, size, enc, ticks)
+            one(robots, size, enc, air, ticks)
         })
         .collect()
 }
@@ -104,10 +130,11 @@ pub fn run(robots: u32, quick: bool) -> BenchResult<Vec<Row>> {
 pub fn print(rows: &[Row]) {
     println!("radio throughput: every robot broadcasts one message every tick, all robots in range (runtime: through the shared medium)");
     println!(
-        "{:>6} {:>8} {:>6} {:>6} | {:>8} {:>8} {:>8} | {:>12} {:>10} | {:>9} {:>9}",
+        "{:>6} {:>8} {:>6} {:>8} {:>6} | {:>8} {:>8} {:>8} | {:>12} {:>10} | {:>9} {:>9}",
         "robots",
         "payload",
         "enc",
+        "air",
         "ticks",
         "ticks/s",
         "p50 us",
@@ -119,10 +146,11 @@ pub fn print(rows: &[Row]) {
     );
     for r in rows {
         println!(
-            "{:>6} {:>8} {:>6} {:>6} | {:>8.0} {:>8.0} {:>8.0} | {:>12.0} {:>10.1} | {:>9} {:>8.2}%",
+            "{:>6} {:>8} {:>6} {:>8} {:>6} | {:>8.0} {:>8.0} {:>8.0} | {:>12.0} {:>10.1} | {:>9} {:>8.2}%",
             r.robots,
             format!("{} B", r.payload_bytes),
             r.encoding,
+            r.air,
             r.ticks,
             r.ticks_per_s,
             r.tick_p50_us,
@@ -142,10 +170,11 @@ pub fn print(rows: &[Row]) {
             .find(|x| x.encoding == "raw" && x.payload_bytes == r.payload_bytes)
         {
             println!(
-                "runtime ({}) / raw iceoryx2 tick time at {} B: {:.2}x",
+                "runtime ({}, {} air) ticks/s / raw iceoryx2 ticks/s at {} B: {:.2}x",
                 r.encoding,
+                r.air,
                 r.payload_bytes,
-                raw.ticks_per_s / r.ticks_per_s.max(1e-9)
+                r.ticks_per_s / raw.ticks_per_s.max(1e-9)
             );
         }
     }
@@ -159,10 +188,16 @@ pub fn print(rows: &[Row]) {
 const READY_S: u64 = 120;
 const ACK_S: u64 = 10;
 
-fn one(n: u32, size: usize, enc: &str, ticks: u64) -> BenchResult<Row> {
-    let prefix = tick::bench_prefix(&format!("tput-{n}-{size}-{enc}"));
+fn one(
+    n: u32,
+    size: usize,
+    enc: &str,
+    air: Option<AirTransport>,
+    ticks: u64,
+) -> BenchResult<Row> {
+    let prefix = tick::bench_prefix(&format!("tput-{n}-{size}-{enc}-{}", air_name(air)));
     let r = (|| -> BenchResult<Row> {
-        let sc = scenario(n, size);
+        let sc = scenario(n, size, air.unwrap_or_default());
         let barrier = TickBarrier::create(&prefix, n)?;
         let config = transport::run_config(&prefix)?;
         let node = transport::node(&config, "bench-tput")?;
@@ -173,7 +208,7 @@ fn one(n: u32, size: usize, enc: &str, ticks: u64) -> BenchResult<Row> {
                     .collect::<Result<Vec<_>, _>>()?,
             )
         } else {
-            Radio::Medium(Box::new(WorldRadio::create(&node, &sc)?))
+            Radio::Medium(Box::new(WorldRadio::create(&node, &prefix, &sc)?))
         };
         let mut radio = radio;
         let extra = [
@@ -184,7 +219,7 @@ fn one(n: u32, size: usize, enc: &str, ticks: u64) -> BenchResult<Row> {
             "--robots".to_string(),
             n.to_string(),
             "--mode".to_string(),
-            enc.to_string(),
+            format!("{enc}:{}", air_name(air)),
         ];
         let mut children = Vec::new();
         for i in 0..n {
@@ -258,6 +293,7 @@ fn one(n: u32, size: usize, enc: &str, ticks: u64) -> BenchResult<Row> {
                 robots: n,
                 payload_bytes: size,
                 encoding: enc.to_string(),
+                air: air_name(air).to_string(),
                 ticks,
                 seconds,
                 ticks_per_s: ticks as f64 / seconds,
@@ -292,20 +328,19 @@ type ActPort = (
     Subscriber<ipc::Service, [u8], swarm::Action>,
 );
 
-/// The world's side of the medium: every robot's act service, the air, the medium.
+/// The world's side of the medium: every robot's act service, the run's air (`AirSink`, as
+/// the world process has it), the medium.
 struct WorldRadio {
     acts: Vec<ActPort>,
-    _air_svc: transport::AirService,
-    air: iceoryx2::port::publisher::Publisher<ipc::Service, [u8], swarm::frames::AirHeader>,
+    air: transport::AirSink,
     medium: Medium,
-    due: Option<swarm::air::TickAir>,
     poses: Vec<[f64; 3]>,
     alive: Vec<bool>,
     sent: Air,
 }
 
 impl WorldRadio {
-    fn create(node: &Node<ipc::Service>, sc: &Scenario) -> BenchResult<WorldRadio> {
+    fn create(node: &Node<ipc::Service>, prefix: &str, sc: &Scenario) -> BenchResult<WorldRadio> {
         let n = sc.run.robots;
         let mut acts = Vec::new();
         for i in 0..n {
@@ -320,14 +355,10 @@ impl WorldRadio {
                 })?;
             acts.push((svc, sub));
         }
-        let air_svc = transport::air_service(node, sc, true)?;
-        let air = transport::air_publisher(&air_svc, sc)?;
         Ok(WorldRadio {
             acts,
-            _air_svc: air_svc,
-            air,
+            air: transport::AirSink::create(node, prefix, sc)?,
             medium: Medium::new(sc, MediumParams::from_scenario(sc)),
-            due: None,
             poses: (0..n)
                 .map(|i| {
                     let p = position(i, n);
@@ -339,26 +370,18 @@ impl WorldRadio {
         })
     }
 
-    /// The air of tick k, as the world publishes it before the release.
+    /// The air of tick k, as the world process publishes it before the release
+    /// (`AirSink::publish` of `write_air`); the spent air goes back to the medium, as
+    /// `World::apply` hands it back.
     fn publish(&mut self, k: u64) -> BenchResult<()> {
-        self.due = self.medium.due(k);
+        let due = self.medium.due(k);
         let n = self.poses.len();
-        let len = swarm::air::air_len(self.due.as_ref(), n);
-        let sample = self
-            .air
-            .loan_slice_uninit(len)
-            .map_err(|source| TransportError::Loan {
-                service: ServiceId::Air,
-                source,
-            })?;
-        // SAFETY: shared memory is always initialised bytes; write_air writes all of them.
-        let mut sample = unsafe { sample.assume_init() };
-        let h = swarm::air::write_air(self.due.as_ref(), n, k, sample.payload_mut());
-        *sample.user_header_mut() = h;
-        sample.send().map_err(|source| TransportError::Send {
-            service: ServiceId::Air,
-            source,
-        })?;
+        let len = swarm::air::air_len(due.as_ref(), n);
+        self.air
+            .publish(k, len, |out| swarm::air::write_air(due.as_ref(), n, k, out))?;
+        if let Some(a) = due {
+            self.medium.recycle(a);
+        }
         Ok(())
     }
 
@@ -502,11 +525,16 @@ fn data_len<M: Make>(size: usize) -> usize {
 }
 
 pub fn child(a: &ChildArgs) -> i32 {
-    let r = match a.mode.as_str() {
-        "bytes" => child_run::<BytesBlob>(a),
-        "blob" => child_run::<BlobMsg>(a),
+    let (enc, air) = a.mode.split_once(':').unwrap_or((a.mode.as_str(), "ring"));
+    let air = match air {
+        "iceoryx2" => AirTransport::Iceoryx2,
+        _ => AirTransport::Ring,
+    };
+    let r = match enc {
+        "bytes" => child_run::<BytesBlob>(a, air),
+        "blob" => child_run::<BlobMsg>(a, air),
         "raw" => child_raw(a),
-        _ => child_run::<SeqBlob>(a),
+        _ => child_run::<SeqBlob>(a, air),
     };
     match r {
         Ok(()) => 0,
@@ -517,23 +545,15 @@ pub fn child(a: &ChildArgs) -> i32 {
     }
 }
 
-fn child_run<M: Make>(a: &ChildArgs) -> BenchResult<()> {
+fn child_run<M: Make>(a: &ChildArgs, air: AirTransport) -> BenchResult<()> {
     let (n, me) = (a.robots, a.index);
-    let sc = scenario(n, a.size);
+    let sc = scenario(n, a.size, air);
     let barrier = TickBarrier::open(&a.prefix)?;
     let config = transport::run_config(&a.prefix)?;
     let node = transport::node(&config, &format!("bench-tput-{me}"))?;
     let act_svc = transport::act_service(&node, me, false)?;
     let act = transport::act_publisher(&act_svc, &sc)?;
-    let air_svc = transport::air_service(&node, &sc, false)?;
-    let air = air_svc
-        .subscriber_builder()
-        .buffer_size(1)
-        .create()
-        .map_err(|source| TransportError::Subscriber {
-            service: ServiceId::Air,
-            source,
-        })?;
+    let mut air = transport::AirSource::open(&node, &a.prefix, &sc, me)?;
     let mut rt = AgentRuntime::new(
         &sc,
         me,
@@ -558,12 +578,8 @@ fn child_run<M: Make>(a: &ChildArgs) -> BenchResult<()> {
         sense.tick = k;
         inbox.clear();
         let mut bad = 0;
-        let mut latest = None;
-        while let Ok(Some(s)) = air.receive() {
-            latest = Some(s);
-        }
-        if let Some(s) = latest.filter(|s| s.user_header().tick == k) {
-            bad = transport::air_inbox(s, me, rt.zero_copy(), &live, held, &mut inbox);
+        if let Some(got) = air.receive()?.filter(|g| g.tick() == k) {
+            bad = got.inbox(me, rt.zero_copy(), &live, held, &mut inbox);
         }
         let sample = act
             .loan_slice_uninit(area)
@@ -600,7 +616,7 @@ fn child_run<M: Make>(a: &ChildArgs) -> BenchResult<()> {
 /// a tick, so a receiver takes exactly one off each other robot's service.
 fn child_raw(a: &ChildArgs) -> BenchResult<()> {
     let (n, me) = (a.robots, a.index);
-    let sc = scenario(n, a.size);
+    let sc = scenario(n, a.size, AirTransport::Ring);
     let barrier = TickBarrier::open(&a.prefix)?;
     let config = transport::run_config(&a.prefix)?;
     let node = transport::node(&config, &format!("bench-tput-{me}"))?;

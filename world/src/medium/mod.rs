@@ -185,6 +185,38 @@ impl Medium {
         poses: &[[f64; 3]],
         alive: &[bool],
     ) -> Counts {
+        self.transmit_into(tick, sent, bytes, poses, alive, false)
+    }
+
+    /// [`Medium::transmit`] without copying a payload: the air it queues is `lent`, its
+    /// message ranges index `bytes`, and the caller writes it into the air sample straight
+    /// from there (`swarm::air::write_air_from`), so a payload is copied once between the
+    /// sender's buffer and the air instead of twice. The caller must publish the air due at
+    /// `tick + 1` (the next [`Medium::due`]) from the same, unchanged `bytes`. With a delay
+    /// (`radio.delay_ticks` > 0) the air outlives the tick's buffer, so the payloads are
+    /// copied as by `transmit` (the air then holds them; `write_air_from` reads them there).
+    /// Decisions and counts are those of `transmit`.
+    pub fn transmit_lent(
+        &mut self,
+        tick: u64,
+        sent: &[(RadioHeader, usize)],
+        bytes: &[u8],
+        poses: &[[f64; 3]],
+        alive: &[bool],
+    ) -> Counts {
+        let lend = self.p.radio.delay_ticks == 0;
+        self.transmit_into(tick, sent, bytes, poses, alive, lend)
+    }
+
+    fn transmit_into(
+        &mut self,
+        tick: u64,
+        sent: &[(RadioHeader, usize)],
+        bytes: &[u8],
+        poses: &[[f64; 3]],
+        alive: &[bool],
+        lend: bool,
+    ) -> Counts {
         let Medium {
             p,
             seed,
@@ -211,6 +243,7 @@ impl Medium {
         let mut air = spare.pop().unwrap_or_default();
         air.clear();
         air.tick = tick;
+        air.lent = lend;
         air.bytes_to.resize(n, 0);
         for l in lists.iter_mut() {
             l.clear();
@@ -311,7 +344,9 @@ impl Medium {
                     counts.add(Outcome::Range, 1, len);
                 }
             }
-            if any {
+            if any && lend {
+                air.messages.push((*h, *at..at + payload.len()));
+            } else if any {
                 let at = air.bytes.len();
                 air.bytes.extend_from_slice(payload);
                 air.messages.push((*h, at..at + payload.len()));

@@ -362,3 +362,43 @@ fn a_hunt_auctioneer_with_a_radio_range_transmits_within_it() {
     }];
     assert_eq!(sender_ranges(&sc2, &sc2.radio)[station], 7.0);
 }
+
+/// `transmit_lent` decides and counts as `transmit`, and the air written from the sender's
+/// buffer is byte for byte the air of the copying medium; with a delay it copies.
+#[test]
+fn a_lent_air_is_the_copied_air_written_from_the_senders_buffer() {
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
+    for delay in [0, 2] {
+        let mut sc = scenario(40);
+        sc.radio.loss = 0.3;
+        sc.radio.delay_ticks = delay;
+        let mut copied = Medium::new(&sc, MediumParams::from_scenario(&sc));
+        let mut lent = Medium::new(&sc, MediumParams::from_scenario(&sc));
+        for tick in 0..12 {
+            let (poses, alive, msgs) = traffic(&mut rng, 40, tick);
+            let mut sent = Vec::new();
+            let mut bytes = Vec::new();
+            for (h, p) in &msgs {
+                sent.push((*h, bytes.len()));
+                bytes.extend_from_slice(p);
+            }
+            let a = copied.transmit(tick, &sent, &bytes, &poses, &alive);
+            let b = lent.transmit_lent(tick, &sent, &bytes, &poses, &alive);
+            assert_eq!(a, b);
+            let (x, y) = (copied.due(tick + 1), lent.due(tick + 1));
+            assert_eq!(x.is_some(), y.is_some(), "tick {tick} delay {delay}");
+            if let (Some(x), Some(y)) = (x, y) {
+                assert_eq!(y.lent, delay == 0);
+                let len = swarm::air::air_len(Some(&x), 40);
+                assert_eq!(len, swarm::air::air_len(Some(&y), 40));
+                let (mut ox, mut oy) = (vec![0u8; len], vec![1u8; len]);
+                let hx = swarm::air::write_air(Some(&x), 40, tick + 1, &mut ox);
+                let hy = swarm::air::write_air_from(Some(&y), &bytes, 40, tick + 1, &mut oy);
+                assert_eq!((hx, &ox), (hy, &oy), "tick {tick} delay {delay}");
+                assert!(x.pairs() > 0);
+                copied.recycle(x);
+                lent.recycle(y);
+            }
+        }
+    }
+}

@@ -5,10 +5,13 @@
 //! `Medium::transmit`, writes the air and publishes it through the run's air, `radio.air`:
 //! the world's ring by default) and robot 0, which reads the air and decodes its list out of
 //! shared memory (`AirGot::inbox`; `BlobPing` holds a view). Hop 2 is thus a publish and a
-//! read without a second process wake-up. The payload is copied twice on the way (into the
-//! medium's tick buffer, into the air) besides its encoding and decoding. Three message
-//! types: the payload as serde encodes a `Vec<u8>`, as one byte string, and as a
-//! `swarm::Blob`.
+//! read without a second process wake-up. The world writes the air straight from the act
+//! sample it holds (`Medium::transmit_lent`, `swarm::air::write_air_from`): the payload is
+//! copied once on the way (act sample -> air) besides its encoding into the act sample and
+//! its decoding (none for the blob). The world process (`world/src/process.rs`) does not do
+//! this yet: it copies each act sample's messages into a tick buffer, the medium copies them
+//! again, then the air (BENCHMARKS.md section 14). Three message types: the payload as serde
+//! encodes a `Vec<u8>`, as one byte string, and as a `swarm::Blob`.
 
 use super::{open_barrier, wait_parent, Mode, Parent};
 use crate::bench::{now_ns, tick, BenchError, BenchResult, ByteBuf, ChildArgs};
@@ -188,7 +191,8 @@ struct World {
 
 impl World {
     /// Puts `sent` (messages of tick k, payloads in `bytes`) on the medium and publishes
-    /// what is due at k + 1.
+    /// what is due at k + 1, writing each payload from `bytes` straight into the air
+    /// (`Medium::transmit_lent`, `write_air_from`: one copy in the world).
     fn carry(
         &mut self,
         k: u64,
@@ -196,11 +200,11 @@ impl World {
         bytes: &[u8],
     ) -> BenchResult<()> {
         self.medium
-            .transmit(k, sent, bytes, &self.poses, &[true, true]);
+            .transmit_lent(k, sent, bytes, &self.poses, &[true, true]);
         let due = self.medium.due(k + 1);
         let len = swarm::air::air_len(due.as_ref(), 2);
         self.air.publish(k + 1, len, |out| {
-            swarm::air::write_air(due.as_ref(), 2, k + 1, out)
+            swarm::air::write_air_from(due.as_ref(), bytes, 2, k + 1, out)
         })?;
         if let Some(a) = due {
             self.medium.recycle(a);
@@ -209,8 +213,8 @@ impl World {
     }
 
     /// [`World::carry`] of an act sample's messages, read where they lie in the sample
-    /// (`act_messages`' payload slices are offsets into it): the payload is copied once
-    /// into the medium and once into the air, not first into a buffer of the tick.
+    /// (`act_messages`' payload slices are offsets into it) while the world holds it: the
+    /// payload is copied once, from the act sample into the air.
     fn carry_act(&mut self, k: u64, payload: &[u8]) -> BenchResult<()> {
         let mut entries = std::mem::take(&mut self.entries);
         entries.clear();
