@@ -57,7 +57,17 @@ pub enum Msg {
         from_position: [f64; 2],
         /// The proposer waits for the answer until this tick.
         deadline: u64,
+        /// The plan the targets are slots of: a robot on another plan ignores it.
+        epoch: u32,
     },
-    /// The answer to proposal `seq`.
-    Reply { to: u32, seq: u64, accepted: bool },
+    /// The answer to proposal `seq` (of the plan of `epoch`).
+    Reply {
+        to: u32,
+        seq: u64,
+        accepted: bool,
+        epoch: u32,
+    },
+    /// Swaps mode: dead robots' positions (the world's, from the sender's Sense frame or heard)
+    /// that the sender's plan does not plan around yet: for the coordinator of the re-plan.
+    Wrecks(Vec<[f64; 2]>),
 }

@@ -19,19 +19,25 @@
 //!    and the tick.
 //!    With `reassignment = "swaps"` there is no coordinator: the pattern is the fixed
 //!    `formation.transform` every robot computes alike, robot i starts on slot i, and
-//!    neighbours swap slots pairwise with a handshake (agent/src/formation/swaps.rs).
+//!    neighbours swap slots pairwise with a handshake (agent/src/formation/swaps.rs). When
+//!    a robot dies (or a wreck blocks a slot) the robots elect a coordinator that re-plans
+//!    for the robots left (replan.rs), and swaps resume on the new slots.
 //! 3. `motion`: eq. (16) towards its slot, then ORCA (eqs. 17-26) against the robots its own
 //!    sensors list (Sense `nearby`, within robot.neighbour_sensing_radius: positions and
-//!    velocities), the arena's discs, the lost robots of the plan, and robots that vanished
-//!    from `nearby` while well inside the sensing radius (dead: static discs until seen again).
+//!    velocities), the arena's discs, the lost robots of the plan, the wrecks (dead robots)
+//!    sensed in the Sense frame's obstacle points or heard of (wrecks.rs), and robots that
+//!    vanished from `nearby` while well inside the sensing radius (static discs until seen
+//!    again).
 //! 4. `broadcast` its status; report its slot to the mission (Action `report`).
 //!
 //! Units: robot.v_max is per tick, so V_p = v_max / tau and the command is v tau.
 
 pub mod messages;
 pub mod params;
+mod replan;
 #[cfg(test)]
 mod tests;
+pub mod wrecks;
 
 pub use messages::{Assign, Msg, Plan, Status};
 pub use params::{parse_params, Params};
@@ -108,6 +114,17 @@ pub struct Formation {
     last_nearby: BTreeMap<u32, Vec2>,
     ghosts: BTreeMap<u32, Vec2>,
     swap: Option<SwapAgent>,
+    /// The epoch of the plan the handshake state `swap` is for.
+    swap_epoch: Option<u32>,
+    /// The tick this robot adopted its swaps-mode plan (it repeats it for `replan.relay_ticks`).
+    adopted_at: u64,
+    /// Swaps mode: since when a re-plan is needed, and the live count then.
+    need_since: Option<(u64, u32)>,
+    /// Dead robots' positions this robot knows (sensed or heard; the world's, exact).
+    wrecks: Vec<Vec2>,
+    statics: wrecks::StaticBoundaries,
+    /// A robot on an older plan was heard: repeat the plan this tick.
+    heard_older: bool,
     hungarian: Hungarian,
     first_tick: Option<u64>,
     /// Reports queued for the next ticks: a plan's (alpha, theta) and d follow its report.
@@ -149,6 +166,12 @@ impl Formation {
             last_nearby: BTreeMap::new(),
             ghosts: BTreeMap::new(),
             swap: None,
+            swap_epoch: None,
+            adopted_at: 0,
+            need_since: None,
+            wrecks: Vec::new(),
+            statics: wrecks::StaticBoundaries::of(sc),
+            heard_older: false,
             hungarian: Hungarian::new(),
             first_tick: None,
             queued_reports: Default::default(),
@@ -223,9 +246,12 @@ impl Formation {
     fn listen(&mut self, inbox: &[&Received<Msg>], swaps: &mut Vec<SwapMessage>) {
         let mut plans = Vec::new();
         let mut assigns = Vec::new();
+        let my_epoch = self.plan.as_ref().map(|p| p.epoch);
+        self.heard_older = false;
         for r in inbox {
             match &r.msg {
                 Msg::Status(s) => {
+                    self.heard_older |= my_epoch.is_some_and(|e| s.epoch < e);
                     self.heard.insert(
                         r.from,
                         Heard {
@@ -240,6 +266,11 @@ impl Formation {
                 }
                 Msg::Plan(p) => plans.push(p.clone()),
                 Msg::Assign(a) => assigns.push((r.from, a.clone())),
+                Msg::Wrecks(ws) => {
+                    for w in ws {
+                        wrecks::remember(&mut self.wrecks, Vec2::new(w[0], w[1]));
+                    }
+                }
                 Msg::Propose {
                     to,
                     seq,
@@ -247,7 +278,8 @@ impl Formation {
                     to_target,
                     from_position,
                     deadline,
-                } if *to == self.robot => swaps.push(SwapMessage::Propose {
+                    epoch,
+                } if *to == self.robot && Some(*epoch) == my_epoch => swaps.push(SwapMessage::Propose {
                     from: r.from as usize,
                     to: *to as usize,
                     seq: *seq,
@@ -256,7 +288,12 @@ impl Formation {
                     from_position: *from_position,
                     deadline: *deadline,
                 }),
-                Msg::Reply { to, seq, accepted } if *to == self.robot => {
+                Msg::Reply {
+                    to,
+                    seq,
+                    accepted,
+                    epoch,
+                } if *to == self.robot && Some(*epoch) == my_epoch => {
                     swaps.push(SwapMessage::Reply {
                         from: r.from as usize,
                         to: *to as usize,
@@ -500,7 +537,14 @@ impl Formation {
     }
 
     /// Step 2 for decentralised swaps: the fixed pattern, then one step of the handshake.
-    fn swap_step(&mut self, k: u64, me: Vec2, inbox: &[SwapMessage], out: &mut Outbox<Msg>) {
+    fn swap_step(
+        &mut self,
+        k: u64,
+        me: Vec2,
+        alive: u32,
+        inbox: &[SwapMessage],
+        out: &mut Outbox<Msg>,
+    ) -> Option<[f64; 4]> {
         if self.plan.is_none() {
             let n = self.template.len();
             self.install(Plan {
@@ -512,12 +556,32 @@ impl Formation {
                 slots: (0..n as u16).collect(),
                 dead: Vec::new(),
             });
-            self.swap = Some(SwapAgent::new(self.robot as usize, self.robot as usize));
+        }
+        let report = self.replan_step(k, me, alive);
+        self.adopt_for_swaps(k, me);
+        let plan = self.plan.as_ref().expect("installed above");
+        let epoch = plan.epoch;
+        if epoch > 0
+            && (k < self.adopted_at + self.p.replan.relay_ticks
+                || plan.coordinator == self.robot
+                || self.heard_older)
+        {
+            out.broadcast(Msg::Plan(plan.clone()));
+        }
+        // Wrecks the plan was not made around: for the coordinator of the next re-plan.
+        let news: Vec<[f64; 2]> = self
+            .wrecks
+            .iter()
+            .filter(|w| !plan.dead.iter().any(|d| d[0] == w.x && d[1] == w.y))
+            .map(|w| [w.x, w.y])
+            .collect();
+        if !news.is_empty() {
+            out.broadcast(Msg::Wrecks(news));
         }
         let neighbours: Vec<NeighbourView> = self
             .live_heard(k)
             .iter()
-            .filter(|(_, h)| h.slot >= 0)
+            .filter(|(_, h)| h.slot >= 0 && h.epoch == epoch)
             .map(|(id, h)| NeighbourView {
                 id: *id as usize,
                 position: self.estimate(h, k),
@@ -535,9 +599,11 @@ impl Formation {
                 (h.slot >= 0).then_some((*at, h.slot as usize))
             })
             .collect();
-        let blocked_within = 2.0 * (self.p.kernels.robot_radius + self.p.orca_margin);
-        let Some(agent) = &mut self.swap else { return };
-        if !wrecks.is_empty() {
+        let blocked_within = self.blocked_within();
+        let Some(agent) = &mut self.swap else {
+            return report;
+        };
+        if !wrecks.is_empty() && epoch == 0 {
             agent.take_vacancy(&self.targets, &wrecks, &neighbours, blocked_within);
         }
         let msgs = agent.step(k, me, &self.targets, &neighbours, inbox, &self.p.swaps);
@@ -561,6 +627,7 @@ impl Formation {
                         to_target: to_target as u32,
                         from_position,
                         deadline,
+                        epoch,
                     },
                 ),
                 SwapMessage::Reply {
@@ -571,10 +638,12 @@ impl Formation {
                         to: to as u32,
                         seq,
                         accepted,
+                        epoch,
                     },
                 ),
             };
         }
+        report
     }
 
     /// Step 3: eq. (16) then ORCA; the velocity in units per second.
@@ -604,8 +673,11 @@ impl Formation {
         for o in &mut obstacles {
             o.radius += self.p.orca_margin;
         }
-        let dead = self.plan.iter().flat_map(|p| p.dead.iter()).map(|d| Vec2::new(d[0], d[1]));
-        for pos in dead.chain(self.ghosts.values().copied()) {
+        let mut dead: Vec<Vec2> = self.wrecks.clone();
+        for d in self.plan.iter().flat_map(|p| p.dead.iter()) {
+            wrecks::remember(&mut dead, Vec2::new(d[0], d[1]));
+        }
+        for pos in dead.into_iter().chain(self.ghosts.values().copied()) {
             obstacles.push(Disc {
                 position: pos,
                 velocity: Vec2::zeros(),
@@ -658,14 +730,23 @@ impl Behaviour for Formation {
         let mut swaps = Vec::new();
         self.listen(inbox, &mut swaps);
         self.track_ghosts(sense, me);
-        let mut report = None;
-        let mut coordinator = false;
-        if self.f.reassignment == Reassignment::Swaps {
-            self.swap_step(k, me, &swaps, out);
-        } else {
-            report = self.coordinate(k, me, sense.alive_robots, out);
-            coordinator = self.plan.as_ref().is_some_and(|p| p.coordinator == self.robot);
+        for w in self.statics.wrecks_in(sense) {
+            wrecks::remember(&mut self.wrecks, w);
         }
+        // A restarted robot drives its body again: it is no wreck any more.
+        let r = self.p.kernels.robot_radius;
+        self.wrecks.retain(|w| {
+            !sense
+                .nearby()
+                .iter()
+                .any(|n| (Vec2::new(n.pos[0], n.pos[1]) - w).norm() < r)
+        });
+        let report = if self.f.reassignment == Reassignment::Swaps {
+            self.swap_step(k, me, sense.alive_robots, &swaps, out)
+        } else {
+            self.coordinate(k, me, sense.alive_robots, out)
+        };
+        let coordinator = self.plan.as_ref().is_some_and(|p| p.coordinator == self.robot);
         let v = self.motion(sense, me);
         let tau = self.tau();
         let mut cmd = v * tau;

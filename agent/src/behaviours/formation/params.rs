@@ -27,6 +27,44 @@ pub struct Params {
     /// lock-step ORCA does not model (neighbours sensed one step old, the LP's fallback in a
     /// crowd). [chosen] 0.05: without it 100 robots under swaps overlapped by up to 0.07.
     pub orca_margin: f64,
+    /// The re-plan after a robot is killed under `reassignment = "swaps"`
+    /// (`formation.kernels.replan`).
+    pub replan: ReplanParams,
+}
+
+/// The swaps mode's re-plan when the swarm is short of the pattern's slots (a robot died) or
+/// a wreck blocks a slot: an elected coordinator re-solves eq. (14) for the robots left with
+/// the wrecks as obstacles (docs/formation.md 9, "A robot killed under swaps").
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct ReplanParams {
+    /// alpha's range in the re-plan. [chosen] [1, 1.1]: in the literal reading of eq. (5)
+    /// q = ((alpha - 1) + R(theta)) s + d is a similarity of scale |alpha - 1 + e^(i theta)|,
+    /// so the pattern stays near the template's own size (the thick letters are drawn 2.2
+    /// apart, at the separation bound: alpha = 1 exactly is infeasible) and the search stays
+    /// small: on configs/formation-swaps-16.toml, kills 30:5, 40:10, 50:7, 0.13-1.1 s against
+    /// 0.7-1.4 s for [1, 1.25] and 1.2-1.4 s for [0.5, 2] (node budget spent).
+    pub alpha_range: [f64; 2],
+    /// theta's range in the re-plan. [chosen] [-pi, pi].
+    pub theta_range: [f64; 2],
+    /// The optimiser's node budget in the re-plan (it reports the gap it proved).
+    /// [chosen] 20 000.
+    pub max_nodes: usize,
+    /// Every robot repeats a re-planned pattern for this many ticks after it adopted it (the
+    /// coordinator's broadcast reaches only its comm radius, and loss drops some).
+    /// [chosen] 20.
+    pub relay_ticks: u64,
+}
+
+impl Default for ReplanParams {
+    fn default() -> Self {
+        ReplanParams {
+            alpha_range: [1.0, 1.1],
+            theta_range: [-std::f64::consts::PI, std::f64::consts::PI],
+            max_nodes: 20_000,
+            relay_ticks: 20,
+        }
+    }
 }
 
 impl Default for Params {
@@ -36,6 +74,7 @@ impl Default for Params {
             gather_ticks: 20,
             swaps: SwapParams::default(),
             orca_margin: 0.05,
+            replan: ReplanParams::default(),
         }
     }
 }
@@ -105,6 +144,8 @@ pub fn validate(sc: &Scenario, c: &Check) -> Result<(), ConfigError> {
     for (key, r) in [
         ("formation.kernels.optimiser.alpha_range", o.alpha_range),
         ("formation.kernels.optimiser.theta_range", o.theta_range),
+        ("formation.kernels.replan.alpha_range", p.replan.alpha_range),
+        ("formation.kernels.replan.theta_range", p.replan.theta_range),
     ] {
         if !(r[0].is_finite() && r[1].is_finite() && r[0] <= r[1]) {
             return Err(c.err(key, format!("= {r:?} must be finite [lo, hi] with lo <= hi")));
@@ -113,6 +154,12 @@ pub fn validate(sc: &Scenario, c: &Check) -> Result<(), ConfigError> {
     c.range_u(
         "formation.kernels.optimiser.max_nodes",
         o.max_nodes as u64,
+        1,
+        100_000_000,
+    )?;
+    c.range_u(
+        "formation.kernels.replan.max_nodes",
+        p.replan.max_nodes as u64,
         1,
         100_000_000,
     )?;
