@@ -35,7 +35,8 @@
 //! Choices (the thesis gives none of this): the merged group's consensus runs on a complete
 //! graph (the thesis's group shares its information; relays inside it are assumed); resources
 //! left after the captured tasks (4.5) and l_i less the captured tasks bound the new plans;
-//! holding robots keep their paths.
+//! holding robots keep their paths; an idle robot's Ē_i is 0 (it leaves no coalition, so
+//! (4.22) holds it back by nothing but its sunk cost).
 
 use std::collections::{BTreeMap, BTreeSet};
 
@@ -537,7 +538,9 @@ fn replan(
                         }
                     }
                 }
-                None => coalition = robots[i].resources,
+                // An idle robot leaves no coalition: Ē_i = 0 (4.19 over no type), so only
+                // its sunk cost and mu_i (both 0 here) hold it back.
+                None => {}
             }
             Proposal {
                 robot: i,
