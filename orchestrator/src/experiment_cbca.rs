@@ -61,7 +61,40 @@ pub struct CbcaExperiment {
     /// Hunt-world runs of Example 1 per variant (seeds 1..=variant_seeds).
     pub variant_seeds: u64,
     pub variants: Vec<crate::experiment::Variant>,
+    /// Run the hunt-world sections (Examples 1 and 2 in the hunt world, the variants). Default
+    /// true; configs/cbca-rounds.toml (round runs only) sets false.
+    #[serde(default = "yes")]
+    pub hunt_world: bool,
+    /// Run the first sweeps (grouped CBCA against globally informed baselines, the SVGs of
+    /// Figs. 4.6-4.7). Default true.
+    #[serde(default = "yes")]
+    pub legacy_sweeps: bool,
+    /// Run the fair comparison (experiment_cbca_fair.rs: every algorithm under local and
+    /// global information, (2.6) off and on). Default false.
+    #[serde(default)]
+    pub fair: bool,
+    /// Kill this fraction of the robots after convergence in the round runs at `loss_point`
+    /// (0: skip).
+    #[serde(default)]
+    pub kill_fraction: f64,
+    /// Example 2 re-planned with motion (Fig. 4.5) at these radio radii (km); empty: skip.
+    #[serde(default)]
+    pub moving_radii: Vec<f64>,
+    /// The results file's name in the output directory. Default "results.md".
+    #[serde(default = "results_md")]
+    pub results_file: String,
 }
+
+fn yes() -> bool {
+    true
+}
+
+fn results_md() -> String {
+    "results.md".into()
+}
+
+#[path = "experiment_cbca_fair.rs"]
+mod fair;
 
 use crate::experiment::mean_sd;
 
@@ -851,14 +884,78 @@ pub fn run(file: &Path, out: Option<&Path>) -> Result<i32, String> {
     );
     example_rounds(1, &ex1, &x, &out, &mut md)?;
     example_rounds(2, &ex2, &x, &out, &mut md)?;
-    example_hunt(1, &ex1, &mut md)?;
-    example_hunt(2, &ex2, &mut md)?;
+    if !x.moving_radii.is_empty() {
+        let (robots, tasks, params) = kernels_of(&ex2)?;
+        fair::example2_moving(
+            &robots,
+            &tasks,
+            &params,
+            &x.moving_radii,
+            &out,
+            &mut md,
+            &write_curves_svg,
+        )?;
+    }
+    if x.hunt_world {
+        example_hunt(1, &ex1, &mut md)?;
+        example_hunt(2, &ex2, &mut md)?;
+    }
     let (_, _, params) = kernels_of(&ex1)?;
-    sweeps(&x, &params, &out, &mut md)?;
-    loss_sweep(&x, &params, &mut md);
-    variants(&x, &ex1, &name, &dir, &mut md)?;
-    std::fs::write(out.join("results.md"), &md).map_err(|e| e.to_string())?;
+    if x.legacy_sweeps {
+        sweeps(&x, &params, &out, &mut md)?;
+    }
+    if x.fair {
+        let robots_points: Vec<(usize, usize)> = x
+            .sweep_robots
+            .iter()
+            .map(|&n_r| (n_r, x.sweep_robots_evaders))
+            .collect();
+        let evaders_points: Vec<(usize, usize)> = x
+            .sweep_evaders
+            .iter()
+            .map(|&n_e| (x.sweep_evaders_robots, n_e))
+            .collect();
+        fair::fair_sweeps(
+            x.seeds,
+            &robots_points,
+            &evaders_points,
+            &x.instance,
+            &params,
+            &mut md,
+        );
+    }
+    for cover in [false, true] {
+        let p = CbcaParams {
+            enforce_coverage: cover,
+            ..params.clone()
+        };
+        let _ = writeln!(
+            md,
+            "(The next section with (2.6) {}.)\n",
+            if cover { "on" } else { "off" }
+        );
+        loss_sweep(&x, &p, &mut md);
+        if x.kill_fraction > 0.0 {
+            fair::kill_sweep(
+                x.seeds,
+                x.loss_point,
+                &x.losses,
+                x.loss_max_delay,
+                x.kill_fraction,
+                &x.instance,
+                &p,
+                &mut md,
+            );
+        }
+        if !x.fair {
+            break;
+        }
+    }
+    if x.hunt_world {
+        variants(&x, &ex1, &name, &dir, &mut md)?;
+    }
+    std::fs::write(out.join(&x.results_file), &md).map_err(|e| e.to_string())?;
     println!("{md}");
-    println!("results: {}", out.join("results.md").display());
+    println!("results: {}", out.join(&x.results_file).display());
     Ok(0)
 }

@@ -14,6 +14,9 @@
 //!   beats n*'s (ties: the smaller id) and E_m ∩ E_n* != ∅; if n* = i, i loses j and every task
 //!   it added to b_i after j (CBBA's release), and Algorithm 1 runs again next iteration.
 //! - leave: otherwise nothing changes. Robot i alone writes its own entries (m = i).
+//! - (2.6), with `params.enforce_coverage`: at the next bundle pass, a robot that is the weakest
+//!   member of a full coalition whose carried resources do not cover E_j releases j (and what
+//!   it added after j), as a displaced robot does ([`CbcaRobot::uncovered_weakest`]).
 //!
 //! Then s_ik <- max(s_ik, send time) and s_im <- max(s_im, s_km) for m != i, k (the stamp
 //! propagation spec 4.6 adds). The thesis sets s_ik to the receive time; with delays a late
@@ -171,7 +174,17 @@ struct BelievedPeers<'a> {
 }
 
 impl<'a> BelievedPeers<'a> {
-    fn new(me: RobotId, infos: &'a [Option<RobotInfo>], winners: &Winners) -> Self {
+    /// `doomed`: (robot, task) pairs the robot is about to release by the (2.6) rule
+    /// ([`CbcaRobot::doomed`]), left out of its believed path. Without this a robot's DAG
+    /// repair reacted to a task its peer was releasing at the same time, and both gave way in
+    /// turn forever (fixed sweep seed 14405549394120499418: R1 released T3 by (2.6) while R2
+    /// dropped T3 and T1 to break the cycle R1's stale path made, then both took them again).
+    fn new(
+        me: RobotId,
+        infos: &'a [Option<RobotInfo>],
+        winners: &Winners,
+        doomed: &std::collections::BTreeSet<(RobotId, TaskId)>,
+    ) -> Self {
         let paths = (0..infos.len())
             .map(|m| {
                 let view = InfoPeers(infos);
@@ -182,7 +195,7 @@ impl<'a> BelievedPeers<'a> {
                     known
                         .iter()
                         .copied()
-                        .filter(|&j| winners.is_winner(m, j))
+                        .filter(|&j| winners.is_winner(m, j) && !doomed.contains(&(m, j)))
                         .collect()
                 }
             })
@@ -263,7 +276,7 @@ impl CbcaRobot {
     }
     /// The whole peer view (for the "why" reports of a driver).
     pub fn peers(&self) -> impl Peers + '_ {
-        BelievedPeers::new(self.me.id, &self.infos, &self.winners)
+        BelievedPeers::new(self.me.id, &self.infos, &self.winners, &self.doomed())
     }
     pub fn params(&self) -> &CbcaParams {
         &self.params
@@ -332,7 +345,8 @@ impl CbcaRobot {
         self.iteration += 1;
         let mut dropped = Vec::new();
         loop {
-            let mut paths = BelievedPeers::new(self.me.id, &self.infos, &self.winners).paths;
+            let mut paths =
+                BelievedPeers::new(self.me.id, &self.infos, &self.winners, &self.doomed()).paths;
             paths[self.me.id] = self.plan.path.clone();
             if dag::cycle_closer(&paths) != Some(self.me.id) || self.plan.bundle.is_empty() {
                 break;
@@ -340,8 +354,9 @@ impl CbcaRobot {
             let last = self.plan.bundle.len() - 1;
             dropped.extend(self.release_from(last));
         }
+        dropped.extend(self.release_uncovered());
         let added = {
-            let peers = BelievedPeers::new(self.me.id, &self.infos, &self.winners);
+            let peers = BelievedPeers::new(self.me.id, &self.infos, &self.winners, &self.doomed());
             build_bundle(
                 &self.me,
                 &mut self.plan,
@@ -356,6 +371,72 @@ impl CbcaRobot {
         let digest = self.digest();
         self.detector.note_state(self.iteration, digest);
         (added, dropped)
+    }
+
+    /// (2.6) after consensus: the tasks of b_i whose agreed coalition is full (N_j^sum = L_j)
+    /// but whose members' carried resources E' do not cover E_j, and where robot i is the
+    /// weakest member (4.16's min_k y_kj; ties: the larger id). Only when every member's
+    /// resources are known (robot i judges only coalitions it can vouch for).
+    pub fn uncovered_weakest(&self) -> Vec<TaskId> {
+        let doomed = self.doomed();
+        self.plan
+            .bundle
+            .iter()
+            .copied()
+            .filter(|&j| doomed.contains(&(self.me.id, j)))
+            .collect()
+    }
+
+    /// Every (weakest member, task) of a full coalition robot i believes in whose members'
+    /// carried resources (all known to i) do not cover E_j: who gives way by the (2.6) rule.
+    pub fn doomed(&self) -> std::collections::BTreeSet<(RobotId, TaskId)> {
+        let mut out = std::collections::BTreeSet::new();
+        if !self.params.enforce_coverage {
+            return out;
+        }
+        for (&j, task) in &self.book {
+            let members = self.winners.winners_of(j);
+            if members.len() < task.robots_needed {
+                continue;
+            }
+            let res: Option<Vec<Resources>> =
+                members.iter().map(|&(m, _)| self.resources_of(m)).collect();
+            let Some(res) = res else { continue };
+            let refs: Vec<&Resources> = res.iter().collect();
+            if !super::model::covers(&refs, task) {
+                if let Some((weak, _)) = self.winners.weakest(j) {
+                    out.insert((weak, j));
+                }
+            }
+        }
+        out
+    }
+
+    /// The (2.6) rule of Algorithm 2 (our reading of sec. 4.2.3 and Fig. 4.4(d), spec 4.6):
+    /// consensus compares bids only, so two robots that each complete a coalition with
+    /// different partners, or rule (B) adding a relayed winner to a coalition with room, can
+    /// leave a full coalition that does not cover E_j. Such a coalition cannot hunt (the thesis
+    /// shelves T1 when "no coalition satisfies T1's resources"). Its weakest member gives way,
+    /// as the loser of a full coalition does in the textual rule ("it loses winner status,
+    /// resets this task's position in its bundle, and goes back to Phase 1"): it releases j and
+    /// every task added after it; the place reopens for a robot whose resources complete the
+    /// cover (Algorithm 1's completing bid is checked by `enforce_coverage`, so the same robot
+    /// cannot take it back). Run at the start of each bundle pass. Returns the released tasks.
+    fn release_uncovered(&mut self) -> Vec<TaskId> {
+        let mut out = Vec::new();
+        while let Some(&j) = self.uncovered_weakest().first() {
+            let at = self
+                .plan
+                .bundle
+                .iter()
+                .position(|&t| t == j)
+                .expect("in the bundle");
+            out.extend(self.release_from(at));
+        }
+        if !out.is_empty() {
+            self.sync_own_info();
+        }
+        out
     }
 
     /// The message to the neighbours at clock `now`.
@@ -499,6 +580,25 @@ impl CbcaRobot {
         changed
     }
 
+    /// Starts from a decided plan (moving_rounds.rs, the consistency pass after the loyalty
+    /// decisions of a merged group): b_i = p_i = `path`, every task committed (the head of the
+    /// path), with robot i's bid on each raised to `bonus` + its `scores` entry (so a decided
+    /// plan outranks any fresh bid and, between two decided plans claiming the last place of a
+    /// coalition, the larger score keeps it). Replaces the current plan and i's own entries.
+    pub fn seed_plan(&mut self, path: &[TaskId], scores: &[f64], bonus: f64) {
+        self.release_all();
+        for (&j, &s) in path.iter().zip(scores) {
+            if !self.book.contains_key(&j) {
+                continue;
+            }
+            self.plan.bundle.push(j);
+            self.plan.path.push(j);
+            self.plan.committed.insert(j);
+            self.winners.set(self.me.id, j, bonus + s);
+        }
+        self.sync_own_info();
+    }
+
     /// Drops every task of b_i (a switch after the loyalty test).
     pub fn release_all(&mut self) -> Vec<TaskId> {
         let r = self.release_from(0);
@@ -544,7 +644,7 @@ impl CbcaRobot {
     pub fn proposal(&self) -> (Vec<TaskId>, f64) {
         let mut c = self.clone();
         c.release_all();
-        let peers = BelievedPeers::new(c.me.id, &c.infos, &c.winners);
+        let peers = BelievedPeers::new(c.me.id, &c.infos, &c.winners, &c.doomed());
         build_bundle(
             &c.me,
             &mut c.plan,
@@ -769,6 +869,65 @@ mod tests {
         });
         a.receive(&m);
         assert_eq!(a.winners.winners_of(0), vec![(1, 2.0)]);
+    }
+
+    #[test]
+    fn rule_2_6_the_weakest_of_a_full_uncovered_coalition_gives_way() {
+        // T1 needs 4 of every type, L = 2. R1 (index 0) carries 1 a type and holds T1 at 5.
+        // R2 (index 1) reports itself on T1 at 6: rule B, room, R2 joins. The pair {R1, R2}
+        // is full but carries 1 + c < 4 of each type: R1, the weakest (5 < 6), releases T1 at
+        // its next bundle pass and cannot bid it back (completing it would not cover either);
+        // R2's entry stays. With R2 carrying 3 a type (1 + 3 = 4 covers) R1 keeps T1.
+        let book: TaskBook = [(0, task(0, [0.0, 0.0], [4.0; 6], 2))]
+            .into_iter()
+            .collect();
+        for (r2_carries, kept) in [(1.0, false), (3.0, true)] {
+            let mut a = CbcaRobot::new(
+                robot(0, [0.0, 1.0], [1.0; 6]),
+                3,
+                1,
+                book.clone(),
+                CbcaParams::default(),
+            );
+            a.plan = Plan {
+                committed: Default::default(),
+                bundle: vec![0],
+                path: vec![0],
+            };
+            a.winners.set(0, 0, 5.0);
+            let mut m = msg(1, 2.0, &[(1, 0, 6.0)], [0.0, 0.0, 0.0]);
+            m.infos[1] = Some(RobotInfo {
+                resources: [r2_carries; 6],
+                path: vec![0],
+            });
+            a.receive(&m);
+            assert_eq!(a.winners.winners_of(0), vec![(0, 5.0), (1, 6.0)]);
+            assert_eq!(a.uncovered_weakest().is_empty(), kept);
+            let (_, dropped) = a.iterate(3.0);
+            assert_eq!(a.plan.bundle.contains(&0), kept, "R2 carries {r2_carries}");
+            assert_eq!(dropped, if kept { vec![] } else { vec![0] });
+            assert_eq!(a.winners.is_winner(1, 0), true);
+        }
+        // Off: the uncovered pair stays.
+        let mut a = CbcaRobot::new(
+            robot(0, [0.0, 1.0], [1.0; 6]),
+            3,
+            1,
+            book,
+            CbcaParams {
+                enforce_coverage: false,
+                ..CbcaParams::default()
+            },
+        );
+        a.plan = Plan {
+            committed: Default::default(),
+            bundle: vec![0],
+            path: vec![0],
+        };
+        a.winners.set(0, 0, 5.0);
+        a.receive(&msg(1, 2.0, &[(1, 0, 6.0)], [0.0, 0.0, 0.0]));
+        a.iterate(3.0);
+        assert_eq!(a.plan.bundle, vec![0]);
     }
 
     #[test]

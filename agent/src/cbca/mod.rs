@@ -14,6 +14,7 @@ pub mod grouping;
 pub mod instance;
 pub mod loyalty;
 pub mod model;
+pub mod moving_rounds;
 pub mod params;
 pub mod replan;
 pub mod rounds;

@@ -2,7 +2,8 @@
 //! connected graphs, over the in-memory radio of rounds.rs: after the detectors declare
 //! convergence, every robot holds the same winner lists, they match the robots' own bundles,
 //! no task has more than L_j winners, and the paths' task graph is a DAG (4.6); with loss 0.3
-//! and delays of up to 2 rounds as well.
+//! and delays of up to 2 rounds as well; and no agreed full coalition leaves E_j uncovered
+//! ((2.6), enforced in Algorithms 1 and 2).
 
 use proptest::prelude::*;
 use rand::{Rng, SeedableRng};
@@ -11,7 +12,7 @@ use swarm::geometry::Vec2;
 
 use super::consensus::CbcaRobot;
 use super::dag;
-use super::model::{Robot, RobotId, Task, TaskBook, RESOURCE_TYPES};
+use super::model::{covers, Robot, RobotId, Task, TaskBook, RESOURCE_TYPES};
 use super::params::CbcaParams;
 use super::rounds::{run, Radio, RunStats};
 
@@ -104,6 +105,20 @@ fn check_agreement(
         prop_assert_eq!(won, bundle);
     }
     prop_assert!(dag::is_dag(robots.iter().map(|r| r.plan().path.as_slice())));
+    // (2.6) in both algorithms (`enforce_coverage`, on by default): no agreed full coalition
+    // leaves E_j uncovered.
+    if robots[0].params().enforce_coverage {
+        for (j, t) in book {
+            let members = robots[0].winners().winners_of(*j);
+            if members.len() == t.robots_needed {
+                let res: Vec<_> = members
+                    .iter()
+                    .map(|&(m, _)| &robots[m].robot().resources)
+                    .collect();
+                prop_assert!(covers(&res, t), "T{} full but uncovered", j + 1);
+            }
+        }
+    }
     Ok(())
 }
 

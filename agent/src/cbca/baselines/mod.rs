@@ -13,6 +13,7 @@
 //! the realised start, less the path cost (4.14).
 
 pub mod contract_net;
+pub mod local;
 pub mod sujit;
 pub mod welfare;
 
@@ -80,6 +81,8 @@ pub fn reduce(need: &mut Resources, contribution: &Resources) {
 /// contribution still covers some of the task's remaining need, until L_j have joined; if L_j
 /// do, they take the task (each appends it to its path, one award message each). Returns
 /// whether the task was taken. The contract net and Sujit et al. differ only in the ranking.
+/// With `params.enforce_coverage` a full coalition that does not cover E_j (2.6) takes nothing
+/// (the task is shelved), as in CBCA.
 pub fn recruit(
     alloc: &mut Allocation,
     robots: &[Robot],
@@ -103,7 +106,7 @@ pub fn recruit(
         reduce(&mut need, &c);
         members.push(i);
     }
-    if members.len() < task.robots_needed {
+    if members.len() < task.robots_needed || !coalition_covers(robots, &members, task, params) {
         return false;
     }
     for &i in &members {
@@ -111,6 +114,23 @@ pub fn recruit(
     }
     alloc.messages += members.len() as u64;
     true
+}
+
+/// (2.6) for a baseline's coalition when `params.enforce_coverage` is on: the members' carried
+/// resources E_i' sum to E_j in every type, the same test CBCA's Algorithms 1 and 2 apply
+/// (bundle.rs, consensus.rs). Off: always true (the baselines' published forms stop at L_j
+/// members whatever they carry).
+pub fn coalition_covers(
+    robots: &[Robot],
+    members: &[usize],
+    task: &super::model::Task,
+    params: &CbcaParams,
+) -> bool {
+    if !params.enforce_coverage {
+        return true;
+    }
+    let res: Vec<&Resources> = members.iter().map(|&i| &robots[i].resources).collect();
+    super::model::covers(&res, task)
 }
 
 /// An allocation: each robot's path, and the messages the method would exchange.

@@ -12,7 +12,9 @@
 //! - a coalition is built greedily: among the robots that can append the task (sec. 4.1's
 //!   constraints), add the one with the largest coverage gain (baselines::coverage_gain) per
 //!   unit of welfare it consumes, ties by arrival time then id, until L_j members; robots that
-//!   add nothing to the residual need are skipped; fewer than L_j: the task is shelved.
+//!   add nothing to the residual need are skipped; fewer than L_j: the task is shelved;
+//! - with `params.enforce_coverage`, a coalition whose carried E_i' do not cover E_j (2.6) is
+//!   shelved too (the same test as CBCA's).
 
 use super::super::model::{Resources, Robot, TaskBook, TaskId, RESOURCE_TYPES};
 use super::super::params::CbcaParams;
@@ -69,7 +71,9 @@ pub fn allocate(robots: &[Robot], book: &TaskBook, params: &CbcaParams) -> Alloc
             spent = add(&spent, &c);
             members.push(i);
         }
-        if members.len() == task.robots_needed {
+        if members.len() == task.robots_needed
+            && super::coalition_covers(robots, &members, task, params)
+        {
             team = sub(&team, &spent);
             for &i in &members {
                 alloc.paths[i].push(j);
@@ -110,8 +114,16 @@ mod tests {
         // ratio, not the distance, decides, R1 is put nearer.
         let mut near = robots.clone();
         near[0].position = Vec2::new(0.5, 0.0);
-        let a = allocate(&near, &b, &CbcaParams::default());
+        // (R2 alone carries no type 2: the ratio test runs with (2.6) off.)
+        let off = CbcaParams {
+            enforce_coverage: false,
+            ..CbcaParams::default()
+        };
+        let a = allocate(&near, &b, &off);
         assert_eq!(a.paths, vec![vec![], vec![0]]);
+        // With (2.6) on, neither robot covers {0, 2, 2} alone (L = 1): shelved.
+        let a = allocate(&near, &b, &CbcaParams::default());
+        assert_eq!(a.paths, vec![Vec::<usize>::new(), vec![]]);
         assert!(
             (welfare(&[0.0, 5.0, 9.0, 0.0, 0.0, 0.0]) - (6.0f64.ln() + 10.0f64.ln())).abs() < 1e-12
         );
