@@ -74,6 +74,8 @@ def kind(name):
         return "barrier"
     if name == pfx + "air" or name.startswith(pfx + "air."):
         return "air"
+    if name == pfx + "sense" or name.startswith(pfx + "sense."):
+        return "sense"  # the Sense frames' ring (runtime.sense = "ring")
     parts = name[len(pfx):].split("_")
     if name.endswith(".dynamic"):
         return dyn_service_kind(name)
