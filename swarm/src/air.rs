@@ -140,7 +140,10 @@ impl TickAir {
     }
     /// Message `i`'s header and payload (not of a `lent` air: its payloads are elsewhere).
     pub fn message(&self, i: u32) -> Option<(&RadioHeader, &[u8])> {
-        debug_assert!(!self.lent, "a lent air's payloads are in its sender's buffer");
+        debug_assert!(
+            !self.lent,
+            "a lent air's payloads are in its sender's buffer"
+        );
         let (h, r) = self.messages.get(i as usize)?;
         Some((h, self.bytes.get(r.clone())?))
     }

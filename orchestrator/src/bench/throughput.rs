@@ -112,8 +112,10 @@ pub fn run(robots: u32, quick: bool) -> BenchResult<Vec<Row>> {
     CASES
         .iter()
         .filter(|&&(_, enc, air)| {
-            only.as_deref()
-                .is_none_or(|o| o.split(',').any(|c| c == format!("{enc}:{}", air_name(air))))
+            only.as_deref().is_none_or(|o| {
+                o.split(',')
+                    .any(|c| c == format!("{enc}:{}", air_name(air)))
+            })
         })
         .map(|&(size, enc, air)| {
             let ticks = match (quick, size > 1024 && enc == "seq") {
@@ -188,13 +190,7 @@ pub fn print(rows: &[Row]) {
 const READY_S: u64 = 120;
 const ACK_S: u64 = 10;
 
-fn one(
-    n: u32,
-    size: usize,
-    enc: &str,
-    air: Option<AirTransport>,
-    ticks: u64,
-) -> BenchResult<Row> {
+fn one(n: u32, size: usize, enc: &str, air: Option<AirTransport>, ticks: u64) -> BenchResult<Row> {
     let prefix = tick::bench_prefix(&format!("tput-{n}-{size}-{enc}-{}", air_name(air)));
     let r = (|| -> BenchResult<Row> {
         let sc = scenario(n, size, air.unwrap_or_default());
