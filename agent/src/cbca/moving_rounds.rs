@@ -530,17 +530,14 @@ fn replan(
             let new_path = cb[i].plan().path.clone();
             let new_score = path_score(&now[i], &new_path, &book, params).total;
             let mut coalition = [0.0; super::model::RESOURCE_TYPES];
-            match old_path.first() {
-                Some(j) => {
-                    for &m in &old_coalitions[j] {
-                        for (w, c) in coalition.iter_mut().enumerate() {
-                            *c += robots[m].resources[w];
-                        }
+            // An idle robot leaves no coalition: Ē_i = 0 (4.19 over no type), so only its
+            // sunk cost and mu_i (both 0 here) hold it back.
+            if let Some(j) = old_path.first() {
+                for &m in &old_coalitions[j] {
+                    for (w, c) in coalition.iter_mut().enumerate() {
+                        *c += robots[m].resources[w];
                     }
                 }
-                // An idle robot leaves no coalition: Ē_i = 0 (4.19 over no type), so only
-                // its sunk cost and mu_i (both 0 here) hold it back.
-                None => {}
             }
             Proposal {
                 robot: i,
