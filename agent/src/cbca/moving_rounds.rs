@@ -657,3 +657,59 @@ mod tests {
         assert!((r.utility[0][0] - want).abs() < 1e-6);
     }
 }
+
+#[cfg(test)]
+mod example2_tests {
+    use super::*;
+    use crate::cbca::params::LoyaltyParams;
+    use crate::cbca::scenario::tests::example;
+
+    /// Example 2 at 1.5 km without loyalty (r1 = r2 = r3 = 0): coalition members switch to a
+    /// better path (3 here; none leaves a coalition that others stay in, so nobody is paid);
+    /// with loyalty on (the defaults) none does. Payments, if any, sum to zero.
+    #[test]
+    fn loyalty_blocks_the_switches_a_free_run_makes() {
+        let s = example(2);
+        let robots = s.robots().unwrap();
+        let tasks = s.tasks().unwrap();
+        let mp = MovingParams::default();
+        let free = CbcaParams {
+            loyalty: LoyaltyParams {
+                r1: 0.0,
+                r2: 0.0,
+                r3: 0.0,
+                ..LoyaltyParams::default()
+            },
+            ..s.params.clone()
+        };
+        let count = |p: &CbcaParams| {
+            let r = run_moving(&robots, &tasks, p, &mp);
+            let switches: usize = r
+                .replannings
+                .iter()
+                .flat_map(|x| &x.decisions)
+                .filter(|d| d.verdict == Verdict::Switches && !d.old_path.is_empty())
+                .count();
+            let (n, amount) = r
+                .replannings
+                .iter()
+                .flat_map(|x| &x.payments)
+                .fold((0, 0.0), |(n, a), p| (n + 1, a + p.amount));
+            (r, switches, n, amount)
+        };
+        let (r, switches, payments, amount) = count(&free);
+        eprintln!("without loyalty: {switches} member switches, {payments} payments, {amount:.2}");
+        assert!(switches > 0);
+        assert_eq!((payments, amount), (0, 0.0));
+        let (_, loyal_switches, _, _) = count(&s.params);
+        eprintln!("with loyalty: {loyal_switches} member switches");
+        assert!(loyal_switches < switches);
+        // Every payment leaves one robot and reaches another.
+        let mut balance = vec![0.0; robots.len()];
+        for p in r.replannings.iter().flat_map(|x| &x.payments) {
+            balance[p.from] -= p.amount;
+            balance[p.to] += p.amount;
+        }
+        assert!(balance.iter().sum::<f64>().abs() < 1e-9);
+    }
+}
