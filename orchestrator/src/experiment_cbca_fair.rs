@@ -374,6 +374,9 @@ fn set(v: &[usize]) -> String {
     format!("{{{}}}", names.join(", "))
 }
 
+/// The utility-curve SVG writer of experiment_cbca.rs: (title, times, (label, values), file).
+pub type CurvesSvg = dyn Fn(&str, &[f64], &[(String, Vec<f64>)], &Path) -> Result<(), String>;
+
 /// Example 2 re-planned with motion (Fig. 4.5): see `agent::cbca::moving_rounds`.
 pub fn example2_moving(
     robots: &[Robot],
@@ -382,7 +385,7 @@ pub fn example2_moving(
     radii: &[f64],
     out: &Path,
     md: &mut String,
-    svg: &dyn Fn(&str, &[f64], &[(String, Vec<f64>)], &Path) -> Result<(), String>,
+    svg: &CurvesSvg,
 ) -> Result<(), String> {
     let _ = writeln!(md, "## Example 2 re-planned with motion, loyalty and compensation (Fig. 4.5; `agent::cbca::moving_rounds`, static targets)\n");
     let _ = writeln!(md, "Robots move at 1 km per time unit along their plans (dt 0.05); a target is captured when its whole full coalition is there, held for its hold time, then done. When two planning groups come within the radio radius they merge: CBCA runs afresh on the merged group from where the robots are (values decayed to now); each robot adopts its new path only if S_i(p_i') > S_i(p_i) + sigma_i (4.22), a switcher pays compensation (rate {}) split among the members it leaves; a consistency pass (consensus with the decided plans seeded) settles contested places. Loyalty r1 = {}, r2 = {}, r3 = {}.\n", params.loyalty.compensation_rate, params.loyalty.r1, params.loyalty.r2, params.loyalty.r3);

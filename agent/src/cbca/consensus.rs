@@ -906,7 +906,7 @@ mod tests {
             let (_, dropped) = a.iterate(3.0);
             assert_eq!(a.plan.bundle.contains(&0), kept, "R2 carries {r2_carries}");
             assert_eq!(dropped, if kept { vec![] } else { vec![0] });
-            assert_eq!(a.winners.is_winner(1, 0), true);
+            assert!(a.winners.is_winner(1, 0));
         }
         // Off: the uncovered pair stays.
         let mut a = CbcaRobot::new(

@@ -530,17 +530,14 @@ fn replan(
             let new_path = cb[i].plan().path.clone();
             let new_score = path_score(&now[i], &new_path, &book, params).total;
             let mut coalition = [0.0; super::model::RESOURCE_TYPES];
-            match old_path.first() {
-                Some(j) => {
-                    for &m in &old_coalitions[j] {
-                        for (w, c) in coalition.iter_mut().enumerate() {
-                            *c += robots[m].resources[w];
-                        }
+            // An idle robot leaves no coalition: Ē_i = 0 (4.19 over no type), so only its
+            // sunk cost and mu_i (both 0 here) hold it back.
+            if let Some(j) = old_path.first() {
+                for &m in &old_coalitions[j] {
+                    for (w, c) in coalition.iter_mut().enumerate() {
+                        *c += robots[m].resources[w];
                     }
                 }
-                // An idle robot leaves no coalition: Ē_i = 0 (4.19 over no type), so only
-                // its sunk cost and mu_i (both 0 here) hold it back.
-                None => {}
             }
             Proposal {
                 robot: i,
@@ -658,5 +655,61 @@ mod tests {
         assert!((r.utility[0].last().unwrap() - want).abs() < 1e-6);
         // ... and at t = 0 the same plan, expected: the identical value (no waiting).
         assert!((r.utility[0][0] - want).abs() < 1e-6);
+    }
+}
+
+#[cfg(test)]
+mod example2_tests {
+    use super::*;
+    use crate::cbca::params::LoyaltyParams;
+    use crate::cbca::scenario::tests::example;
+
+    /// Example 2 at 1.5 km without loyalty (r1 = r2 = r3 = 0): coalition members switch to a
+    /// better path (3 here; none leaves a coalition that others stay in, so nobody is paid);
+    /// with loyalty on (the defaults) none does. Payments, if any, sum to zero.
+    #[test]
+    fn loyalty_blocks_the_switches_a_free_run_makes() {
+        let s = example(2);
+        let robots = s.robots().unwrap();
+        let tasks = s.tasks().unwrap();
+        let mp = MovingParams::default();
+        let free = CbcaParams {
+            loyalty: LoyaltyParams {
+                r1: 0.0,
+                r2: 0.0,
+                r3: 0.0,
+                ..LoyaltyParams::default()
+            },
+            ..s.params.clone()
+        };
+        let count = |p: &CbcaParams| {
+            let r = run_moving(&robots, &tasks, p, &mp);
+            let switches: usize = r
+                .replannings
+                .iter()
+                .flat_map(|x| &x.decisions)
+                .filter(|d| d.verdict == Verdict::Switches && !d.old_path.is_empty())
+                .count();
+            let (n, amount) = r
+                .replannings
+                .iter()
+                .flat_map(|x| &x.payments)
+                .fold((0, 0.0), |(n, a), p| (n + 1, a + p.amount));
+            (r, switches, n, amount)
+        };
+        let (r, switches, payments, amount) = count(&free);
+        eprintln!("without loyalty: {switches} member switches, {payments} payments, {amount:.2}");
+        assert!(switches > 0);
+        assert_eq!((payments, amount), (0, 0.0));
+        let (_, loyal_switches, _, _) = count(&s.params);
+        eprintln!("with loyalty: {loyal_switches} member switches");
+        assert!(loyal_switches < switches);
+        // Every payment leaves one robot and reaches another.
+        let mut balance = vec![0.0; robots.len()];
+        for p in r.replannings.iter().flat_map(|x| &x.payments) {
+            balance[p.from] -= p.amount;
+            balance[p.to] += p.amount;
+        }
+        assert!(balance.iter().sum::<f64>().abs() < 1e-9);
     }
 }

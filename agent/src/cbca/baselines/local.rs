@@ -105,12 +105,9 @@ pub fn allocate_local(
         }
         merges += 1;
         let mut by_root: BTreeMap<usize, Vec<RobotId>> = BTreeMap::new();
-        for gi in 0..groups.len() {
+        for (gi, g) in groups.iter().enumerate() {
             let r = root(&mut parent, gi);
-            by_root
-                .entry(r)
-                .or_default()
-                .extend(groups[gi].iter().copied());
+            by_root.entry(r).or_default().extend(g.iter().copied());
         }
         groups = by_root
             .into_values()
