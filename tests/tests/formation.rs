@@ -102,3 +102,58 @@ fn a_coordinator_killed_mid_run_is_replaced_and_the_pattern_replanned_for_eight(
     assert_eq!(s["alive_at_end"], 8, "{s}");
     assert_left_nothing(&out);
 }
+
+/// Issue 16 under the decentralised swaps: 16 robots, comm radius 15, loss 0.3, robot 5 gets a
+/// real SIGKILL at tick 30. The survivors sense its wreck (Sense obstacle points), elect robot
+/// 0 (the lowest id heard since the death), which re-plans the pattern for the 15 left with
+/// the wreck as an obstacle; swaps resume on the new slots. The recording is the in-process
+/// executor's, and the run leaves /dev/shm clean.
+#[test]
+fn a_robot_killed_under_swaps_leaves_fifteen_that_re_form_a_re_planned_pattern() {
+    let _g = serial();
+    let sc = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../configs/formation-swaps-16.toml")
+        .to_str()
+        .unwrap()
+        .to_string();
+    let p = tmp_dir("formation-swaps-kill-p");
+    let i = tmp_dir("formation-swaps-kill-i");
+    let id = own_run_id("formation-swaps-kill");
+    for (dir, exec, run_id) in [
+        (&p, "processes", Some(id.as_str())),
+        (&i, "inprocess", None),
+    ] {
+        let o = up_as(
+            &["--scenario", &sc, "--executor", exec, "--chaos-at", "30:5"],
+            dir,
+            run_id,
+        );
+        assert!(o.status.success(), "{exec}: {}", stderr(&o));
+        let s = summary(dir);
+        let f = formation(dir);
+        assert_eq!(f["formed"], true, "{exec}: {f}");
+        assert_eq!(f["overlapping_pairs"], 0, "{exec}: {f}");
+        assert_eq!(f["obstacle_overlaps"], 0, "{exec}: {f}");
+        assert_eq!(s["alive_at_end"], 15, "{exec}: {s}");
+        let plans = f["plans"].as_array().unwrap();
+        assert_eq!(plans.len(), 1, "{exec}: {f}");
+        assert_eq!(plans[0]["robot"], 0, "{exec}: {f}");
+        assert_eq!(plans[0]["epoch"], 1, "{exec}: {f}");
+        assert!(plans[0]["tick"].as_u64().unwrap() > 30, "{exec}: {f}");
+        // The 15 survivors hold the 15 distinct slots of the re-planned pattern.
+        let slots = f["slots"].as_array().unwrap();
+        let mut idx: Vec<u64> = (0..16)
+            .filter(|r| *r != 5)
+            .map(|r| {
+                assert_eq!(slots[r]["epoch"], 1, "{exec}: robot {r}: {}", slots[r]);
+                slots[r]["index"].as_u64().unwrap()
+            })
+            .collect();
+        idx.sort_unstable();
+        assert_eq!(idx, (0..15).collect::<Vec<u64>>(), "{exec}");
+    }
+    let rec = |d: &std::path::Path| std::fs::read(d.join("recording.bin")).unwrap();
+    assert!(rec(&p) == rec(&i), "the executors differ");
+    assert!(shm_of_run(&id).is_empty(), "{:?}", shm_of_run(&id));
+    assert_left_nothing(&p);
+}

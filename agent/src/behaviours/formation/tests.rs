@@ -119,3 +119,110 @@ fn a_silent_member_is_replanned_away_by_the_lowest_robot_left() {
     assert_eq!(plan.points.len(), 8);
     assert_eq!(plan.coordinator, 1);
 }
+
+fn swaps_scenario() -> Scenario {
+    Scenario::load(std::path::Path::new(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../configs/formation-swaps-16.toml"
+    )))
+    .unwrap()
+}
+
+fn slot_status(from: u32, tick: u64, pos: Vec2, slot: i32) -> Received<Msg> {
+    Received {
+        from,
+        tick,
+        seq: 0,
+        sender_pos: [pos.x, pos.y],
+        unicast: false,
+        msg: Msg::Status(Status {
+            pos: [pos.x, pos.y],
+            vel: [0.0, 0.0],
+            slot,
+            epoch: 0,
+        }),
+    }
+}
+
+#[test]
+fn under_swaps_a_death_makes_the_lowest_robot_heard_since_re_plan_around_the_wreck() {
+    let sc = swaps_scenario();
+    let mut robots: Vec<Formation> = (0..16).map(|i| Formation::new(&sc, i)).collect();
+    // Tick 0: the fixed pattern, robot i on slot i; every robot sits on its slot.
+    let mut at = Vec::new();
+    for (i, r) in robots.iter_mut().enumerate() {
+        let mut out = Outbox::new_for_tests(8);
+        r.step(&sense(i as u32, 0, [1.0 + 1.5 * i as f64, 1.0], 16), &[], &mut out);
+        assert_eq!(r.slot(), Some(i));
+        at = r.targets().to_vec();
+    }
+    // Robot 5 died at tick 30 on its slot: robot 0 senses the wreck (an obstacle point off
+    // every static boundary) and hears statuses sent at tick 30 from the 14 others only.
+    let wreck = at[5];
+    let heard: Vec<Received<Msg>> = (1..16)
+        .filter(|j| *j != 5)
+        .map(|j| slot_status(j, 30, at[j as usize], j as i32))
+        .collect();
+    // At the tick of the death (30) the statuses of tick 29, robot 5's among them, prove
+    // nothing: no plan yet.
+    let old: Vec<Received<Msg>> = (1..16).map(|j| slot_status(j, 29, at[j as usize], j as i32)).collect();
+    let mut s = sense(0, 30, [at[0].x, at[0].y], 15);
+    s.obstacle_points[0] = [wreck.x, wreck.y];
+    s.n_obstacle_points = 1;
+    let mut out = Outbox::new_for_tests(8);
+    let c = robots[0].step(&s, &old, &mut out);
+    assert_ne!(c.report[2], REPORT_PLAN);
+    assert_eq!(robots[0].plan().unwrap().epoch, 0);
+    // Robot 0 tells the others of the wreck its plan was not made around.
+    assert!(out
+        .queued()
+        .iter()
+        .any(|(_, m)| *m == Msg::Wrecks(vec![[wreck.x, wreck.y]])));
+    let mut s = sense(0, 31, [at[0].x, at[0].y], 15);
+    s.obstacle_points[0] = [wreck.x, wreck.y];
+    s.n_obstacle_points = 1;
+    let mut out = Outbox::new_for_tests(8);
+    let c = robots[0].step(&s, &heard, &mut out);
+    assert_eq!(c.report[2], REPORT_PLAN);
+    let plan = robots[0].plan().unwrap().clone();
+    assert_eq!((plan.epoch, plan.coordinator), (1, 0));
+    let members: Vec<u32> = (0..16).filter(|j| *j != 5).collect();
+    assert_eq!(plan.members, members);
+    // The unheld slot 5 (the dead robot's) left the pattern; every other template point stays.
+    let points: Vec<u16> = (0..16).filter(|j| *j != 5).collect();
+    assert_eq!(plan.points, points);
+    assert_eq!(plan.dead, vec![[wreck.x, wreck.y]]);
+    let mut sigma = plan.slots.clone();
+    sigma.sort_unstable();
+    assert_eq!(sigma, (0..15).collect::<Vec<u16>>());
+    // C2 with the wreck as one more obstacle centre: every new slot outside the square of
+    // half-side r_o + r + margin = 2 + 1 + 0.1 around it.
+    for q in robots[0].targets() {
+        let d = (q - wreck).abs();
+        assert!(d.x.max(d.y) >= 3.1 - 1e-9, "{q:?}");
+    }
+    assert!(out.queued().iter().any(|(_, m)| *m == Msg::Plan(plan.clone())));
+    // Robot 1 heard robot 0 since the death: it does not plan, and adopts robot 0's plan.
+    let mut heard1: Vec<Received<Msg>> = (0..16)
+        .filter(|j| *j != 5 && *j != 1)
+        .map(|j| slot_status(j, 30, at[j as usize], j as i32))
+        .collect();
+    let mut out = Outbox::new_for_tests(8);
+    let c = robots[1].step(&sense(1, 31, [at[1].x, at[1].y], 15), &heard1, &mut out);
+    assert_ne!(c.report[2], REPORT_PLAN);
+    heard1.push(Received {
+        from: 0,
+        tick: 31,
+        seq: 1,
+        sender_pos: [at[0].x, at[0].y],
+        unicast: false,
+        msg: Msg::Plan(plan.clone()),
+    });
+    let mut out = Outbox::new_for_tests(8);
+    let c = robots[1].step(&sense(1, 32, [at[1].x, at[1].y], 15), &heard1, &mut out);
+    assert_eq!(robots[1].targets(), robots[0].targets());
+    assert_eq!(robots[1].slot(), Some(plan.slots[1] as usize));
+    assert_eq!(c.report[3], 1.0);
+    // It repeats the plan for the others.
+    assert!(out.queued().iter().any(|(_, m)| matches!(m, Msg::Plan(p) if p.epoch == 1)));
+}

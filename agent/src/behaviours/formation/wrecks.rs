@@ -90,7 +90,7 @@ fn segment_distance(p: Vec2, a: Vec2, b: Vec2) -> f64 {
 
 /// Adds `w` to `known` unless it is there already (positions are the world's, exact).
 pub fn remember(known: &mut Vec<Vec2>, w: Vec2) -> bool {
-    if known.iter().any(|k| *k == w) {
+    if known.contains(&w) {
         return false;
     }
     known.push(w);
