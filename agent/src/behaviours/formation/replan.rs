@@ -89,7 +89,7 @@ impl Formation {
             return None;
         }
         let started = std::time::Instant::now();
-        let (plan, gap, nodes) = self.solve_replan(k, me, alive, since, &live);
+        let (plan, gap, nodes) = self.solve_replan(k, me, alive, &live);
         let seconds = started.elapsed().as_secs_f64();
         eprintln!(
             "formation: robot {} re-plans (swaps) epoch {} at tick {k} for {} robots, {} wrecks: alpha {:.4} d [{:.4}, {:.4}] theta {:.4}, gap {gap:.4}, {nodes} nodes, {seconds:.3} s",
@@ -120,30 +120,18 @@ impl Formation {
         k: u64,
         me: Vec2,
         alive: u32,
-        since: u64,
         live: &BTreeMap<u32, Heard>,
     ) -> (Plan, f64, usize) {
         let old = self.plan.as_ref().expect("a re-plan replaces a plan");
         let n = (alive as usize).min(old.points.len()).max(1);
         // Members: this robot and those heard since the need began; if too few were heard,
-        // the most recently heard others (their last positions), then unknown robots.
+        // unknown members (a robot heard only before the need may be the dead one: seed 3,
+        // kill 25:0 gave the dead robot 0 a slot and left robot 3 on its old slot index).
         let mut members: Vec<(u32, Vec2)> = live
             .iter()
             .map(|(i, h)| (*i, self.estimate(h, k)))
             .collect();
         members.push((self.robot, me));
-        let mut older: Vec<(&u32, &Heard)> = self
-            .heard
-            .iter()
-            .filter(|(i, h)| h.tick < since && !live.contains_key(i) && **i != self.robot)
-            .collect();
-        older.sort_by_key(|(i, h)| (std::cmp::Reverse(h.tick), **i));
-        for (i, h) in older {
-            if members.len() >= n {
-                break;
-            }
-            members.push((*i, self.estimate(h, k)));
-        }
         members.sort_by_key(|(i, _)| *i);
         members.truncate(n);
         // The slots the members hold now (their last status of the old epoch).
@@ -262,7 +250,13 @@ impl Formation {
                         .total_cmp(&(self.targets[*b] - me).norm())
                 })
         });
-        let Some(slot) = slot else { return };
+        // No slot left for it: it keeps none (and so the formation cannot complete) rather
+        // than an index of the old pattern.
+        let Some(slot) = slot else {
+            self.slot = None;
+            self.swap = None;
+            return;
+        };
         self.slot = Some(slot);
         self.swap = Some(SwapAgent::new(self.robot as usize, slot));
         self.swap_epoch = Some(plan.epoch);
