@@ -722,7 +722,7 @@ impl Cbca {
         for e in &self.events[events_before..] {
             eprintln!("event t={now} R{}: {e:?}", self.id + 1);
         }
-        if now % every != 0 {
+        if !now.is_multiple_of(every) {
             return;
         }
         let k = &self.kernel;
