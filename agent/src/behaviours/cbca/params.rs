@@ -79,6 +79,13 @@ pub struct BehaviourParams {
     /// [chosen] 100 (5 time units; beacons go every `beacon_period` = 5 ticks). A member still
     /// on its way after that long is taken for dead too: the cost of the rule.
     pub presume_lost_ticks: u64,
+    /// The presumed-loss clock of `presume_lost_ticks` starts only once this robot is within
+    /// this distance of the target (km). [chosen] 0.6: on the capture ring (radius r_s <= 0.3 km
+    /// in the hunt configs) plus the capture tolerance and the target's own motion; members
+    /// there are within 1.2 km of each other, inside the 1.5 km radio. Without it a robot
+    /// still 3 km away, closing after `max_wait_ticks`, took members it could not hear for
+    /// dead (the trace of docs/hunting.md 14.4).
+    pub presume_within_km: f64,
     /// Speed / distance gain of the holonomic go-to (1/tick): v = min(v_max, gain d). [chosen]
     /// 0.5: a robot slows down in the last 2 v_max of its goal.
     pub goto_gain: f64,
@@ -101,6 +108,7 @@ impl Default for BehaviourParams {
             seek_when_idle: false,
             seek_radius_km: 1.0,
             presume_lost_ticks: 100,
+            presume_within_km: 0.6,
             goto_gain: 0.5,
         }
     }

@@ -108,6 +108,10 @@ pub struct Cbca {
     closing: bool,
     /// Since when it closes on the capture point of which target (the presumed-loss clock).
     closing_since: Option<(TaskId, u64)>,
+    /// The target at whose waiting ring this robot itself has arrived (cleared when its first
+    /// target changes). The `ready` gossip cannot serve: it is never withdrawn, so a robot that
+    /// left j's ring for an earlier target would, back on j, skip the ring and close alone.
+    arrived: Option<TaskId>,
     /// Realised utility: finished tasks' scores, plus compensation received, less paid.
     utility: f64,
     /// Distance travelled since the last finished task (km) and the tick it finished.
@@ -168,6 +172,7 @@ impl Cbca {
             waiting: None,
             closing: false,
             closing_since: None,
+            arrived: None,
             utility: 0.0,
             leg: 0.0,
             last_pos: None,
@@ -488,6 +493,9 @@ impl Cbca {
             self.events.push(Event::Captured { tick: now, task: j });
             return self.mover.go(s, self.capture_goal(j, s.pos).unwrap_or(s.pos));
         }
+        if self.arrived.is_some_and(|a| a != j) {
+            self.arrived = None;
+        }
         let d = dist(s.pos, target);
         let members: Vec<u32> = self
             .kernel
@@ -496,7 +504,14 @@ impl Cbca {
             .into_iter()
             .map(|(m, _)| m as u32)
             .collect();
-        let assembled = members.iter().all(|&m| self.ready.contains(&(j as u32, m)));
+        // A member counts as assembled only while j is the first target of its path as this
+        // robot knows it: the `ready` gossip is never withdrawn, so a member that reached j's
+        // ring and then put another target first (a task learnt at a merge, a switch) would
+        // otherwise still count, the others would close on j without it, and
+        // `presume_lost` would then take it for dead (the trace of docs/hunting.md 14.4).
+        let assembled = members
+            .iter()
+            .all(|&m| self.ready.contains(&(j as u32, m)) && self.heads_for(m, j));
         let since = match self.waiting {
             Some((w, t)) if w == j => t,
             _ => {
@@ -505,7 +520,7 @@ impl Cbca {
             }
         };
         if d > self.p.wait_radius_km + self.p.arrive_tolerance_km
-            && !self.ready.contains(&(j as u32, self.id))
+            && self.arrived != Some(j)
         {
             // Towards the waiting ring.
             let k = (d - self.p.wait_radius_km) / d;
@@ -514,18 +529,22 @@ impl Cbca {
             return self.mover.go(s, goal);
         }
         self.ready.insert((j as u32, self.id));
+        self.arrived = Some(j);
         // A coalition short of L_j (a member died and was forgotten) waits for a replacement.
         let full = members.len() >= self.tasks[j].robots_needed;
         if full && (assembled || now.saturating_sub(since) >= self.p.max_wait_ticks) {
             self.closing = true;
+            // The presumed-loss clock runs only near the target (`presume_within_km`), where
+            // every live member closing on it is in radio range.
             let started = match self.closing_since {
-                Some((c, t)) if c == j => t,
-                _ => {
+                Some((c, t)) if c == j => Some(t),
+                _ if d <= self.p.presume_within_km => {
                     self.closing_since = Some((j, now));
-                    now
+                    Some(now)
                 }
+                _ => None,
             };
-            if now.saturating_sub(started) >= self.p.presume_lost_ticks {
+            if started.is_some_and(|t| now.saturating_sub(t) >= self.p.presume_lost_ticks) {
                 self.presume_lost(j, &members, now);
             }
             let goal = self.capture_goal(j, s.pos).unwrap_or(target);
@@ -543,7 +562,7 @@ impl Cbca {
         let silent: Vec<u32> = members
             .iter()
             .copied()
-            .filter(|&m| m != self.id)
+            .filter(|&m| m != self.id && self.heads_for(m, j))
             .filter(|m| {
                 self.heard
                     .get(m)
@@ -554,6 +573,13 @@ impl Cbca {
             self.events.push(Event::PresumedLost { tick: now, robot: m, task: j });
             self.forget(m, now);
         }
+    }
+
+    /// Whether robot m's path, as this robot knows it, starts with target j (m is on its way
+    /// to j, or there). A member busy with an earlier target is neither assembled at j nor
+    /// missing from it.
+    fn heads_for(&self, m: u32, j: TaskId) -> bool {
+        m == self.id || self.kernel.known_path(m as usize).first() == Some(&j)
     }
 
     /// An idle robot goes to `seek_radius_km` of the nearest unfinished target it knows of
@@ -618,6 +644,7 @@ impl Cbca {
 
     pub fn step_msgs(&mut self, s: &Sense, inbox: &[&Received<CbcaRadio>], out: &mut Outbox<CbcaRadio>) -> Command {
         let now = s.tick;
+        let events_before = self.events.len();
         if let Some(p) = self.last_pos {
             self.leg += dist(p, s.pos);
         }
@@ -657,6 +684,7 @@ impl Cbca {
             out.broadcast(m);
         }
         let cmd = self.act(s, now, &captured);
+        self.trace(now, s.pos, events_before);
         // The hunt mission's report contract (swarm::sections::hunt): [T_j hunted, the point
         // it heads for (x, y; NaN before the ring), REPORT_AT_POINT when there]; the display
         // state is the task.
@@ -676,6 +704,55 @@ impl Cbca {
                 if at { swarm::sections::hunt::REPORT_AT_POINT } else { 0.0 },
             ],
         }
+    }
+}
+
+impl Cbca {
+    /// Debug trace (`CBCA_TRACE=<thesis target id>` in the agent's environment, every
+    /// `CBCA_TRACE_EVERY` ticks, default 10): what this robot believes about that target's
+    /// coalition, the members' resources it has heard, and why it does not bid.
+    fn trace(&self, now: u64, pos: [f64; 2], events_before: usize) {
+        thread_local! {
+            static TRACE: Option<(usize, u64)> = std::env::var("CBCA_TRACE").ok().and_then(|v| {
+                let every = std::env::var("CBCA_TRACE_EVERY").ok().and_then(|e| e.parse().ok()).unwrap_or(10);
+                v.parse::<usize>().ok().and_then(|t| t.checked_sub(1)).map(|t| (t, every))
+            });
+        }
+        let Some((j, every)) = TRACE.with(|t| *t) else { return };
+        for e in &self.events[events_before..] {
+            eprintln!("event t={now} R{}: {e:?}", self.id + 1);
+        }
+        if !now.is_multiple_of(every) {
+            return;
+        }
+        let k = &self.kernel;
+        let members: Vec<String> = k
+            .winners()
+            .winners_of(j)
+            .into_iter()
+            .map(|(m, b)| {
+                let r = k.known_resources(m).map_or("?".to_string(), |r| format!("{r:?}"));
+                format!("R{}({b:.1},{r})", m + 1)
+            })
+            .collect();
+        let why = if k.book().contains_key(&j) {
+            let c = crate::cbca::bundle::evaluate(k.robot(), k.plan(), j, k.winners(), k.book(), &k.peers(), k.params());
+            format!("{c:?}")
+        } else {
+            "unknown".into()
+        };
+        eprintln!(
+            "trace t={now} R{} pos=({:.2},{:.2}) {:?} settled={} path={:?} gone={:?} T{}: [{}] why={why}",
+            self.id + 1,
+            pos[0],
+            pos[1],
+            self.phase,
+            self.was_settled,
+            k.plan().path.iter().map(|t| t + 1).collect::<Vec<_>>(),
+            self.gone.iter().map(|g| g + 1).collect::<Vec<_>>(),
+            j + 1,
+            members.join(" "),
+        );
     }
 }
 
