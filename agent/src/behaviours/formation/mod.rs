@@ -205,6 +205,39 @@ impl Formation {
             .collect()
     }
 
+    /// Prints a plan just solved (`solved`: plan, gap, nodes, as `solve` gives it; `what`:
+    /// "plans" / "re-plans (swaps)", `extra`: more of the line), queues its shape and shift
+    /// reports, installs it; the plan report (gap, seconds, REPORT_PLAN, nodes).
+    fn adopt_solved(
+        &mut self,
+        k: u64,
+        solved: (Plan, f64, usize),
+        seconds: f64,
+        what: &str,
+        extra: String,
+    ) -> [f64; 4] {
+        let (plan, gap, nodes) = solved;
+        eprintln!(
+            "formation: robot {} {what} epoch {} at tick {k} for {} robots{extra}: alpha {:.4} d [{:.4}, {:.4}] theta {:.4}, gap {gap:.4}, {nodes} nodes, {seconds:.3} s",
+            self.robot,
+            plan.epoch,
+            plan.members.len(),
+            plan.transform[0],
+            plan.transform[1],
+            plan.transform[2],
+            plan.transform[3],
+        );
+        let t = plan.transform;
+        let epoch = plan.epoch as f64;
+        self.queued_reports = [
+            [t[0], t[3], REPORT_PLAN_SHAPE, epoch],
+            [t[1], t[2], REPORT_PLAN_SHIFT, epoch],
+        ]
+        .into();
+        self.install(plan);
+        [gap, seconds, REPORT_PLAN, nodes as f64]
+    }
+
     /// Adopts `plan`: the slots from eq. (5), this robot's slot from sigma.
     fn install(&mut self, plan: Plan) {
         let sub = self.sub_template(&plan.points);
@@ -380,27 +413,9 @@ impl Formation {
         };
         if replan {
             let started = std::time::Instant::now();
-            let (plan, gap, nodes) = self.solve(k, me, &live);
+            let solved = self.solve(k, me, &live);
             let seconds = started.elapsed().as_secs_f64();
-            eprintln!(
-                "formation: robot {} plans epoch {} at tick {k} for {} robots: alpha {:.4} d [{:.4}, {:.4}] theta {:.4}, gap {gap:.4}, {nodes} nodes, {seconds:.3} s",
-                self.robot,
-                plan.epoch,
-                plan.members.len(),
-                plan.transform[0],
-                plan.transform[1],
-                plan.transform[2],
-                plan.transform[3],
-            );
-            let t = plan.transform;
-            let epoch = plan.epoch as f64;
-            self.queued_reports = [
-                [t[0], t[3], REPORT_PLAN_SHAPE, epoch],
-                [t[1], t[2], REPORT_PLAN_SHIFT, epoch],
-            ]
-            .into();
-            self.install(plan);
-            report = Some([gap, seconds, REPORT_PLAN, nodes as f64]);
+            report = Some(self.adopt_solved(k, solved, seconds, "plans", String::new()));
         }
         let Some(plan) = self.plan.clone() else {
             return report;

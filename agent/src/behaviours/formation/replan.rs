@@ -89,29 +89,12 @@ impl Formation {
             return None;
         }
         let started = std::time::Instant::now();
-        let (plan, gap, nodes) = self.solve_replan(k, me, alive, &live);
+        let solved = self.solve_replan(k, me, alive, &live);
         let seconds = started.elapsed().as_secs_f64();
-        eprintln!(
-            "formation: robot {} re-plans (swaps) epoch {} at tick {k} for {} robots, {} wrecks: alpha {:.4} d [{:.4}, {:.4}] theta {:.4}, gap {gap:.4}, {nodes} nodes, {seconds:.3} s",
-            self.robot,
-            plan.epoch,
-            plan.members.len(),
-            plan.dead.len(),
-            plan.transform[0],
-            plan.transform[1],
-            plan.transform[2],
-            plan.transform[3],
-        );
-        let t = plan.transform;
-        let epoch = plan.epoch as f64;
-        self.queued_reports = [
-            [t[0], t[3], swarm::sections::formation::REPORT_PLAN_SHAPE, epoch],
-            [t[1], t[2], swarm::sections::formation::REPORT_PLAN_SHIFT, epoch],
-        ]
-        .into();
-        self.install(plan);
+        let wrecks = format!(", {} wrecks", solved.0.dead.len());
+        let report = self.adopt_solved(k, solved, seconds, "re-plans (swaps)", wrecks);
         self.need_since = None;
-        Some([gap, seconds, swarm::sections::formation::REPORT_PLAN, nodes as f64])
+        Some(report)
     }
 
     /// The re-planned pattern for `alive` robots: (plan, gap, nodes).
