@@ -260,3 +260,26 @@ pub fn same_recording(a: &Path, b: &Path) -> bool {
     let rec = |d: &Path| std::fs::read(d.join("recording.bin")).expect("recording.bin");
     rec(a) == rec(b)
 }
+
+/// While `child` runs, the most `count()` gave, sampled every 5 ms (e.g. a ring's data files:
+/// a leaked hold would pin one more a kill).
+pub fn most_while_running(child: &mut Child, count: impl Fn() -> usize) -> usize {
+    let mut most = 0;
+    while child.try_wait().unwrap().is_none() {
+        most = most.max(count());
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    most
+}
+
+/// Every one of `kills` kills took effect and every killed robot came back (summary `faults`).
+pub fn assert_every_kill_restarted(s: &serde_json::Value, kills: usize) {
+    let faults = s["faults"].as_array().unwrap();
+    assert_eq!(faults.len(), kills, "{faults:?}");
+    assert!(
+        faults
+            .iter()
+            .all(|f| f["restarted_tick"].as_u64().is_some()),
+        "{faults:?}"
+    );
+}

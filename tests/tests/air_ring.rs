@@ -94,11 +94,7 @@ fn agents_killed_while_holding_the_air_never_exhaust_the_ring() {
     // While it runs: the ring never has more data files than the slots in use at once (the
     // published air, the one being written, the air the agents keep; a leaked hold would pin
     // one more slot per kill).
-    let mut most = 0;
-    while child.try_wait().unwrap().is_none() {
-        most = most.max(ring_files(&id));
-        std::thread::sleep(std::time::Duration::from_millis(5));
-    }
+    let most = most_while_running(&mut child, || ring_files(&id));
     let o = child.wait_with_output().unwrap();
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
     assert!(most >= 2, "the ring was seen: {most} data files");
@@ -107,14 +103,7 @@ fn agents_killed_while_holding_the_air_never_exhaust_the_ring() {
     assert_eq!(s["ticks"].as_u64(), Some(max_ticks), "{s}");
     assert_eq!(s["end"], "completed", "{s}");
     // Every kill took effect and every killed robot came back.
-    let faults = s["faults"].as_array().unwrap();
-    assert_eq!(faults.len(), kills.len(), "{faults:?}");
-    assert!(
-        faults
-            .iter()
-            .all(|f| f["restarted_tick"].as_u64().is_some()),
-        "{faults:?}"
-    );
+    assert_every_kill_restarted(&s, kills.len());
     // The counters add up at every tick, and the radio still works at the end: with no loss
     // every robot hears the others, in the last ticks as in the first.
     let t = ticks(&out);
