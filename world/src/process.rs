@@ -30,11 +30,13 @@ struct Robot {
 
 /// Publishes the messages due at tick `k` as one air (`swarm::air`) through the run's air
 /// transport (`radio.air`: the world's ring, or the iceoryx2 service), before the tick is
-/// released: every agent reads its list in it.
-fn publish_air(air: &mut transport::AirSink, world: &World, k: u64) -> Result<()> {
+/// released: every agent reads its list in it. The world lends its airs
+/// (`World::lend_air`): the payloads are copied from `sent`, the buffer of the last tick's
+/// messages, which is not touched between `World::apply` and this publish.
+fn publish_air(air: &mut transport::AirSink, world: &World, sent: &Air, k: u64) -> Result<()> {
     let len = swarm::air::air_len(world.air(), world.n);
     air.publish(k, len, |out| {
-        swarm::air::write_air(world.air(), world.n, k, out)
+        swarm::air::write_air_from(world.air(), sent.bytes(), world.n, k, out)
     })?;
     Ok(())
 }
@@ -324,6 +326,7 @@ pub fn run(args: &WorldArgs) -> Result<i32> {
     let sc = &args.scenario;
     let n = sc.run.robots;
     let mut world = World::new(sc).map_err(|e| e.to_string())?;
+    world.lend_air();
     let config = transport::run_config(&args.prefix)?;
     let node = transport::node(&config, "world")?;
     let mut robots = Vec::with_capacity(n as usize);
@@ -460,7 +463,7 @@ pub fn run(args: &WorldArgs) -> Result<i32> {
             }
         }
         revived.iter_mut().for_each(|r| *r = false);
-        publish_air(&mut air, &world, k)?;
+        publish_air(&mut air, &world, &sent, k)?;
         barrier.release_with(k, world.alive_count(), bell);
         if realtime {
             if !wait_realtime(

@@ -76,6 +76,9 @@ pub struct World {
     sent_per_robot: Vec<usize>,
     radio_taken: Vec<bool>,
     outgoing: Vec<(RadioHeader, usize)>,
+    /// The air is lent ([`World::lend_air`]): the medium copies no payload, and the caller
+    /// writes each air from the buffer its messages were sent in.
+    lend_air: bool,
     pub radio: RadioCounters,
     /// The same counters in payload bytes (each pair counts its message's length).
     pub radio_bytes: RadioCounters,
@@ -212,6 +215,7 @@ impl World {
             due: None,
             sent_per_robot: Vec::new(),
             radio_taken: Vec::new(),
+            lend_air: false,
             outgoing: Vec::new(),
             radio: RadioCounters::default(),
             radio_bytes: RadioCounters::default(),
@@ -254,6 +258,18 @@ impl World {
             .enumerate()
             .filter(|(_, a)| **a)
             .map(|(i, _)| i as u32)
+    }
+
+    /// From now on the medium lends each tick's air (`Medium::transmit_lent`): its payloads
+    /// stay in the `sent` buffer handed to [`World::apply`], and the caller writes the air due
+    /// at the next tick ([`World::air`]) from that same, unchanged buffer
+    /// (`swarm::air::write_air_from`): the payloads are copied once between the tick's buffer
+    /// and the air sample instead of twice (DESIGN-NOTES, "The air written from the sender's
+    /// buffer", step 1). With `radio.delay_ticks` > 0 the medium still copies (the air
+    /// outlives the buffer). Decisions, counters and recordings are the same either way. The
+    /// in-process executor does not lend: its mailbox reads the payloads from the air.
+    pub fn lend_air(&mut self) {
+        self.lend_air = true;
     }
 
     /// The run will end after this tick; Sense frames say so.
@@ -673,9 +689,13 @@ impl World {
                 self.outgoing.push((h, at));
             }
         }
-        let c = self
-            .medium
-            .transmit(k, &self.outgoing, sent.bytes(), &self.poses, &self.alive);
+        let c = if self.lend_air {
+            self.medium
+                .transmit_lent(k, &self.outgoing, sent.bytes(), &self.poses, &self.alive)
+        } else {
+            self.medium
+                .transmit(k, &self.outgoing, sent.bytes(), &self.poses, &self.alive)
+        };
         for (out, t) in [(&mut radio, &c.pairs), (&mut bytes, &c.bytes)] {
             out.offered = t.offered;
             out.dropped_range = t.dropped_range;

@@ -38,23 +38,49 @@ use world::output::percentile;
 /// Most robots a throughput run takes (the raw rows subscribe every robot to every other).
 const MAX_ROBOTS: u32 = 129;
 
-/// (payload bytes, encoding, air): `seq` is a `Vec<u8>` as serde encodes it (element by
-/// element), `bytes` the same bytes as one byte string, `blob` the same wire bytes received in
-/// place (`swarm::Blob`, zero-copy), `raw` raw iceoryx2 without the runtime (no air). The air
-/// is `radio.air`: the world's ring (the runtime's default) or the iceoryx2 air service.
-pub const CASES: [(usize, &str, Option<AirTransport>); 12] = [
-    (64, "seq", Some(AirTransport::Ring)),
-    (4096, "seq", Some(AirTransport::Ring)),
-    (64, "bytes", Some(AirTransport::Ring)),
-    (4096, "bytes", Some(AirTransport::Ring)),
-    (64, "bytes", Some(AirTransport::Iceoryx2)),
-    (4096, "bytes", Some(AirTransport::Iceoryx2)),
-    (64, "blob", Some(AirTransport::Ring)),
-    (4096, "blob", Some(AirTransport::Ring)),
-    (64, "blob", Some(AirTransport::Iceoryx2)),
-    (4096, "blob", Some(AirTransport::Iceoryx2)),
-    (64, "raw", None),
-    (4096, "raw", None),
+/// How the parent (the world) carries the payloads from the act samples to the air.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum WorldCopy {
+    /// As the world process does: act sample -> the tick's buffer, and the medium lends the
+    /// air (`Medium::transmit_lent`): the buffer -> the air sample (`write_air_from`). Two
+    /// copies of each payload in the world.
+    Lent,
+    /// The path before `World::lend_air` (3dad5d7), kept to measure beside it: act sample ->
+    /// the tick's buffer -> the medium's air (`Medium::transmit`) -> the air sample. Three.
+    Copy,
+}
+
+impl WorldCopy {
+    fn name(self) -> &'static str {
+        match self {
+            WorldCopy::Lent => "lent",
+            WorldCopy::Copy => "copy",
+        }
+    }
+}
+
+/// (payload bytes, encoding, air, the world's copies): `seq` is a `Vec<u8>` as serde encodes
+/// it (element by element), `bytes` the same bytes as one byte string, `blob` the same wire
+/// bytes received in place (`swarm::Blob`, zero-copy), `raw` raw iceoryx2 without the runtime
+/// (no air, no world). The air is `radio.air`: the world's ring (the runtime's default) or the
+/// iceoryx2 air service. The `copy` rows are the world's old three-copy path (`WorldCopy`).
+pub const CASES: [(usize, &str, Option<AirTransport>, WorldCopy); 16] = [
+    (64, "seq", Some(AirTransport::Ring), WorldCopy::Lent),
+    (4096, "seq", Some(AirTransport::Ring), WorldCopy::Lent),
+    (64, "bytes", Some(AirTransport::Ring), WorldCopy::Lent),
+    (4096, "bytes", Some(AirTransport::Ring), WorldCopy::Lent),
+    (64, "bytes", Some(AirTransport::Ring), WorldCopy::Copy),
+    (4096, "bytes", Some(AirTransport::Ring), WorldCopy::Copy),
+    (64, "bytes", Some(AirTransport::Iceoryx2), WorldCopy::Lent),
+    (4096, "bytes", Some(AirTransport::Iceoryx2), WorldCopy::Lent),
+    (64, "blob", Some(AirTransport::Ring), WorldCopy::Lent),
+    (4096, "blob", Some(AirTransport::Ring), WorldCopy::Lent),
+    (64, "blob", Some(AirTransport::Ring), WorldCopy::Copy),
+    (4096, "blob", Some(AirTransport::Ring), WorldCopy::Copy),
+    (64, "blob", Some(AirTransport::Iceoryx2), WorldCopy::Lent),
+    (4096, "blob", Some(AirTransport::Iceoryx2), WorldCopy::Lent),
+    (64, "raw", None, WorldCopy::Lent),
+    (4096, "raw", None, WorldCopy::Lent),
 ];
 
 /// The air's name in the table and in a child's `--mode` (`enc:air`).
@@ -73,6 +99,8 @@ pub struct Row {
     pub encoding: String,
     /// The air's transport: ring, iceoryx2, or - (raw rows: no air).
     pub air: String,
+    /// The world's payload copies: lent (2), copy (3), or - (raw rows: no world).
+    pub world: String,
     pub ticks: u64,
     pub seconds: f64,
     pub ticks_per_s: f64,
@@ -106,25 +134,29 @@ pub fn run(robots: u32, quick: bool) -> BenchResult<Vec<Row>> {
     if !(min..=max).contains(&robots) {
         return Err(BenchError::Robots { robots, min, max });
     }
-    // `SWARM_TPUT_ONLY=enc:air` (e.g. `bytes:ring`, `raw:-`) runs only those rows: to
-    // profile one path (`perf record -a` over the run), not for the tables.
+    // `SWARM_TPUT_ONLY=enc:air[:world]` (e.g. `bytes:ring`, `bytes:ring:copy`, `raw:-`) runs
+    // only those rows (no world part: the lent rows): to profile one path (`perf record`
+    // over the run), not for the tables.
     let only = std::env::var("SWARM_TPUT_ONLY").ok();
     CASES
         .iter()
-        .filter(|&&(_, enc, air)| {
+        .filter(|&&(_, enc, air, world)| {
             only.as_deref().is_none_or(|o| {
-                o.split(',')
-                    .any(|c| c == format!("{enc}:{}", air_name(air)))
+                o.split(',').any(|c| {
+                    let name = format!("{enc}:{}", air_name(air));
+                    c == format!("{name}:{}", world.name())
+                        || (c == name && world == WorldCopy::Lent)
+                })
             })
         })
-        .map(|&(size, enc, air)| {
+        .map(|&(size, enc, air, world)| {
             let ticks = match (quick, size > 1024 && enc == "seq") {
                 (true, true) => 100,
                 (true, false) => 300,
                 (false, true) => 500,
                 (false, false) => 2000,
             };
-            one(robots, size, enc, air, ticks)
+            one(robots, size, enc, air, world, ticks)
         })
         .collect()
 }
@@ -132,11 +164,12 @@ pub fn run(robots: u32, quick: bool) -> BenchResult<Vec<Row>> {
 pub fn print(rows: &[Row]) {
     println!("radio throughput: every robot broadcasts one message every tick, all robots in range (runtime: through the shared medium)");
     println!(
-        "{:>6} {:>8} {:>6} {:>8} {:>6} | {:>8} {:>8} {:>8} | {:>12} {:>10} | {:>9} {:>9}",
+        "{:>6} {:>8} {:>6} {:>8} {:>5} {:>6} | {:>8} {:>8} {:>8} | {:>12} {:>10} | {:>9} {:>9}",
         "robots",
         "payload",
         "enc",
         "air",
+        "world",
         "ticks",
         "ticks/s",
         "p50 us",
@@ -148,11 +181,12 @@ pub fn print(rows: &[Row]) {
     );
     for r in rows {
         println!(
-            "{:>6} {:>8} {:>6} {:>8} {:>6} | {:>8.0} {:>8.0} {:>8.0} | {:>12.0} {:>10.1} | {:>9} {:>8.2}%",
+            "{:>6} {:>8} {:>6} {:>8} {:>5} {:>6} | {:>8.0} {:>8.0} {:>8.0} | {:>12.0} {:>10.1} | {:>9} {:>8.2}%",
             r.robots,
             format!("{} B", r.payload_bytes),
             r.encoding,
             r.air,
+            r.world,
             r.ticks,
             r.ticks_per_s,
             r.tick_p50_us,
@@ -172,9 +206,10 @@ pub fn print(rows: &[Row]) {
             .find(|x| x.encoding == "raw" && x.payload_bytes == r.payload_bytes)
         {
             println!(
-                "runtime ({}, {} air) ticks/s / raw iceoryx2 ticks/s at {} B: {:.2}x",
+                "runtime ({}, {} air, world {}) ticks/s / raw iceoryx2 ticks/s at {} B: {:.2}x",
                 r.encoding,
                 r.air,
+                r.world,
                 r.payload_bytes,
                 r.ticks_per_s / raw.ticks_per_s.max(1e-9)
             );
@@ -184,14 +219,27 @@ pub fn print(rows: &[Row]) {
     println!("enc: seq = the payload is a Vec<u8> (serde encodes it byte by byte), bytes = the same bytes as one byte string,");
     println!("     blob = the same wire bytes as a swarm::Blob, received in place (zero-copy: no decode copy),");
     println!("     raw = raw iceoryx2, one service per robot, the same barrier: loan, copy in, send; receive one per sender, drop unread.");
+    println!("world: lent = the world copies each payload twice (act sample -> tick buffer -> air, Medium::transmit_lent), as the world process does;");
+    println!("       copy = three times (-> the medium's own air too, Medium::transmit), the path before World::lend_air.");
 }
 
 /// Seconds the children have to get ready, and to acknowledge one tick.
 const READY_S: u64 = 120;
 const ACK_S: u64 = 10;
 
-fn one(n: u32, size: usize, enc: &str, air: Option<AirTransport>, ticks: u64) -> BenchResult<Row> {
-    let prefix = tick::bench_prefix(&format!("tput-{n}-{size}-{enc}-{}", air_name(air)));
+fn one(
+    n: u32,
+    size: usize,
+    enc: &str,
+    air: Option<AirTransport>,
+    world: WorldCopy,
+    ticks: u64,
+) -> BenchResult<Row> {
+    let prefix = tick::bench_prefix(&format!(
+        "tput-{n}-{size}-{enc}-{}-{}",
+        air_name(air),
+        world.name()
+    ));
     let r = (|| -> BenchResult<Row> {
         let sc = scenario(n, size, air.unwrap_or_default());
         let barrier = TickBarrier::create(&prefix, n)?;
@@ -204,7 +252,7 @@ fn one(n: u32, size: usize, enc: &str, air: Option<AirTransport>, ticks: u64) ->
                     .collect::<Result<Vec<_>, _>>()?,
             )
         } else {
-            Radio::Medium(Box::new(WorldRadio::create(&node, &prefix, &sc)?))
+            Radio::Medium(Box::new(WorldRadio::create(&node, &prefix, &sc, world)?))
         };
         let mut radio = radio;
         let extra = [
@@ -290,6 +338,7 @@ fn one(n: u32, size: usize, enc: &str, air: Option<AirTransport>, ticks: u64) ->
                 payload_bytes: size,
                 encoding: enc.to_string(),
                 air: air_name(air).to_string(),
+                world: if air.is_some() { world.name() } else { "-" }.to_string(),
                 ticks,
                 seconds,
                 ticks_per_s: ticks as f64 / seconds,
@@ -333,10 +382,16 @@ struct WorldRadio {
     poses: Vec<[f64; 3]>,
     alive: Vec<bool>,
     sent: Air,
+    copy: WorldCopy,
 }
 
 impl WorldRadio {
-    fn create(node: &Node<ipc::Service>, prefix: &str, sc: &Scenario) -> BenchResult<WorldRadio> {
+    fn create(
+        node: &Node<ipc::Service>,
+        prefix: &str,
+        sc: &Scenario,
+        copy: WorldCopy,
+    ) -> BenchResult<WorldRadio> {
         let n = sc.run.robots;
         let mut acts = Vec::new();
         for i in 0..n {
@@ -363,25 +418,30 @@ impl WorldRadio {
                 .collect(),
             alive: vec![true; n as usize],
             sent: Air::default(),
+            copy,
         })
     }
 
     /// The air of tick k, as the world process publishes it before the release
-    /// (`AirSink::publish` of `write_air`); the spent air goes back to the medium, as
-    /// `World::apply` hands it back.
+    /// (`AirSink::publish` of `write_air_from`, from the last tick's buffer `sent`, untouched
+    /// since `transmit`); the spent air goes back to the medium, as `World::apply` hands it
+    /// back.
     fn publish(&mut self, k: u64) -> BenchResult<()> {
         let due = self.medium.due(k);
         let n = self.poses.len();
         let len = swarm::air::air_len(due.as_ref(), n);
-        self.air
-            .publish(k, len, |out| swarm::air::write_air(due.as_ref(), n, k, out))?;
+        let sent = self.sent.bytes();
+        self.air.publish(k, len, |out| {
+            swarm::air::write_air_from(due.as_ref(), sent, n, k, out)
+        })?;
         if let Some(a) = due {
             self.medium.recycle(a);
         }
         Ok(())
     }
 
-    /// Every robot's messages of tick k into the medium, as `World::apply` takes them.
+    /// Every robot's messages of tick k into the medium, as `World::apply` takes them (lent,
+    /// as the world process has it, or copied: `WorldCopy`).
     fn transmit(&mut self, k: u64) {
         use swarm::wire::RadioTx;
         self.sent.clear();
@@ -397,13 +457,15 @@ impl WorldRadio {
                 }
             }
         }
-        self.medium.transmit(
-            k,
-            self.sent.entries(),
-            self.sent.bytes(),
-            &self.poses,
-            &self.alive,
-        );
+        let (sent, bytes) = (self.sent.entries(), self.sent.bytes());
+        match self.copy {
+            WorldCopy::Lent => self
+                .medium
+                .transmit_lent(k, sent, bytes, &self.poses, &self.alive),
+            WorldCopy::Copy => self
+                .medium
+                .transmit(k, sent, bytes, &self.poses, &self.alive),
+        };
     }
 }
 
