@@ -671,6 +671,16 @@ impl CbcaRobot {
         self.stamps[m] = f64::INFINITY;
     }
 
+    /// Robot m, forgotten by [`CbcaRobot::forget_robot`], is alive after all (a revoked
+    /// presumed loss, a restarted process; behaviours/cbca/liveness.rs): news of it that
+    /// originated after `since` (the tick of its death record) is taken again, older relays
+    /// stay refused.
+    pub fn revive_robot(&mut self, m: RobotId, since: f64) {
+        if m != self.me.id && m < self.stamps.len() && self.stamps[m] == f64::INFINITY {
+            self.stamps[m] = since;
+        }
+    }
+
     /// The detector's verdict for the current neighbour set.
     pub fn converged(&self, neighbours: &[RobotId]) -> bool {
         self.detector

@@ -25,6 +25,10 @@ pub struct Driver {
     pub robots: Vec<Cbca>,
     pub pos: Vec<[f64; 2]>,
     pub alive: Vec<bool>,
+    /// Radio links cut (from, to), 0-based: a robot whose radio fails towards some peers.
+    pub muted: std::collections::BTreeSet<(usize, usize)>,
+    /// Robots that do not move (stuck): their commands are ignored.
+    pub frozen: Vec<bool>,
     pub targets: Vec<Target>,
     pub loss: f64,
     pub capture_radius: f64,
@@ -77,6 +81,8 @@ impl Driver {
             robots: (0..n as u32).map(|i| Cbca::new(&sec, &sc, i)).collect(),
             pos: rows.iter().map(|r| [r.position.x, r.position.y]).collect(),
             alive: vec![true; n],
+            muted: Default::default(),
+            frozen: vec![false; n],
             targets: tasks
                 .iter()
                 .map(|t| Target {
@@ -153,7 +159,10 @@ impl Driver {
             let s = self.sense(i);
             let mut inbox = Vec::new();
             for (from, at, m) in &sent {
-                if *from as usize == i || dist(*at, self.pos[i]) > self.sc.radio.comm_radius {
+                if *from as usize == i
+                    || dist(*at, self.pos[i]) > self.sc.radio.comm_radius
+                    || self.muted.contains(&(*from as usize, i))
+                {
                     continue;
                 }
                 if self.loss > 0.0 && self.rng.gen::<f64>() < self.loss {
@@ -179,6 +188,9 @@ impl Driver {
             }
         }
         for (i, m) in moves.iter().enumerate() {
+            if self.frozen[i] {
+                continue;
+            }
             self.pos[i][0] += m[0];
             self.pos[i][1] += m[1];
         }

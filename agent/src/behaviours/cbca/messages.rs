@@ -8,6 +8,7 @@
 
 use serde::{Deserialize, Serialize};
 
+use super::liveness::Obit;
 use crate::cbca::consensus::CbcaMessage;
 
 /// The last position a robot saw a target at, and when (tick).
@@ -34,8 +35,9 @@ pub struct CbcaRadio {
     pub digest: u64,
     /// The full consensus state; None in a beacon.
     pub state: Option<CbcaMessage>,
-    /// Robots known dead (their agent process died): everyone forgets them.
-    pub gone: Vec<u32>,
+    /// Death records, time-stamped (liveness.rs): a robot is forgotten while its latest death
+    /// is later than the latest message known of it, and comes back when heard after it.
+    pub gone: Vec<Obit>,
     /// Targets finished (captured and held): nobody bids on them again.
     pub done: Vec<u32>,
     /// The latest sighting of each target the sender knows of.
@@ -55,7 +57,7 @@ pub fn encoded_bytes(m: &CbcaRadio) -> usize {
 
 /// The largest message a run with `n_robots` robots and these targets can send: every
 /// robot's facts with a full path, every coalition full, every target known, sighted and
-/// finished, every robot dead and ready, and a switch's payments (at most L_j - 1 per
+/// finished, every robot with a death record and ready, and a switch's payments (at most L_j - 1 per
 /// abandoned task, l_i tasks) — an upper bound the scenario's `radio.max_message_bytes` must
 /// meet. Varints are taken at their widest.
 pub fn worst_case_bytes(n_robots: usize, tasks: &[crate::cbca::Task], max_tasks: usize) -> usize {
@@ -96,7 +98,14 @@ pub fn worst_case_bytes(n_robots: usize, tasks: &[crate::cbca::Task], max_tasks:
     let m = CbcaRadio {
         digest: u64::MAX,
         state: Some(state),
-        gone: vec![u32::MAX; n_robots],
+        gone: vec![
+            Obit {
+                robot: u32::MAX,
+                dead_at: u64::MAX,
+                alive_at: u64::MAX,
+            };
+            n_robots
+        ],
         done: vec![u32::MAX; n_e],
         sightings: vec![
             Sighting {

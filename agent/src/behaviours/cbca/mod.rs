@@ -5,6 +5,7 @@
 //! section: `[cbca.params]` (the kernels' `CbcaParams`), `[[cbca.tasks]]` / `[[cbca.robots]]`
 //! (Tables 4.1-4.4 rows) and `[cbca.behaviour]` (this module's `BehaviourParams`).
 
+pub mod liveness;
 pub mod messages;
 pub mod motion;
 pub mod params;

@@ -18,6 +18,7 @@ use std::collections::{BTreeMap, BTreeSet};
 use swarm::geometry::Vec2;
 use swarm::{Command, Outbox, Received, Sense};
 
+use super::liveness::{Change, Liveness};
 use super::messages::{CbcaRadio, Paid, Sighting};
 use super::motion::{ring_point, Mover};
 use super::params::BehaviourParams;
@@ -66,6 +67,9 @@ pub enum Event {
     RobotGone { tick: u64, robot: u32 },
     /// A member of `task` not heard at the capture ring for `presume_lost_ticks`: taken for dead.
     PresumedLost { tick: u64, robot: u32, task: TaskId },
+    /// A robot taken for dead (sensed or presumed) heard of again after its death record at
+    /// `dead_at`: directly, or through a relayed later alive stamp (liveness.rs).
+    Revived { tick: u64, robot: u32, dead_at: u64 },
     Captured { tick: u64, task: TaskId },
     Finished { tick: u64, task: TaskId, utility: f64 },
 }
@@ -92,7 +96,8 @@ pub struct Cbca {
     phase: Phase,
     heard: BTreeMap<u32, Heard>,
     prev_links: Vec<u32>,
-    gone: BTreeSet<u32>,
+    /// Who is alive, time-stamped (liveness.rs): deaths sensed or presumed, revocable.
+    live: Liveness,
     sightings: BTreeMap<u32, Sighting>,
     ready: BTreeSet<(u32, u32)>,
     paid: BTreeMap<(u32, u32, u32), (f64, u64)>,
@@ -160,7 +165,7 @@ impl Cbca {
             phase: Phase::Planning,
             heard: BTreeMap::new(),
             prev_links: Vec::new(),
-            gone: BTreeSet::new(),
+            live: Liveness::default(),
             sightings: BTreeMap::new(),
             ready: BTreeSet::new(),
             paid: BTreeMap::new(),
@@ -202,7 +207,7 @@ impl Cbca {
         let neighbours: Vec<usize> = self
             .heard
             .iter()
-            .filter(|(m, h)| now.saturating_sub(h.tick) <= self.p.neighbour_window && !self.gone.contains(m))
+            .filter(|(m, h)| now.saturating_sub(h.tick) <= self.p.neighbour_window && !self.live.is_gone(**m))
             .map(|(&m, _)| m as usize)
             .collect();
         self.kernel.converged(&neighbours)
@@ -216,7 +221,7 @@ impl Cbca {
         let mut links: Vec<u32> = s.nearby().iter().map(|n| n.robot).collect();
         links.sort_unstable();
         for m in std::mem::take(&mut self.prev_links) {
-            if links.binary_search(&m).is_ok() || self.gone.contains(&m) {
+            if links.binary_search(&m).is_ok() || self.live.is_gone(m) {
                 continue;
             }
             if let Some(h) = self.heard.get(&m) {
@@ -229,12 +234,31 @@ impl Cbca {
         self.prev_links = links;
     }
 
+    /// m is taken for dead at tick `now` (sensed or presumed).
     fn forget(&mut self, m: u32, now: u64) {
-        if m != self.id && self.gone.insert(m) {
-            self.kernel.forget_robot(m as usize);
-            self.ready.retain(|&(_, r)| r != m);
-            self.events.push(Event::RobotGone { tick: now, robot: m });
-            self.dirty = true;
+        if m != self.id {
+            let c = self.live.dead(m, now);
+            self.apply(m, c, now);
+        }
+    }
+
+    /// What a liveness record's change means: a death forgets m (its bids and facts, and the
+    /// kernel refuses news of it); a revival takes m's news again from its death record on,
+    /// so its next message (or a relay of a later one) brings its bids back.
+    fn apply(&mut self, m: u32, change: Option<Change>, now: u64) {
+        match change {
+            Some(Change::Died) => {
+                self.kernel.forget_robot(m as usize);
+                self.ready.retain(|&(_, r)| r != m);
+                self.events.push(Event::RobotGone { tick: now, robot: m });
+                self.dirty = true;
+            }
+            Some(Change::Revived { dead_at }) => {
+                self.kernel.revive_robot(m as usize, dead_at as f64);
+                self.events.push(Event::Revived { tick: now, robot: m, dead_at });
+                self.dirty = true;
+            }
+            None => {}
         }
     }
 
@@ -276,7 +300,11 @@ impl Cbca {
     /// (3) One received message.
     fn take(&mut self, r: &Received<CbcaRadio>, now: u64) {
         let m = &r.msg;
-        if self.gone.contains(&r.from) {
+        // A message is proof of life at its send tick: a robot taken for dead comes back if
+        // it sent this after its death record (a stale, delayed one changes nothing).
+        let c = self.live.alive(r.from, r.tick);
+        self.apply(r.from, c, now);
+        if self.live.is_gone(r.from) {
             return;
         }
         self.heard.insert(
@@ -287,8 +315,12 @@ impl Cbca {
                 digest: m.digest,
             },
         );
-        for &g in &m.gone {
-            self.forget(g, now);
+        for o in &m.gone {
+            // Its own record is refuted by its own messages.
+            if o.robot != self.id {
+                let c = self.live.merge(o);
+                self.apply(o.robot, c, now);
+            }
         }
         for &j in &m.done {
             if self.kernel.complete(j as usize) {
@@ -303,7 +335,7 @@ impl Cbca {
             }
         }
         for &(j, robot) in &m.ready {
-            if !self.gone.contains(&robot) && !self.kernel.done().contains(&(j as usize)) {
+            if !self.live.is_gone(robot) && !self.kernel.done().contains(&(j as usize)) {
                 self.ready.insert((j, robot));
             }
         }
@@ -317,13 +349,35 @@ impl Cbca {
         }
         match &m.state {
             Some(state) => {
-                let got = self.kernel.receive(state);
+                let got = match self.unforgotten(state) {
+                    Some(clean) => self.kernel.receive(&clean),
+                    None => self.kernel.receive(state),
+                };
                 if got.changed_entries > 0 || !got.new_tasks.is_empty() || !got.released.is_empty() {
                     self.dirty = true;
                 }
             }
             None => self.kernel.hear_digest(r.from as usize, m.digest),
         }
+    }
+
+    /// The sender's state with its refusals of robots this robot knows alive removed, or None
+    /// if there are none. `CbcaRobot::forget_robot` marks a forgotten robot's stamp +inf, and
+    /// stamps merge by the maximum, so a sender that has not yet heard of m's revival would
+    /// otherwise make the receiver forget m again (and clear its bids, rule A). Such a stamp
+    /// becomes -inf: the sender's news of m is taken as none.
+    fn unforgotten(&self, state: &crate::cbca::consensus::CbcaMessage) -> Option<crate::cbca::consensus::CbcaMessage> {
+        let stale = |m: usize| state.stamps[m] == f64::INFINITY && !self.live.is_gone(m as u32) && m != state.sender;
+        if !(0..state.stamps.len()).any(stale) {
+            return None;
+        }
+        let mut clean = state.clone();
+        for m in 0..clean.stamps.len() {
+            if stale(m) {
+                clean.stamps[m] = f64::NEG_INFINITY;
+            }
+        }
+        Some(clean)
     }
 
     /// (5) Settled again after a change, while executing: the loyalty review (4.18)-(4.22).
@@ -430,7 +484,7 @@ impl Cbca {
         let msg = CbcaRadio {
             digest,
             state: full.then(|| self.kernel.message(now as f64)),
-            gone: self.gone.iter().copied().collect(),
+            gone: self.live.obits(),
             done: self.kernel.done().iter().map(|&j| j as u32).collect(),
             sightings: self.sightings.values().copied().collect(),
             ready: self.ready.iter().copied().collect(),
@@ -564,9 +618,10 @@ impl Cbca {
             .copied()
             .filter(|&m| m != self.id && self.heads_for(m, j))
             .filter(|m| {
-                self.heard
-                    .get(m)
-                    .is_none_or(|h| now.saturating_sub(h.tick) >= window)
+                // Heard directly, or a later send tick relayed in a death record's alive stamp
+                // (a member revived by another member's hearing is not presumed lost again).
+                let last = self.heard.get(m).map(|h| h.tick).max(self.live.alive_at(*m));
+                last.is_none_or(|t| now.saturating_sub(t) >= window)
             })
             .collect();
         for m in silent {
@@ -749,7 +804,7 @@ impl Cbca {
             self.phase,
             self.was_settled,
             k.plan().path.iter().map(|t| t + 1).collect::<Vec<_>>(),
-            self.gone.iter().map(|g| g + 1).collect::<Vec<_>>(),
+            self.live.gone().map(|g| g + 1).collect::<Vec<_>>(),
             j + 1,
             members.join(" "),
         );

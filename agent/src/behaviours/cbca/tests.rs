@@ -239,6 +239,8 @@ fn a_robot_that_dies_unseen_is_presumed_lost_and_replaced() {
         d.targets[1].captured_at
     );
     assert!(!presumed.is_empty(), "nobody took R5 for dead");
+    // A dead process sends nothing: its death record is never revoked.
+    assert!(who(&d, &|e| matches!(e, Event::Revived { robot: 4, .. })).is_empty());
     assert!(t2.len() >= 3 && !t2.contains(&5), "{t2:?}");
 }
 
@@ -257,4 +259,118 @@ fn without_seeking_the_unseen_death_leaves_its_target_unfinished() {
     assert!(!d.run_until(commit + 20, |_| false));
     d.kill(4);
     assert!(!d.run_until(3000, |d| d.targets[1].captured_at.is_some()));
+}
+
+/// A crafted trio for the revocable presumed loss: R1, R2 and R3 (l_i = 1) hunt T1 (L = 3).
+/// After they commit, R3's radio fails towards both others and R3 is stuck where it is (the
+/// driver's `muted` and `frozen`): R1 and R2 wait `max_wait_ticks` at the waiting ring, close,
+/// and after `presume_lost_ticks` at the capture ring take R3 for dead. Then R3 is brought
+/// within radio range and its link to R1 (only) comes back: R1 hears R3 directly and revives
+/// it; R2, which still cannot hear R3, revives it from the later alive stamp R1 relays in its
+/// death record. Both then count R3 in T1's coalition again, and T1 is captured by the three.
+fn revocable_trio() -> Driver {
+    let text = r#"
+[params]
+max_tasks = 1
+[[tasks]]
+id = 1
+position = [3.0, 0.0]
+value = 100.0
+resources = [2.0, 2.0, 2.0, 2.0, 2.0, 2.0]
+beta = 0.01
+robots_needed = 3
+[[robots]]
+id = 1
+position = [0.0, 0.0]
+gamma = 0.5
+resources = [3.0, 3.0, 3.0, 3.0, 3.0, 3.0]
+[[robots]]
+id = 2
+position = [0.0, 0.5]
+gamma = 0.5
+resources = [3.0, 3.0, 3.0, 3.0, 3.0, 3.0]
+[[robots]]
+id = 3
+position = [0.0, -0.5]
+gamma = 0.5
+resources = [3.0, 3.0, 3.0, 3.0, 3.0, 3.0]
+"#;
+    let mut sc = scenario(1);
+    sc.cbca = text.parse().unwrap();
+    sc.run.robots = 3;
+    // No proximity-sensor deaths: the silence is the only evidence.
+    sc.robot.neighbour_sensing_radius = 0.2;
+    Driver::new(sc, 0.0, 1)
+}
+
+#[test]
+fn a_robot_presumed_lost_while_alive_comes_back_when_heard_again() {
+    let mut d = revocable_trio();
+    assert!(d.run_until(200, |d| d.all_committed()), "not committed");
+    assert_eq!(d.coalitions(0)[0], vec![1, 2, 3]);
+    d.muted.insert((2, 0));
+    d.muted.insert((2, 1));
+    d.frozen[2] = true;
+    let presumed = |d: &Driver, i: usize| {
+        d.robots[i]
+            .events
+            .iter()
+            .any(|e| matches!(e, Event::RobotGone { robot: 2, .. }))
+    };
+    assert!(
+        d.run_until(2000, |d| presumed(d, 0) && presumed(d, 1)),
+        "R3 not taken for dead by R1 and R2 by tick {}",
+        d.tick
+    );
+    let lost_at = d.tick;
+    assert!(d.robots[0..2]
+        .iter()
+        .any(|r| r.events.iter().any(|e| matches!(e, Event::PresumedLost { robot: 2, .. }))));
+    assert_eq!(d.coalitions(0)[0], vec![1, 2]);
+    assert_eq!(d.coalitions(1)[0], vec![1, 2]);
+    // R3 within radio range of both (1.2 km west of T1), heard again by R1 only.
+    d.pos[2] = [1.8, 0.0];
+    d.muted.remove(&(2, 0));
+    let back = |d: &Driver, i: usize| {
+        d.robots[i]
+            .events
+            .iter()
+            .any(|e| matches!(e, Event::Revived { robot: 2, .. }))
+            && d.coalitions(i)[0] == vec![1, 2, 3]
+    };
+    assert!(
+        d.run_until(lost_at + 200, |d| back(d, 0) && back(d, 1)),
+        "R3 not back by tick {}: R1 {:?} R2 {:?} R3 {:?} path {:?}; events R1 {:?} R3 {:?}",
+        d.tick,
+        d.coalitions(0),
+        d.coalitions(1),
+        d.coalitions(2),
+        d.robots[2].path(),
+        d.robots[0].events,
+        d.robots[2].events
+    );
+    println!(
+        "R3 presumed lost by tick {lost_at}, back in R1's and R2's coalition at tick {}",
+        d.tick
+    );
+    assert!(d.targets[0].captured_at.is_none(), "captured before R3 was back");
+    d.frozen[2] = false;
+    assert!(d.run_until(d.tick + 2000, |d| d.targets[0].captured_at.is_some()), "T1 not captured");
+    let finished: Vec<usize> = d
+        .robots
+        .iter()
+        .enumerate()
+        .filter(|(_, r)| r.events.iter().any(|e| matches!(e, Event::Finished { task: 0, .. })))
+        .map(|(i, _)| i + 1)
+        .collect();
+    assert!(d.run_until(d.tick + 400, |d| d.all_finished()));
+    let finished_late: Vec<usize> = d
+        .robots
+        .iter()
+        .enumerate()
+        .filter(|(_, r)| r.events.iter().any(|e| matches!(e, Event::Finished { task: 0, .. })))
+        .map(|(i, _)| i + 1)
+        .collect();
+    println!("T1 captured at {:?}, finished by {finished_late:?} ({finished:?} at the capture)", d.targets[0].captured_at);
+    assert_eq!(finished_late, vec![1, 2, 3]);
 }
