@@ -15,6 +15,7 @@ pub mod instance;
 pub mod loyalty;
 pub mod model;
 pub mod moving_rounds;
+pub mod narrative;
 pub mod params;
 pub mod replan;
 pub mod rounds;

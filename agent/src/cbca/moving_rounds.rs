@@ -46,7 +46,7 @@ use swarm::geometry::Vec2;
 use super::compare::{cbca_robots, complete_graph};
 use super::consensus::CbcaRobot;
 use super::grouping::{comm_graph, components, robot_knowledge, PriorInfo};
-use super::loyalty::{LoyaltyState, Payment};
+use super::loyalty::{LoyaltyState, Payment, Threshold};
 use super::model::{consumption, Robot, RobotId, Task, TaskBook, TaskId};
 use super::params::CbcaParams;
 use super::replan::{decide, Proposal, Verdict};
@@ -92,6 +92,8 @@ pub struct Decision {
     pub verdict: Verdict,
     /// sigma_i (4.18) when the proposal differed.
     pub sigma: Option<f64>,
+    /// Its terms (Ē_i, d_ic, mu_i) when the proposal differed.
+    pub threshold: Option<Threshold>,
     /// The path after the consistency pass.
     pub final_path: Vec<TaskId>,
 }
@@ -108,6 +110,10 @@ pub struct Replanning {
     pub payments: Vec<Payment>,
     /// Consensus cost of the fresh run plus the consistency pass.
     pub stats: RunStats,
+    /// Every robot as it was when the groups met (position, resources and l_i left), and the
+    /// old coalitions (task -> members of the merged group): what the decisions were taken on.
+    pub robots_now: Vec<Robot>,
+    pub old_coalitions: BTreeMap<TaskId, Vec<RobotId>>,
 }
 
 /// A captured target.
@@ -154,6 +160,21 @@ fn live(paths: &[&[TaskId]], j: TaskId, tasks: &[Task]) -> bool {
     paths.iter().filter(|p| p.contains(&j)).count() >= tasks[j].robots_needed
 }
 
+/// How a moving run starts. The default: the temporary groups are the components of the
+/// `radius_km` graph and CBCA plans in them at t = 0. The narrative run of Example 2
+/// (narrative.rs) imposes the thesis's groups and coalitions instead.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Start {
+    /// Imposed temporary groups (every robot in exactly one); None: the radio components.
+    pub groups: Option<Vec<Vec<RobotId>>>,
+    /// Imposed initial paths, one per robot (the decided plans of the first allocation; no
+    /// CBCA at t = 0); None: CBCA in each group.
+    pub paths: Option<Vec<Vec<TaskId>>>,
+    /// Targets nobody knows or sees until the first meeting of groups, at which they join the
+    /// meeting groups' knowledge (the narrative's T5, unallocated at first).
+    pub hidden_until_meeting: Vec<TaskId>,
+}
+
 /// Runs Example-like instances with motion (see the module doc).
 pub fn run_moving(
     robots: &[Robot],
@@ -161,19 +182,45 @@ pub fn run_moving(
     params: &CbcaParams,
     mp: &MovingParams,
 ) -> MovingRun {
+    run_moving_from(robots, tasks, params, mp, &Start::default())
+}
+
+/// [`run_moving`] from a given [`Start`].
+pub fn run_moving_from(
+    robots: &[Robot],
+    tasks: &[Task],
+    params: &CbcaParams,
+    mp: &MovingParams,
+    start: &Start,
+) -> MovingRun {
     let n = robots.len();
     let pos0: Vec<Vec2> = robots.iter().map(|r| r.position).collect();
-    let knowledge = robot_knowledge(
+    let mut hidden: BTreeSet<TaskId> = start.hidden_until_meeting.iter().copied().collect();
+    let mut knowledge = robot_knowledge(
         &pos0,
         tasks,
         params.detection_radius_km,
         PriorInfo::DetectionPlusNearest,
     );
+    for k in knowledge.iter_mut() {
+        k.retain(|j| !hidden.contains(j));
+    }
     let graph = comm_graph(&pos0, mp.radius_km);
-    let initial_groups = components(&graph);
-    let mut cb = cbca_robots(robots, tasks, &knowledge, params);
-    let initial_stats = run(&mut cb, &graph, &Radio::perfect(), params.max_iterations);
-    let initial_paths: Vec<Vec<TaskId>> = cb.iter().map(|r| r.plan().path.clone()).collect();
+    let initial_groups = start.groups.clone().unwrap_or_else(|| components(&graph));
+    let (initial_paths, initial_stats) = match &start.paths {
+        Some(p) => {
+            // The imposed coalitions' targets are known to their members.
+            for (i, path) in p.iter().enumerate() {
+                knowledge[i].extend(path.iter().copied());
+            }
+            (p.clone(), RunStats::default())
+        }
+        None => {
+            let mut cb = cbca_robots(robots, tasks, &knowledge, params);
+            let stats = run(&mut cb, &graph, &Radio::perfect(), params.max_iterations);
+            (cb.iter().map(|r| r.plan().path.clone()).collect(), stats)
+        }
+    };
     let mut group_known: Vec<BTreeSet<TaskId>> = initial_groups
         .iter()
         .map(|g| g.iter().flat_map(|&i| knowledge[i].clone()).collect())
@@ -283,7 +330,7 @@ pub fn run_moving(
         }
         // Local vision (case 1): no re-planning, the group learns the target.
         for m in &movers {
-            for task in tasks {
+            for task in tasks.iter().filter(|k| !hidden.contains(&k.id)) {
                 if (m.pos - task.pos()).norm() <= params.detection_radius_km {
                     group_known[m.group].insert(task.id);
                 }
@@ -303,6 +350,13 @@ pub fn run_moving(
         }
         if meet.is_empty() {
             continue;
+        }
+        // The hidden targets appear at the first meeting, to the groups that meet.
+        for j in std::mem::take(&mut hidden) {
+            for &(a, b) in &meet {
+                group_known[a].insert(j);
+                group_known[b].insert(j);
+            }
         }
         // Union of the meeting groups (transitively), each union re-plans once.
         let mut parent: Vec<usize> = (0..group_known.len()).collect();
@@ -386,7 +440,7 @@ fn robot_now(r: &Robot, m: &Mover) -> Robot {
 }
 
 /// The tasks with their values decayed to time t (t_o = t in (4.12)).
-fn decayed(tasks: &[Task], t: f64) -> Vec<Task> {
+pub(crate) fn decayed(tasks: &[Task], t: f64) -> Vec<Task> {
     tasks
         .iter()
         .map(|k| Task {
@@ -596,6 +650,7 @@ fn replan(
             new_score: p.new_score,
             verdict: o.verdict,
             sigma: o.threshold.as_ref().map(|t| t.sigma),
+            threshold: o.threshold.clone(),
             final_path,
         });
     }
@@ -606,6 +661,8 @@ fn replan(
         decisions,
         payments,
         stats,
+        robots_now: now,
+        old_coalitions,
     }
 }
 
