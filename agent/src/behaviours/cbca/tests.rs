@@ -93,12 +93,28 @@ fn a_robot_that_dies_mid_hunt_is_replaced() {
     assert!(t2.len() >= 3 && !t2.contains(&5));
 }
 
+/// The `[[robots]]` rows of a crafted case: ids 1.. at the given positions, gamma 0.5 and 3
+/// units of every resource each.
+fn robot_rows(positions: &[[f64; 2]]) -> String {
+    positions
+        .iter()
+        .enumerate()
+        .map(|(i, [x, y])| {
+            format!(
+                "[[robots]]\nid = {}\nposition = [{x:?}, {y:?}]\ngamma = 0.5\nresources = [3.0, 3.0, 3.0, 3.0, 3.0, 3.0]\n",
+                i + 1
+            )
+        })
+        .collect()
+}
+
 /// Three robots of one task each (l_i = 1): R1 and R2 hunt T1 (L = 2) far east; R3, alone
 /// and out of range, waits at T2 (L = 2) in the west. When R3 comes into R1's range, R1 is
 /// offered T2 with R3: about 115 e^(-0.05 x 1.9) - 0.95 = 103 against T1's about 88, a gain
 /// of ~15, below its loyalty threshold sigma ~ 34 (r1 x 0.5 = 25 as R1 supplies half of T1's
 /// coalition, plus r3 x 88 = 8.8 and its small sunk cost).
 fn loyalty_scenario(loyal: bool) -> Driver {
+    let robots = robot_rows(&[[0.0, 0.0], [0.0, 0.5], [-1.3, -0.8]]);
     let text = format!(
         r#"
 [params]
@@ -119,22 +135,7 @@ value = 115.0
 resources = [2.0, 2.0, 2.0, 2.0, 2.0, 2.0]
 beta = 0.05
 robots_needed = 2
-[[robots]]
-id = 1
-position = [0.0, 0.0]
-gamma = 0.5
-resources = [3.0, 3.0, 3.0, 3.0, 3.0, 3.0]
-[[robots]]
-id = 2
-position = [0.0, 0.5]
-gamma = 0.5
-resources = [3.0, 3.0, 3.0, 3.0, 3.0, 3.0]
-[[robots]]
-id = 3
-position = [-1.3, -0.8]
-gamma = 0.5
-resources = [3.0, 3.0, 3.0, 3.0, 3.0, 3.0]
-"#
+{robots}"#
     );
     let mut sc = scenario(1);
     sc.cbca = text.parse().unwrap();
@@ -269,7 +270,9 @@ fn without_seeking_the_unseen_death_leaves_its_target_unfinished() {
 /// it; R2, which still cannot hear R3, revives it from the later alive stamp R1 relays in its
 /// death record. Both then count R3 in T1's coalition again, and T1 is captured by the three.
 fn revocable_trio() -> Driver {
-    let text = r#"
+    let robots = robot_rows(&[[0.0, 0.0], [0.0, 0.5], [0.0, -0.5]]);
+    let text = format!(
+        r#"
 [params]
 max_tasks = 1
 [[tasks]]
@@ -279,22 +282,8 @@ value = 100.0
 resources = [2.0, 2.0, 2.0, 2.0, 2.0, 2.0]
 beta = 0.01
 robots_needed = 3
-[[robots]]
-id = 1
-position = [0.0, 0.0]
-gamma = 0.5
-resources = [3.0, 3.0, 3.0, 3.0, 3.0, 3.0]
-[[robots]]
-id = 2
-position = [0.0, 0.5]
-gamma = 0.5
-resources = [3.0, 3.0, 3.0, 3.0, 3.0, 3.0]
-[[robots]]
-id = 3
-position = [0.0, -0.5]
-gamma = 0.5
-resources = [3.0, 3.0, 3.0, 3.0, 3.0, 3.0]
-"#;
+{robots}"#
+    );
     let mut sc = scenario(1);
     sc.cbca = text.parse().unwrap();
     sc.run.robots = 3;
