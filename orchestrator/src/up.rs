@@ -597,6 +597,12 @@ fn print_summary(v: &serde_json::Value, dir: &Path) {
             sm["energy"].as_f64().unwrap_or(0.0) / 1e4
         );
     }
+    if let Some(h) = v.pointer("/mission/hunt") {
+        print_hunt(h, &g("/ticks"));
+    }
+    if let Some(fm) = v.pointer("/mission/formation") {
+        print_formation(fm, &g("/ticks"));
+    }
     println!(
         "  mission: coverage {:.1} %  spread {:.1}  mean nearest neighbour {:.1}",
         100.0 * f("/mission/coverage"),
@@ -607,6 +613,68 @@ fn print_summary(v: &serde_json::Value, dir: &Path) {
         "  outputs: {}/{{scenario.toml, summary.json, recording.bin, run.svg}}",
         dir.display()
     );
+}
+
+/// The hunt mission's line of the run summary: evaders captured, when and by whom.
+fn print_hunt(h: &serde_json::Value, ticks: &serde_json::Value) {
+    let all = match h["all_captured_minutes"].as_f64() {
+        Some(m) => format!("all by {m:.2} min"),
+        None => format!("not all: censored at tick {ticks}"),
+    };
+    println!(
+        "  hunt: evaders captured {}/{}  {all}",
+        h["captured"], h["evaders"]
+    );
+    for e in h["per_evader"].as_array().into_iter().flatten() {
+        let by: Vec<String> = e["captured_by"]
+            .as_array()
+            .into_iter()
+            .flatten()
+            .map(|r| format!("R{r}"))
+            .collect();
+        match e["capture_minutes"].as_f64() {
+            Some(m) => println!(
+                "    T{}: captured at {m:.2} min by {{{}}}",
+                e["id"],
+                by.join(", ")
+            ),
+            None => println!("    T{}: not captured", e["id"]),
+        }
+    }
+}
+
+/// The formation mission's line of the run summary: formed or not, K, L, clearances, plans.
+fn print_formation(fm: &serde_json::Value, ticks: &serde_json::Value) {
+    let formed = if fm["formed"].as_bool() == Some(true) {
+        format!("formed at K = {}", fm["iterations"])
+    } else {
+        format!("not formed: censored at tick {ticks}")
+    };
+    println!(
+        "  formation: {formed}  robots in place {}/{}  L {:.1}  reassignments {}  overlapping pairs {}",
+        fm["robots_in_place"],
+        fm["robots"],
+        fm["path_length"].as_f64().unwrap_or(0.0),
+        fm["reassignments"],
+        fm["overlapping_pairs"]
+    );
+    println!(
+        "    least clearance: robot-robot {:.3}  robot-obstacle {:.3}",
+        fm["min_robot_clearance"].as_f64().unwrap_or(f64::NAN),
+        fm["min_obstacle_clearance"].as_f64().unwrap_or(f64::NAN)
+    );
+    for p in fm["plans"].as_array().into_iter().flatten() {
+        println!(
+            "    plan epoch {} by robot {} at tick {}: alpha {:.3} theta {:.3}  gap {:.3}  {:.2} s",
+            p["epoch"],
+            p["robot"],
+            p["tick"],
+            p["alpha"].as_f64().unwrap_or(f64::NAN),
+            p["theta"].as_f64().unwrap_or(f64::NAN),
+            p["gap"].as_f64().unwrap_or(f64::NAN),
+            p["seconds"].as_f64().unwrap_or(f64::NAN)
+        );
+    }
 }
 
 /// Worker threads of a single in-process run: the machine's cores.
