@@ -785,7 +785,8 @@ fn variants(
 ) -> Result<(), String> {
     let _ = writeln!(
         md,
-        "## Example 1 in the hunt world under each variant ({} seeds a variant, in-process)\n",
+        "## `example1` ({}) in the hunt world under each variant ({} seeds a variant, in-process)\n",
+        x.example1.display(),
         x.variant_seeds
     );
     let _ = writeln!(md, "A run that does not capture every evader by `run.max_ticks` ({}) is censored: it counts in 'runs capturing all' and its time is left out of the mean (the column says how many runs the mean has).\n", base.run.max_ticks);

@@ -65,11 +65,16 @@ pub struct BehaviourParams {
     /// there, inside the radio range of that target's coalition, so it can replace a member
     /// that dies (sec. 4.2.5 re-planning needs a free robot within reach). [chosen] false, the
     /// thesis's Fig. 4.2(c) (idle robots stay where they are); true lets a coalition that lost
-    /// a member after spreading out be completed (configs/cbca-experiment.toml measures both).
+    /// a member after spreading out be completed. Kept off: it is no general win
+    /// (configs/cbca-seek-example{1,2}.toml, docs/hunting.md 14.9: at 1.6 km it turns Example
+    /// 1's 20 %-killed runs from 7 into 20 of 20 captured, but Example 2's lossless runs from 10
+    /// into 0 of 10).
     pub seek_when_idle: bool,
     /// Where a seeking idle robot parks: this far from the target (km). [chosen] 1.0: within
     /// the 1.5 km radio of every member on a capture ring of radius up to 0.5 km (the waiting
-    /// ring, 1.6 km, is not: a member across the ring is up to 1.9 km away).
+    /// ring, 1.6 km, is not: a member across the ring is up to 1.9 km away). Measured (14.9):
+    /// 1.6, outside the evaders' 1.5 km sensing radius, does better in every Example 1 variant
+    /// and in Example 2 under loss and kills, worse in Example 2 lossless.
     pub seek_radius_km: f64,
     /// A coalition member that has held its capture point this many ticks without the capture
     /// takes every member it has not heard directly in as many ticks for dead (forgotten and
