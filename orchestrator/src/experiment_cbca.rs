@@ -194,6 +194,23 @@ fn example_rounds(
         set(&idle),
         if n == 1 { " (thesis: R10, R13)" } else { "" }
     );
+    // Why: Algorithm 1's verdict on each target for each idle robot, against the winner lists
+    // it converged on (the grouped run again, to hold its robots' states).
+    let (grouped, _, _) = agent::cbca::compare::run_cbca(
+        &robots,
+        &tasks,
+        agent::cbca::grouping::PriorInfo::DetectionPlusNearest,
+        &Radio::perfect(),
+        &params,
+    );
+    for r in grouped.iter().filter(|r| r.plan().path.is_empty()) {
+        let why: Vec<String> = agent::cbca::idle::why_idle(r, &tasks)
+            .iter()
+            .map(|(j, reason)| format!("T{}: {}", j + 1, agent::cbca::idle::describe(reason)))
+            .collect();
+        let _ = writeln!(md, "- why R{} is idle: {}", r.id() + 1, why.join("; "));
+    }
+    let _ = writeln!(md);
     let _ = writeln!(
         md,
         "| method | system utility | mean completion (time units) | hunted / shelved | messages | consensus rounds | bytes broadcast |\n|---|---|---|---|---|---|---|"

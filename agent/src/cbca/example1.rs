@@ -9,7 +9,6 @@ use std::collections::BTreeMap;
 use swarm::geometry::Vec2;
 
 use super::baselines::{self, Allocation};
-use super::bundle::{evaluate, Candidate};
 use super::consensus::CbcaRobot;
 use super::dag;
 use super::grouping::{comm_graph, robot_knowledge, temporary_groups, PriorInfo};
@@ -148,39 +147,11 @@ fn report(title: &str, o: &Outcome, tasks: &[Task]) {
         if !r.plan().bundle.is_empty() {
             continue;
         }
-        let why: Vec<String> = r
-            .book()
-            .keys()
-            .map(|&j| {
-                let c = evaluate(
-                    r.robot(),
-                    r.plan(),
-                    j,
-                    r.winners(),
-                    r.book(),
-                    &r.peers(),
-                    r.params(),
-                );
-                let s = match c {
-                    Candidate::Outbid {
-                        bid,
-                        weakest,
-                        weakest_bid,
-                    } => format!(
-                        "bid {bid:.2} <= weakest winner {} {weakest_bid:.2}",
-                        robot_label(weakest)
-                    ),
-                    other => format!("{other:?}"),
-                };
-                format!("{}: {s}", task_label(j))
-            })
+        let why: Vec<String> = super::idle::why_idle(r, tasks)
+            .iter()
+            .map(|(j, reason)| format!("{}: {}", task_label(*j), super::idle::describe(reason)))
             .collect();
-        println!(
-            "  idle {}: knows {:?}; {}",
-            robot_label(r.id()),
-            r.book().keys().map(|&j| task_label(j)).collect::<Vec<_>>(),
-            why.join("; ")
-        );
+        println!("  idle {}: {}", robot_label(r.id()), why.join("; "));
     }
     let st = &o.stats;
     println!(

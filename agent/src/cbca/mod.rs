@@ -11,6 +11,7 @@ pub mod compare;
 pub mod consensus;
 pub mod dag;
 pub mod grouping;
+pub mod idle;
 pub mod instance;
 pub mod loyalty;
 pub mod model;
