@@ -95,6 +95,8 @@ fn results_md() -> String {
 
 #[path = "experiment_cbca_fair.rs"]
 mod fair;
+#[path = "experiment_cbca_narrative.rs"]
+mod narrative;
 
 use crate::experiment::mean_sd;
 
@@ -887,6 +889,15 @@ pub fn run(file: &Path, out: Option<&Path>) -> Result<i32, String> {
     if !x.moving_radii.is_empty() {
         let (robots, tasks, params) = kernels_of(&ex2)?;
         fair::example2_moving(
+            &robots,
+            &tasks,
+            &params,
+            &x.moving_radii,
+            &out,
+            &mut md,
+            &write_curves_svg,
+        )?;
+        narrative::example2_narrative(
             &robots,
             &tasks,
             &params,
