@@ -8,7 +8,9 @@
 use agent::cbca::model::{Robot, RobotId, Task, TaskId};
 use agent::cbca::moving_rounds::{run_moving_from, MovingParams, MovingRun};
 use agent::cbca::narrative::{jumps, thesis_start, THESIS_HIDDEN};
-use agent::cbca::narrative_thesis::{path_names as names, robot_set as set, side_by_side};
+use agent::cbca::narrative_thesis::{
+    path_names as names, payments, robot_set as set, side_by_side,
+};
 use agent::cbca::replan::Verdict;
 use agent::cbca::CbcaParams;
 use std::fmt::Write as _;
@@ -85,7 +87,11 @@ pub fn narrative_section(
                 .map(|g| set(g))
                 .collect::<Vec<_>>()
                 .join(" + "),
-            set(&rp.holding),
+            if rp.holding.is_empty() {
+                "none".to_string()
+            } else {
+                set(&rp.holding)
+            },
             rp.stats.rounds
         );
     }
@@ -144,10 +150,7 @@ pub fn narrative_section(
             }
         );
     }
-    let pays: Vec<String> = r
-        .replannings
-        .iter()
-        .flat_map(|rp| rp.payments.iter().map(move |p| (rp.time, p)))
+    let pays: Vec<String> = payments(&r)
         .map(|(time, p)| {
             format!(
                 "| {time:.2} | R{} | R{} | T{} | {:.2} |",
@@ -240,21 +243,14 @@ pub fn example2_narrative(
         let r = narrative_section(robots, tasks, params, radius, cover, md);
         let tag = if cover { "-2.6-on" } else { "" };
         let file = format!("fig-4.5-narrative-{radius}km{tag}.svg");
-        let series: Vec<(String, Vec<f64>)> = r
-            .utility
-            .iter()
-            .enumerate()
-            .filter(|(_, u)| u.iter().any(|x| x.abs() > 1e-9))
-            .map(|(i, u)| (format!("R{}", i + 1), u.clone()))
-            .collect();
-        svg(
+        super::fair::utility_svg(
+            &r,
             &format!(
                 "Example 2 from the thesis's allocation ({radius} km, (2.6) {}): utility against time",
                 on_off(cover)
             ),
-            &r.times,
-            &series,
             &out.join(&file),
+            svg,
         )?;
         let _ = writeln!(
             md,

@@ -7,7 +7,8 @@
 //! new targets against 110.56 and 36.32 on the old), T1 shelved ("no coalition satisfies T1's
 //! resources"), R6 T2 -> T4 with compensation to R2 and R4, R10 left with nothing (utility 0).
 
-use super::model::{RobotId, TaskId};
+use super::loyalty::Payment;
+use super::model::{robot_label as r, task_label as t, RobotId, TaskId};
 use super::moving_rounds::{Decision, MovingRun};
 use super::replan::Verdict;
 
@@ -58,14 +59,6 @@ pub struct SideBySide {
     pub thesis: String,
     pub ours: String,
     pub reason: String,
-}
-
-fn r(i: RobotId) -> String {
-    format!("R{}", i + 1)
-}
-
-fn t(j: TaskId) -> String {
-    format!("T{}", j + 1)
 }
 
 /// `[T1 T5]`, `[]` for no task.
@@ -155,23 +148,18 @@ fn switch_row(run: &MovingRun, s: &ThesisSwitch) -> SideBySide {
         ));
         let proposed = d.proposed.contains(&s.to);
         let mut why = if proposed {
-            match d.verdict {
-                Verdict::Switches => format!(
-                    "reproduced: proposed {} (S' {:.2} against S {:.2}), {}",
-                    path_names(&d.proposed),
-                    d.new_score,
-                    d.old_score,
-                    test_words(d)
-                ),
-                Verdict::Loyal => format!(
-                    "refused by (4.22): proposed {} (S' {:.2} against S {:.2}), {}",
-                    path_names(&d.proposed),
-                    d.new_score,
-                    d.old_score,
-                    test_words(d)
-                ),
-                _ => format!("{}", test_words(d)),
-            }
+            let what = match d.verdict {
+                Verdict::Switches => "reproduced",
+                Verdict::Loyal => "refused by (4.22)",
+                _ => "no test",
+            };
+            format!(
+                "{what}: proposed {} (S' {:.2} against S {:.2}), {}",
+                path_names(&d.proposed),
+                d.new_score,
+                d.old_score,
+                test_words(d)
+            )
         } else {
             let tail = match d.verdict {
                 Verdict::Switches => format!(", taken: {}", test_words(d)),
@@ -198,13 +186,17 @@ fn switch_row(run: &MovingRun, s: &ThesisSwitch) -> SideBySide {
     }
 }
 
+/// Every compensation payment of the run with its re-planning time, in order.
+pub fn payments(run: &MovingRun) -> impl Iterator<Item = (f64, &Payment)> {
+    run.replannings
+        .iter()
+        .flat_map(|rp| rp.payments.iter().map(move |p| (rp.time, p)))
+}
+
 fn compensation_row(run: &MovingRun) -> SideBySide {
     let (payer, to) = THESIS_COMPENSATION;
     let thesis = format!("{} pays {} and {}", r(payer), r(to[0]), r(to[1]));
-    let all: Vec<String> = run
-        .replannings
-        .iter()
-        .flat_map(|rp| rp.payments.iter().map(move |p| (rp.time, p)))
+    let all: Vec<String> = payments(run)
         .map(|(time, p)| {
             format!(
                 "t {time:.2}: {} -> {} {:.2} for {}",
@@ -220,10 +212,8 @@ fn compensation_row(run: &MovingRun) -> SideBySide {
     } else {
         all.join("; ")
     };
-    let paid: Vec<RobotId> = run
-        .replannings
-        .iter()
-        .flat_map(|rp| &rp.payments)
+    let paid: Vec<RobotId> = payments(run)
+        .map(|(_, p)| p)
         .filter(|p| p.from == payer)
         .map(|p| p.to)
         .collect();
@@ -266,7 +256,7 @@ fn shelved_row(run: &MovingRun) -> SideBySide {
                 let leaver = THESIS_SWITCHES[1].robot;
                 if c.members.contains(&leaver) {
                     format!(
-                        "{} stayed on {} (row above): its coalition was full",
+                        "{} is in {}'s coalition at the capture (row above): the coalition was full",
                         r(leaver),
                         t(j)
                     )
@@ -337,4 +327,50 @@ pub fn side_by_side(run: &MovingRun) -> Vec<SideBySide> {
     rows.push(shelved_row(run));
     rows.push(nothing_row(run));
     rows
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::cbca::moving_rounds::{run_moving_from, MovingParams};
+    use crate::cbca::narrative::thesis_start;
+    use crate::cbca::scenario::tests::example;
+
+    /// Example 2 from the thesis's start at 2.0 km: each switch row's reason follows the
+    /// robot's own (4.22) test (reproduced only if it was proposed the thesis's target and
+    /// switched; "never proposed" when the fresh CBCA did not propose it), and the
+    /// compensation row names every payment of the run.
+    #[test]
+    fn the_side_by_side_rows_follow_the_runs_decisions() {
+        let s = example(2);
+        let (robots, tasks) = (s.robots().unwrap(), s.tasks().unwrap());
+        let mp = MovingParams {
+            radius_km: 2.0,
+            ..MovingParams::default()
+        };
+        let run = run_moving_from(&robots, &tasks, &s.params, &mp, &thesis_start(robots.len()));
+        let rows = side_by_side(&run);
+        assert_eq!(rows.len(), THESIS_SWITCHES.len() + 3);
+        for (sw, row) in THESIS_SWITCHES.iter().zip(&rows) {
+            let ds = decisions_of(&run, sw.robot);
+            assert!(!ds.is_empty(), "R{} re-plans at the meeting", sw.robot + 1);
+            let (_, d) = ds[0];
+            let proposed = d.proposed.contains(&sw.to);
+            assert_eq!(
+                row.reason.starts_with("reproduced"),
+                proposed && d.verdict == Verdict::Switches,
+                "{row:?}"
+            );
+            assert_eq!(row.reason.contains("never proposed"), !proposed, "{row:?}");
+            if d.verdict == Verdict::Loyal {
+                assert!(row
+                    .reason
+                    .contains(&format!("sigma {:.2}", d.sigma.unwrap())));
+            }
+        }
+        let comp = &rows[THESIS_SWITCHES.len()];
+        let n = payments(&run).count();
+        assert!(n > 0);
+        assert_eq!(comp.ours.matches(" -> ").count(), n, "{comp:?}");
+    }
 }
