@@ -10,6 +10,7 @@ use agent::cbca::grouping::{comm_graph, PriorInfo};
 use agent::cbca::instance::{random_instance, InstanceParams};
 use agent::cbca::model::{Robot, RobotId, Task, TaskId};
 use agent::cbca::moving_rounds::{run_moving, MovingParams, MovingRun};
+use agent::cbca::narrative_thesis::decision_cells;
 use agent::cbca::rounds::{run, Radio};
 use agent::cbca::CbcaParams;
 use rand::seq::SliceRandom;
@@ -465,13 +466,9 @@ pub fn example2_moving(
                 }
                 let _ = writeln!(
                     md,
-                    "| {:.2} | {g} | R{} | {} ({:.2}) | {} ({:.2}) | {} | {:?} | {} |",
+                    "| {:.2} | {g} | {} | {} | {:?} | {} |",
                     rp.time,
-                    d.robot + 1,
-                    names(&d.old_path),
-                    d.old_score,
-                    names(&d.proposed),
-                    d.new_score,
+                    decision_cells(d),
                     d.sigma.map_or("-".into(), |s| format!("{s:.2}")),
                     d.verdict,
                     names(&d.final_path)

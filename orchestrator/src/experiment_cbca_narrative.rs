@@ -9,7 +9,7 @@ use agent::cbca::model::{Robot, RobotId, Task, TaskId};
 use agent::cbca::moving_rounds::{run_moving_from, MovingParams, MovingRun};
 use agent::cbca::narrative::{jumps, thesis_start, THESIS_HIDDEN};
 use agent::cbca::narrative_thesis::{
-    path_names as names, payments, robot_set as set, side_by_side,
+    decision_cells, path_names as names, payments, robot_set as set, side_by_side,
 };
 use agent::cbca::replan::Verdict;
 use agent::cbca::CbcaParams;
@@ -101,13 +101,9 @@ pub fn narrative_section(
             let Some(th) = &d.threshold else { continue };
             let _ = writeln!(
                 md,
-                "| {:.2} | R{} | {} ({:.2}) | {} ({:.2}) | {:.2} | {:.2} | {:.3} | {:.2} | {:.2} | {:?} | {} |",
+                "| {:.2} | {} | {:.2} | {:.2} | {:.3} | {:.2} | {:.2} | {:?} | {} |",
                 rp.time,
-                d.robot + 1,
-                names(&d.old_path),
-                d.old_score,
-                names(&d.proposed),
-                d.new_score,
+                decision_cells(d),
                 d.new_score - d.old_score,
                 th.sigma,
                 th.importance,

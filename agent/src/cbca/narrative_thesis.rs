@@ -73,6 +73,19 @@ pub fn robot_set(v: &[RobotId]) -> String {
     format!("{{{}}}", v.join(", "))
 }
 
+/// A decision's table cells `R1 | [T1] (16.87) | [T5] (67.91)`: robot, old path (S),
+/// proposed path (S').
+pub fn decision_cells(d: &Decision) -> String {
+    format!(
+        "{} | {} ({:.2}) | {} ({:.2})",
+        r(d.robot),
+        path_names(&d.old_path),
+        d.old_score,
+        path_names(&d.proposed),
+        d.new_score
+    )
+}
+
 /// The (4.22) test of a decision in words: "gain 18.14 < sigma 25.25".
 pub fn test_words(d: &Decision) -> String {
     let gain = d.new_score - d.old_score;

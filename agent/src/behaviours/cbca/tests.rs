@@ -208,6 +208,20 @@ fn loyalty_blocks_a_switch_below_its_threshold_and_the_ablation_switches() {
     assert!(total.abs() < 1e-9, "{total}");
 }
 
+/// Runs `sc` until R5 (index 4) has committed to T2 and executed 20 ticks, then kills it;
+/// returns the driver and the tick of the commitment.
+fn kill_r5_on_its_way_to_t2(sc: swarm::scenario::Scenario) -> (Driver, u64) {
+    let mut d = Driver::new(sc, 0.0, 1);
+    let r5_on_t2 = |d: &Driver| {
+        d.robots[4].phase() == super::robot::Phase::Executing && d.robots[4].path().contains(&1)
+    };
+    assert!(d.run_until(300, r5_on_t2), "R5 never committed to T2");
+    let commit = d.tick;
+    assert!(!d.run_until(commit + 20, |_| false));
+    d.kill(4);
+    (d, commit)
+}
+
 /// R5 (index 4) dies on its way to T2 where no proximity sensor sees it vanish (the sensor
 /// range is cut to 0.2 km, below the spacing of the members on the capture ring: the case of
 /// a coalition that has spread out). R1 and R6 wait at T2's ring, close in after
@@ -221,14 +235,7 @@ fn a_robot_that_dies_unseen_is_presumed_lost_and_replaced() {
     b.insert("seek_when_idle".into(), toml::Value::Boolean(true));
     sc.cbca.insert("behaviour".into(), toml::Value::Table(b));
     sc.robot.neighbour_sensing_radius = 0.2;
-    let mut d = Driver::new(sc, 0.0, 1);
-    let r5_on_t2 = |d: &Driver| {
-        d.robots[4].phase() == super::robot::Phase::Executing && d.robots[4].path().contains(&1)
-    };
-    assert!(d.run_until(300, r5_on_t2), "R5 never committed to T2");
-    let commit = d.tick;
-    assert!(!d.run_until(commit + 20, |_| false));
-    d.kill(4);
+    let (mut d, commit) = kill_r5_on_its_way_to_t2(sc);
     assert!(d.run_until(5000, |d| d.all_finished()), "targets left at tick {}", d.tick);
     let presumed = who(&d, &|e| matches!(e, Event::PresumedLost { robot: 4, .. }));
     let t2 = who(&d, &|e| matches!(e, Event::Finished { task: 1, .. }));
@@ -249,14 +256,7 @@ fn a_robot_that_dies_unseen_is_presumed_lost_and_replaced() {
 fn without_seeking_the_unseen_death_leaves_its_target_unfinished() {
     let mut sc = scenario(1);
     sc.robot.neighbour_sensing_radius = 0.2;
-    let mut d = Driver::new(sc, 0.0, 1);
-    let r5_on_t2 = |d: &Driver| {
-        d.robots[4].phase() == super::robot::Phase::Executing && d.robots[4].path().contains(&1)
-    };
-    assert!(d.run_until(300, r5_on_t2), "R5 never committed to T2");
-    let commit = d.tick;
-    assert!(!d.run_until(commit + 20, |_| false));
-    d.kill(4);
+    let (mut d, commit) = kill_r5_on_its_way_to_t2(sc);
     assert!(!d.run_until(3000, |d| d.targets[1].captured_at.is_some()));
 }
 
