@@ -256,7 +256,7 @@ fn a_robot_that_dies_unseen_is_presumed_lost_and_replaced() {
 fn without_seeking_the_unseen_death_leaves_its_target_unfinished() {
     let mut sc = scenario(1);
     sc.robot.neighbour_sensing_radius = 0.2;
-    let (mut d, commit) = kill_r5_on_its_way_to_t2(sc);
+    let (mut d, _) = kill_r5_on_its_way_to_t2(sc);
     assert!(!d.run_until(3000, |d| d.targets[1].captured_at.is_some()));
 }
 
