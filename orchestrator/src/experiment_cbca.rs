@@ -95,6 +95,8 @@ fn results_md() -> String {
 
 #[path = "experiment_cbca_fair.rs"]
 mod fair;
+#[path = "experiment_cbca_narrative.rs"]
+mod narrative;
 
 use crate::experiment::mean_sd;
 
@@ -904,15 +906,18 @@ pub fn run(file: &Path, out: Option<&Path>) -> Result<i32, String> {
     example_rounds(2, &ex2, &x, &out, &mut md)?;
     if !x.moving_radii.is_empty() {
         let (robots, tasks, params) = kernels_of(&ex2)?;
-        fair::example2_moving(
-            &robots,
-            &tasks,
-            &params,
-            &x.moving_radii,
-            &out,
-            &mut md,
-            &write_curves_svg,
-        )?;
+        // Our CBCA's start, then the thesis's first allocation (experiment_cbca_narrative.rs).
+        for section in [fair::example2_moving, narrative::example2_narrative] {
+            section(
+                &robots,
+                &tasks,
+                &params,
+                &x.moving_radii,
+                &out,
+                &mut md,
+                &write_curves_svg,
+            )?;
+        }
     }
     if x.hunt_world {
         example_hunt(1, &ex1, &mut md)?;

@@ -9,7 +9,8 @@ use agent::cbca::consensus::CbcaRobot;
 use agent::cbca::grouping::{comm_graph, PriorInfo};
 use agent::cbca::instance::{random_instance, InstanceParams};
 use agent::cbca::model::{Robot, RobotId, Task, TaskId};
-use agent::cbca::moving_rounds::{run_moving, MovingParams};
+use agent::cbca::moving_rounds::{run_moving, MovingParams, MovingRun};
+use agent::cbca::narrative_thesis::decision_cells;
 use agent::cbca::rounds::{run, Radio};
 use agent::cbca::CbcaParams;
 use rand::seq::SliceRandom;
@@ -377,6 +378,18 @@ fn set(v: &[usize]) -> String {
 /// The utility-curve SVG writer of experiment_cbca.rs: (title, times, (label, values), file).
 pub type CurvesSvg = dyn Fn(&str, &[f64], &[(String, Vec<f64>)], &Path) -> Result<(), String>;
 
+/// Fig. 4.5's curves of a moving run: every robot whose utility is ever non-zero.
+pub fn utility_svg(r: &MovingRun, title: &str, file: &Path, svg: &CurvesSvg) -> Result<(), String> {
+    let series: Vec<(String, Vec<f64>)> = r
+        .utility
+        .iter()
+        .enumerate()
+        .filter(|(_, u)| u.iter().any(|x| x.abs() > 1e-9))
+        .map(|(i, u)| (format!("R{}", i + 1), u.clone()))
+        .collect();
+    svg(title, &r.times, &series, file)
+}
+
 /// Example 2 re-planned with motion (Fig. 4.5): see `agent::cbca::moving_rounds`.
 pub fn example2_moving(
     robots: &[Robot],
@@ -453,13 +466,9 @@ pub fn example2_moving(
                 }
                 let _ = writeln!(
                     md,
-                    "| {:.2} | {g} | R{} | {} ({:.2}) | {} ({:.2}) | {} | {:?} | {} |",
+                    "| {:.2} | {g} | {} | {} | {:?} | {} |",
                     rp.time,
-                    d.robot + 1,
-                    names(&d.old_path),
-                    d.old_score,
-                    names(&d.proposed),
-                    d.new_score,
+                    decision_cells(d),
                     d.sigma.map_or("-".into(), |s| format!("{s:.2}")),
                     d.verdict,
                     names(&d.final_path)
@@ -488,21 +497,14 @@ pub fn example2_moving(
             }
         );
         let file = format!("fig-4.5-moving-{radius}km{tag}.svg");
-        let series: Vec<(String, Vec<f64>)> = r
-            .utility
-            .iter()
-            .enumerate()
-            .filter(|(_, u)| u.iter().any(|x| x.abs() > 1e-9))
-            .map(|(i, u)| (format!("R{}", i + 1), u.clone()))
-            .collect();
-        svg(
+        utility_svg(
+            &r,
             &format!(
                 "Example 2 re-planned ({radius} km, (2.6) {}): utility against time",
                 if cover { "on" } else { "off" }
             ),
-            &r.times,
-            &series,
             &out.join(&file),
+            svg,
         )?;
         let _ = writeln!(md, "![Fig. 4.5, {radius} km]({file})\n");
     }

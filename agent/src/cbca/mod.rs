@@ -17,6 +17,7 @@ pub mod loyalty;
 pub mod model;
 pub mod moving_rounds;
 pub mod narrative;
+pub mod narrative_thesis;
 pub mod params;
 pub mod replan;
 pub mod rounds;

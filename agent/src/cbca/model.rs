@@ -222,6 +222,26 @@ pub(crate) mod tests {
         }
     }
 
+    /// Tasks needing 1 unit of every type, ids 0..: each (position, L_j, V_a).
+    pub fn unit_tasks(rows: &[([f64; 2], usize, f64)]) -> Vec<Task> {
+        rows.iter()
+            .enumerate()
+            .map(|(j, &(pos, needed, value))| Task {
+                value,
+                ..task(j, pos, [1.0; RESOURCE_TYPES], needed)
+            })
+            .collect()
+    }
+
+    /// Robots with 1 unit of every type, ids 0.., at the given positions.
+    pub fn unit_robots(positions: &[[f64; 2]]) -> Vec<Robot> {
+        positions
+            .iter()
+            .enumerate()
+            .map(|(i, &pos)| robot(i, pos, [1.0; RESOURCE_TYPES]))
+            .collect()
+    }
+
     fn book(tasks: Vec<Task>) -> TaskBook {
         tasks.into_iter().map(|t| (t.id, t)).collect()
     }

@@ -669,7 +669,7 @@ fn replan(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::cbca::model::tests::{robot, task};
+    use crate::cbca::model::tests::{unit_robots, unit_tasks};
 
     #[test]
     fn robots_move_capture_and_bank_their_utility() {
@@ -678,23 +678,8 @@ mod tests {
         // detects nothing but is the robot nearest to T2 (2.5 km): it knows T2 and takes it.
         // R1 and R2 reach T1 at t = 0.7 and capture it; R3 captures T2 at t = 2.5; the groups
         // never come within 1.5 km: no re-planning.
-        let tasks = vec![
-            {
-                let mut t = task(0, [0.0, 0.0], [1.0; 6], 2);
-                t.value = 100.0;
-                t
-            },
-            {
-                let mut t = task(1, [4.0, 0.0], [1.0; 6], 1);
-                t.value = 300.0;
-                t
-            },
-        ];
-        let robots = vec![
-            robot(0, [0.0, 0.7], [1.0; 6]),
-            robot(1, [0.0, -0.7], [1.0; 6]),
-            robot(2, [6.0, 1.5], [1.0; 6]),
-        ];
+        let tasks = unit_tasks(&[([0.0, 0.0], 2, 100.0), ([4.0, 0.0], 1, 300.0)]);
+        let robots = unit_robots(&[[0.0, 0.7], [0.0, -0.7], [6.0, 1.5]]);
         let p = CbcaParams::default();
         let mp = MovingParams::default();
         let r = run_moving(&robots, &tasks, &p, &mp);

@@ -62,7 +62,7 @@ pub fn jumps(run: &MovingRun, k: usize) -> Vec<f64> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::cbca::model::tests::{robot, task};
+    use crate::cbca::model::tests::{unit_robots, unit_tasks};
     use crate::cbca::moving_rounds::{run_moving_from, MovingParams};
     use crate::cbca::params::CbcaParams;
     use crate::cbca::replan::Verdict;
@@ -82,23 +82,8 @@ mod tests {
     /// R1's falls by it from its new plan.
     #[test]
     fn compensation_by_hand_three_robots_two_tasks() {
-        let tasks = vec![
-            {
-                let mut t = task(0, [0.0, 0.0], [1.0; 6], 2);
-                t.value = 100.0;
-                t
-            },
-            {
-                let mut t = task(1, [0.0, 4.0], [1.0; 6], 1);
-                t.value = 600.0;
-                t
-            },
-        ];
-        let robots = vec![
-            robot(0, [0.0, 1.0], [1.0; 6]),
-            robot(1, [0.0, -1.0], [1.0; 6]),
-            robot(2, [1.0, 0.0], [1.0; 6]),
-        ];
+        let tasks = unit_tasks(&[([0.0, 0.0], 2, 100.0), ([0.0, 4.0], 1, 600.0)]);
+        let robots = unit_robots(&[[0.0, 1.0], [0.0, -1.0], [1.0, 0.0]]);
         let start = Start {
             groups: Some(vec![vec![0, 1], vec![2]]),
             paths: Some(vec![vec![0], vec![0], vec![]]),

@@ -25,6 +25,16 @@ fn settle_and_check_agreement(d: &mut Driver, max: u64) {
     }
 }
 
+/// The robots (1-based) with an event that `f` accepts.
+fn who(d: &Driver, f: &dyn Fn(&Event) -> bool) -> Vec<usize> {
+    d.robots
+        .iter()
+        .enumerate()
+        .filter(|(_, r)| r.events.iter().any(f))
+        .map(|(i, _)| i + 1)
+        .collect()
+}
+
 #[test]
 fn example1_starts_as_the_two_temporary_groups() {
     let d = Driver::new(scenario(1), 0.0, 1);
@@ -73,22 +83,10 @@ fn a_robot_that_dies_mid_hunt_is_replaced() {
     assert!(d.coalitions(5)[1].contains(&5), "{:?}", d.coalitions(5));
     d.kill(4);
     assert!(d.run_until(3000, |d| d.all_finished()), "targets left at tick {}", d.tick);
-    let knew: Vec<usize> = d
-        .robots
-        .iter()
-        .enumerate()
-        .filter(|(_, r)| r.events.iter().any(|e| matches!(e, Event::RobotGone { robot: 4, .. })))
-        .map(|(i, _)| i + 1)
-        .collect();
+    let knew = who(&d, &|e| matches!(e, Event::RobotGone { robot: 4, .. }));
     println!("R5's death known to {knew:?}; T2 captured at {:?}", d.targets[1].captured_at);
     assert!(knew.contains(&6), "R6, beside R5, saw it die");
-    let t2: Vec<usize> = d
-        .robots
-        .iter()
-        .enumerate()
-        .filter(|(_, r)| r.events.iter().any(|e| matches!(e, Event::Finished { task: 1, .. })))
-        .map(|(i, _)| i + 1)
-        .collect();
+    let t2 = who(&d, &|e| matches!(e, Event::Finished { task: 1, .. }));
     println!("T2 finished by {t2:?}");
     assert!(t2.len() >= 3 && !t2.contains(&5));
 }
@@ -108,38 +106,46 @@ fn robot_rows(positions: &[[f64; 2]]) -> String {
         .collect()
 }
 
+/// The `[[tasks]]` rows of a crafted case: ids 1.., each (position, value, beta, L_j), 2 units
+/// of every resource required.
+fn task_rows(tasks: &[([f64; 2], f64, f64, usize)]) -> String {
+    tasks
+        .iter()
+        .enumerate()
+        .map(|(j, ([x, y], value, beta, l))| {
+            format!(
+                "[[tasks]]\nid = {}\nposition = [{x:?}, {y:?}]\nvalue = {value:?}\nresources = [2.0, 2.0, 2.0, 2.0, 2.0, 2.0]\nbeta = {beta:?}\nrobots_needed = {l}\n",
+                j + 1
+            )
+        })
+        .collect()
+}
+
+/// A crafted case on Example 1's scenario: the `[cbca]` text `head` (params, behaviour), the
+/// tasks and the robots' positions (`task_rows`, `robot_rows`).
+fn crafted(
+    head: &str,
+    tasks: &[([f64; 2], f64, f64, usize)],
+    positions: &[[f64; 2]],
+) -> swarm::scenario::Scenario {
+    let text = format!("{head}\n{}{}", task_rows(tasks), robot_rows(positions));
+    let mut sc = scenario(1);
+    sc.cbca = text.parse().unwrap();
+    sc.run.robots = positions.len() as u32;
+    sc
+}
+
 /// Three robots of one task each (l_i = 1): R1 and R2 hunt T1 (L = 2) far east; R3, alone
 /// and out of range, waits at T2 (L = 2) in the west. When R3 comes into R1's range, R1 is
 /// offered T2 with R3: about 115 e^(-0.05 x 1.9) - 0.95 = 103 against T1's about 88, a gain
 /// of ~15, below its loyalty threshold sigma ~ 34 (r1 x 0.5 = 25 as R1 supplies half of T1's
 /// coalition, plus r3 x 88 = 8.8 and its small sunk cost).
 fn loyalty_scenario(loyal: bool) -> Driver {
-    let robots = robot_rows(&[[0.0, 0.0], [0.0, 0.5], [-1.3, -0.8]]);
-    let text = format!(
-        r#"
-[params]
-max_tasks = 1
-[behaviour]
-loyalty = {loyal}
-[[tasks]]
-id = 1
-position = [3.0, 0.0]
-value = 100.0
-resources = [2.0, 2.0, 2.0, 2.0, 2.0, 2.0]
-beta = 0.05
-robots_needed = 2
-[[tasks]]
-id = 2
-position = [-1.3, 0.0]
-value = 115.0
-resources = [2.0, 2.0, 2.0, 2.0, 2.0, 2.0]
-beta = 0.05
-robots_needed = 2
-{robots}"#
+    let sc = crafted(
+        &format!("[params]\nmax_tasks = 1\n[behaviour]\nloyalty = {loyal}"),
+        &[([3.0, 0.0], 100.0, 0.05, 2), ([-1.3, 0.0], 115.0, 0.05, 2)],
+        &[[0.0, 0.0], [0.0, 0.5], [-1.3, -0.8]],
     );
-    let mut sc = scenario(1);
-    sc.cbca = text.parse().unwrap();
-    sc.run.robots = 3;
     Driver::new(sc, 0.0, 1)
 }
 
@@ -202,6 +208,20 @@ fn loyalty_blocks_a_switch_below_its_threshold_and_the_ablation_switches() {
     assert!(total.abs() < 1e-9, "{total}");
 }
 
+/// Runs `sc` until R5 (index 4) has committed to T2 and executed 20 ticks, then kills it;
+/// returns the driver and the tick of the commitment.
+fn kill_r5_on_its_way_to_t2(sc: swarm::scenario::Scenario) -> (Driver, u64) {
+    let mut d = Driver::new(sc, 0.0, 1);
+    let r5_on_t2 = |d: &Driver| {
+        d.robots[4].phase() == super::robot::Phase::Executing && d.robots[4].path().contains(&1)
+    };
+    assert!(d.run_until(300, r5_on_t2), "R5 never committed to T2");
+    let commit = d.tick;
+    assert!(!d.run_until(commit + 20, |_| false));
+    d.kill(4);
+    (d, commit)
+}
+
 /// R5 (index 4) dies on its way to T2 where no proximity sensor sees it vanish (the sensor
 /// range is cut to 0.2 km, below the spacing of the members on the capture ring: the case of
 /// a coalition that has spread out). R1 and R6 wait at T2's ring, close in after
@@ -215,23 +235,8 @@ fn a_robot_that_dies_unseen_is_presumed_lost_and_replaced() {
     b.insert("seek_when_idle".into(), toml::Value::Boolean(true));
     sc.cbca.insert("behaviour".into(), toml::Value::Table(b));
     sc.robot.neighbour_sensing_radius = 0.2;
-    let mut d = Driver::new(sc, 0.0, 1);
-    let r5_on_t2 = |d: &Driver| {
-        d.robots[4].phase() == super::robot::Phase::Executing && d.robots[4].path().contains(&1)
-    };
-    assert!(d.run_until(300, r5_on_t2), "R5 never committed to T2");
-    let commit = d.tick;
-    assert!(!d.run_until(commit + 20, |_| false));
-    d.kill(4);
+    let (mut d, commit) = kill_r5_on_its_way_to_t2(sc);
     assert!(d.run_until(5000, |d| d.all_finished()), "targets left at tick {}", d.tick);
-    let who = |d: &Driver, f: &dyn Fn(&Event) -> bool| -> Vec<usize> {
-        d.robots
-            .iter()
-            .enumerate()
-            .filter(|(_, r)| r.events.iter().any(f))
-            .map(|(i, _)| i + 1)
-            .collect()
-    };
     let presumed = who(&d, &|e| matches!(e, Event::PresumedLost { robot: 4, .. }));
     let t2 = who(&d, &|e| matches!(e, Event::Finished { task: 1, .. }));
     println!(
@@ -251,14 +256,7 @@ fn a_robot_that_dies_unseen_is_presumed_lost_and_replaced() {
 fn without_seeking_the_unseen_death_leaves_its_target_unfinished() {
     let mut sc = scenario(1);
     sc.robot.neighbour_sensing_radius = 0.2;
-    let mut d = Driver::new(sc, 0.0, 1);
-    let r5_on_t2 = |d: &Driver| {
-        d.robots[4].phase() == super::robot::Phase::Executing && d.robots[4].path().contains(&1)
-    };
-    assert!(d.run_until(300, r5_on_t2), "R5 never committed to T2");
-    let commit = d.tick;
-    assert!(!d.run_until(commit + 20, |_| false));
-    d.kill(4);
+    let (mut d, _) = kill_r5_on_its_way_to_t2(sc);
     assert!(!d.run_until(3000, |d| d.targets[1].captured_at.is_some()));
 }
 
@@ -270,23 +268,11 @@ fn without_seeking_the_unseen_death_leaves_its_target_unfinished() {
 /// it; R2, which still cannot hear R3, revives it from the later alive stamp R1 relays in its
 /// death record. Both then count R3 in T1's coalition again, and T1 is captured by the three.
 fn revocable_trio() -> Driver {
-    let robots = robot_rows(&[[0.0, 0.0], [0.0, 0.5], [0.0, -0.5]]);
-    let text = format!(
-        r#"
-[params]
-max_tasks = 1
-[[tasks]]
-id = 1
-position = [3.0, 0.0]
-value = 100.0
-resources = [2.0, 2.0, 2.0, 2.0, 2.0, 2.0]
-beta = 0.01
-robots_needed = 3
-{robots}"#
+    let mut sc = crafted(
+        "[params]\nmax_tasks = 1",
+        &[([3.0, 0.0], 100.0, 0.01, 3)],
+        &[[0.0, 0.0], [0.0, 0.5], [0.0, -0.5]],
     );
-    let mut sc = scenario(1);
-    sc.cbca = text.parse().unwrap();
-    sc.run.robots = 3;
     // No proximity-sensor deaths: the silence is the only evidence.
     sc.robot.neighbour_sensing_radius = 0.2;
     Driver::new(sc, 0.0, 1)
@@ -345,21 +331,9 @@ fn a_robot_presumed_lost_while_alive_comes_back_when_heard_again() {
     assert!(d.targets[0].captured_at.is_none(), "captured before R3 was back");
     d.frozen[2] = false;
     assert!(d.run_until(d.tick + 2000, |d| d.targets[0].captured_at.is_some()), "T1 not captured");
-    let finished: Vec<usize> = d
-        .robots
-        .iter()
-        .enumerate()
-        .filter(|(_, r)| r.events.iter().any(|e| matches!(e, Event::Finished { task: 0, .. })))
-        .map(|(i, _)| i + 1)
-        .collect();
+    let finished = who(&d, &|e| matches!(e, Event::Finished { task: 0, .. }));
     assert!(d.run_until(d.tick + 400, |d| d.all_finished()));
-    let finished_late: Vec<usize> = d
-        .robots
-        .iter()
-        .enumerate()
-        .filter(|(_, r)| r.events.iter().any(|e| matches!(e, Event::Finished { task: 0, .. })))
-        .map(|(i, _)| i + 1)
-        .collect();
+    let finished_late = who(&d, &|e| matches!(e, Event::Finished { task: 0, .. }));
     println!("T1 captured at {:?}, finished by {finished_late:?} ({finished:?} at the capture)", d.targets[0].captured_at);
     assert_eq!(finished_late, vec![1, 2, 3]);
 }
