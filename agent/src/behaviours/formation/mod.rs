@@ -668,7 +668,21 @@ impl Formation {
         if !wrecks.is_empty() && epoch == 0 {
             agent.take_vacancy(&self.targets, &wrecks, &neighbours, blocked_within);
         }
-        let msgs = agent.step(k, me, &self.targets, &neighbours, inbox, &self.p.swaps);
+        // Multi-hop re-plan: no new swap while gathering (min gain infinite: no proposal, every
+        // new one rejected), so the handshakes in flight settle before the plan comes and the
+        // robots' template points are a permutation when they assign themselves (without
+        // this, 7 slots were doubled at 100 robots, kill 100:37: handshakes cut by the plan).
+        let frozen;
+        let swap_params = if self.gathering.is_some() {
+            frozen = crate::formation::swaps::SwapParams {
+                min_gain: f64::INFINITY,
+                ..self.p.swaps.clone()
+            };
+            &frozen
+        } else {
+            &self.p.swaps
+        };
+        let msgs = agent.step(k, me, &self.targets, &neighbours, inbox, swap_params);
         self.slot = Some(agent.target);
         for m in msgs {
             let _ = match m {

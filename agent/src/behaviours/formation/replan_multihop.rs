@@ -3,9 +3,11 @@
 //! (compact.rs), solved by a budgeted branch-and-bound. The triggers are replan.rs's.
 //!
 //! Per tick, a robot in a need (its own trigger, or a neighbour's gossip of its key) merges
-//! the gossip heard, adds itself, and, if it is the lowest id known (the candidate) and
-//! `known` counts `alive` robots and `held` leaves the deficit of points vacant, or the
-//! timeout (`replan.ticks_per_hop`) passed, solves; otherwise it broadcasts its gossip. Two
+//! the gossip heard, adds itself, makes and accepts no new swap, and, if it is the lowest id
+//! known (the candidate), the handshakes in flight have settled (`swaps.timeout_ticks +
+//! settle_ticks` since the need began), `known` counts `alive` robots and `held` leaves the
+//! deficit of points vacant, or the timeout (`replan.ticks_per_hop`) passed, solves;
+//! otherwise it broadcasts its gossip. Two
 //! robots may solve for one key (each took itself for the lowest at the timeout): the lower
 //! coordinator's plan wins ([`Formation::better`]) and every robot relays the plan it holds
 //! for `relay_ticks`, and whenever it hears a robot on an older epoch, so it floods.
@@ -20,9 +22,14 @@ use super::gossip::{Gathering, Need};
 use super::messages::CompactPlan;
 use super::replan::NO_PLACEMENT;
 use super::{Formation, Msg};
+use crate::formation::constraints::PatternConstraints;
 use crate::formation::optimise::optimise_in;
 use swarm::geometry::Vec2;
 use swarm::Outbox;
+
+/// The old pattern's spacing may sit at the C3 bound (the thick letters are drawn 2.2 apart,
+/// 2r + separation margin): it counts as met within this rounding.
+const OLD_SPACING_SLACK: f64 = 1e-6;
 
 impl Formation {
     /// The template point this robot holds in its plan.
@@ -64,7 +71,11 @@ impl Formation {
                 .iter()
                 .filter(|p| !g.need.held.contains(**p as usize))
                 .count();
-            let gathered = g.need.known.count() >= alive as usize && vacant >= deficit;
+            // The handshakes in flight at the need's start have settled (swaps are frozen
+            // while gathering, mod.rs).
+            let settled = k >= g.since + self.p.swaps.timeout_ticks + self.p.swaps.settle_ticks;
+            let gathered =
+                settled && g.need.known.count() >= alive as usize && vacant >= deficit;
             if gathered || k >= g.since + self.replan_timeout {
                 let since = g.since;
                 let known = g.need.known.count();
@@ -114,6 +125,32 @@ impl Formation {
         let sub = self.sub_template(&points);
         let mut params = self.p.kernels.clone();
         params.obstacle_centres.extend(dead.iter().copied());
+        // With the old slots as positions the old placement costs 0, the global minimum of
+        // eq. (14) without the wrecks: it is kept when no wreck blocks a kept slot (the
+        // re-plan trigger's test, replan.rs: so it does not fire again) and it meets C1 and C3
+        // (the kept points are a subset of a pattern that met them, C3 up to rounding at the
+        // thick letters' bound; the arena's discs too). Else the budgeted branch-and-bound
+        // places the pattern with the wrecks in C2.
+        let c = PatternConstraints::new(&params);
+        let sep = c.min_separation - OLD_SPACING_SLACK;
+        let spaced = positions.iter().enumerate().all(|(i, p)| {
+            positions[i + 1..].iter().all(|q| (p - q).norm() >= sep)
+        });
+        let within = self.blocked_within();
+        let unblocked = positions.iter().all(|q| {
+            c.in_box(*q) && dead.iter().all(|w| (q - Vec2::new(w[0], w[1])).norm() >= within)
+        });
+        if spaced && unblocked {
+            let plan = CompactPlan {
+                epoch: old.epoch + 1,
+                coordinator: self.robot,
+                transform: old.transform,
+                kept,
+                moves,
+                dead,
+            };
+            return (plan, 0.0, 0);
+        }
         let work = (positions.len() as f64).powi(3);
         params.optimiser.max_nodes = ((r.max_work / work) as usize).clamp(1, r.max_nodes);
         let (transform, gap, nodes) =
