@@ -157,3 +157,47 @@ fn a_robot_killed_under_swaps_leaves_fifteen_that_re_form_a_re_planned_pattern()
     assert!(shm_of_run(&id).is_empty(), "{:?}", shm_of_run(&id));
     assert_left_nothing(&p);
 }
+
+/// Issue 16 at 100 robots (configs/formation-100.toml: 60 x 60, comm radius 15, loss 0.3, a
+/// multi-hop swarm whose full plan does not fit 512 bytes): robot 37 killed at tick 100 under
+/// swaps. The robots elect the lowest live id by gossip, gather every live robot's template
+/// point, and robot 0 broadcasts a compact plan that floods; the 99 re-form on 99 distinct
+/// slots of epoch 1 with 0 overlaps. In-process (about 20 s here; the real-process run is in
+/// docs/formation.md 9).
+#[test]
+fn a_robot_killed_among_100_under_swaps_re_forms_by_a_multi_hop_compact_re_plan() {
+    let _g = serial();
+    let sc = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../configs/formation-100.toml")
+        .to_str()
+        .unwrap()
+        .to_string();
+    let i = tmp_dir("formation-100-kill-i");
+    let o = up(
+        &["--scenario", &sc, "--executor", "inprocess", "--chaos-at", "100:37"],
+        &i,
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let s = summary(&i);
+    let f = formation(&i);
+    assert_eq!(f["formed"], true, "{f}");
+    assert_eq!(f["overlapping_pairs"], 0, "{f}");
+    assert_eq!(f["obstacle_overlaps"], 0, "{f}");
+    assert_eq!(s["alive_at_end"], 99, "{s}");
+    let plans = f["plans"].as_array().unwrap();
+    assert_eq!(plans.len(), 1, "{f}");
+    assert_eq!(plans[0]["robot"], 0, "{f}");
+    assert_eq!(plans[0]["epoch"], 1, "{f}");
+    assert!(plans[0]["tick"].as_u64().unwrap() > 100, "{f}");
+    let slots = f["slots"].as_array().unwrap();
+    let mut idx: Vec<u64> = (0..100)
+        .filter(|r| *r != 37)
+        .map(|r| {
+            assert_eq!(slots[r]["epoch"], 1, "robot {r}: {}", slots[r]);
+            slots[r]["index"].as_u64().unwrap()
+        })
+        .collect();
+    idx.sort_unstable();
+    assert_eq!(idx, (0..99).collect::<Vec<u64>>());
+    assert_left_nothing(&i);
+}
