@@ -142,9 +142,55 @@ pub fn dead_list(old: &[[f64; 2]], wrecks: &[Vec2], targets: &[Vec2], max_dead: 
     dead
 }
 
+/// The smallest translation delta of the slots `slots` (on rings `step` apart, 16 directions
+/// each, up to `max_shift`) that leaves every slot in the box and clear (`clear`) of the
+/// wrecks: with the old slots as positions and each robot keeping its point, the cost of
+/// eq. (14) is n |delta|^2, so the first clear shift is the cheapest translation of the old
+/// placement on that grid (no bound on other placements: it is no certificate).
+pub fn nearest_clear_shift(
+    slots: &[Vec2],
+    clear: impl Fn(Vec2) -> bool,
+    step: f64,
+    max_shift: f64,
+) -> Option<Vec2> {
+    const DIRECTIONS: usize = 16;
+    let rings = (max_shift / step).floor() as usize;
+    (1..=rings).find_map(|i| {
+        (0..DIRECTIONS).find_map(|j| {
+            let a = std::f64::consts::TAU * j as f64 / DIRECTIONS as f64;
+            let delta = Vec2::new(a.cos(), a.sin()) * (step * i as f64);
+            slots.iter().all(|q| clear(q + delta)).then_some(delta)
+        })
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_nearest_clear_shift_moves_a_line_of_slots_off_a_wreck_by_the_least_ring() {
+        // Slots on the x axis 2.2 apart, a wreck at (1.1, 0.5) between two of them, clearance
+        // 2.1: no sideways shift clears both neighbours (it needs |dx| >= 2.04 on each side
+        // of a 2.2 gap); down by delta clears when 1.1^2 + (0.5 + delta)^2 >= 2.1^2, delta
+        // >= 1.29, so ring 6 (1.5) is the least and ring 5 (1.25) is clear in no direction.
+        let slots: Vec<Vec2> = (0..5).map(|j| Vec2::new(2.2 * j as f64, 0.0)).collect();
+        let wreck = Vec2::new(1.1, 0.5);
+        let clear = |q: Vec2| (q - wreck).norm() >= 2.1;
+        let d = nearest_clear_shift(&slots, clear, 0.25, 6.0).expect("a clear shift");
+        assert!(slots.iter().all(|q| clear(q + d)));
+        assert!((d.norm() - 1.5).abs() < 1e-12, "{d:?}");
+        // No shift of a smaller ring is clear (checked densely: 360 directions).
+        let r = d.norm();
+        for i in 1..((r / 0.25).round() as usize) {
+            for a in 0..360 {
+                let a = (a as f64).to_radians();
+                let e = Vec2::new(a.cos(), a.sin()) * (0.25 * i as f64);
+                assert!(!slots.iter().all(|q| clear(q + e)), "ring {i} clear at {a}");
+            }
+        }
+        assert!(nearest_clear_shift(&slots, |_| false, 0.25, 6.0).is_none());
+    }
 
     #[test]
     fn the_full_plan_fits_512_bytes_at_16_robots_and_not_at_100() {

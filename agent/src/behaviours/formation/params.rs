@@ -72,6 +72,14 @@ pub struct ReplanParams {
     /// first. [chosen] 12 (16 bytes each; with the 63-byte bitmap and 12 moves a 500-robot
     /// plan stays under 512 bytes).
     pub max_dead: usize,
+    /// Large swarms: when a wreck blocks a kept slot, the old placement is translated by the
+    /// least clear shift on rings this far apart (compact.rs `nearest_clear_shift`) before
+    /// the budgeted optimiser is tried. [chosen] 0.25 (one V_p tau step of configs/
+    /// formation-100.toml).
+    pub shift_step: f64,
+    /// ... and at most this far. [chosen] 6.0: three times the blocked distance 2 (r +
+    /// orca_margin) = 2.1, room for a wreck between two rows of the thick letter.
+    pub max_shift: f64,
 }
 
 impl Default for ReplanParams {
@@ -85,6 +93,8 @@ impl Default for ReplanParams {
             max_work: 5e8,
             max_moves: 12,
             max_dead: 12,
+            shift_step: 0.25,
+            max_shift: 6.0,
         }
     }
 }
@@ -189,5 +199,7 @@ pub fn validate(sc: &Scenario, c: &Check) -> Result<(), ConfigError> {
     c.range_f("formation.kernels.replan.max_work", p.replan.max_work, 1.0, 1e18, false)?;
     c.range_u("formation.kernels.replan.max_moves", p.replan.max_moves as u64, 0, 1_000)?;
     c.range_u("formation.kernels.replan.max_dead", p.replan.max_dead as u64, 0, 1_000)?;
+    c.range_f("formation.kernels.replan.shift_step", p.replan.shift_step, 0.0, 1e6, true)?;
+    c.range_f("formation.kernels.replan.max_shift", p.replan.max_shift, 0.0, 1e6, false)?;
     Ok(())
 }

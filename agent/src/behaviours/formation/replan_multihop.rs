@@ -17,7 +17,7 @@
 //! keeps every slot clear of the wrecks (C2), so the robots' self-assignment (keep your point)
 //! stays near the optimum of eq. (14) for the robots at their slots.
 
-use super::compact::{choose, dead_list, own_slot, plan_of};
+use super::compact::{choose, dead_list, nearest_clear_shift, own_slot, plan_of};
 use super::gossip::{Gathering, Need};
 use super::messages::CompactPlan;
 use super::replan::NO_PLACEMENT;
@@ -26,6 +26,10 @@ use crate::formation::constraints::PatternConstraints;
 use crate::formation::optimise::optimise_in;
 use swarm::geometry::Vec2;
 use swarm::Outbox;
+
+/// The gap a re-plan reports when it translated the old placement (no bound: not a
+/// certificate of eq. 14's optimum).
+pub const SHIFTED: f64 = -2.0;
 
 impl Formation {
     /// The template point this robot holds in its plan.
@@ -144,6 +148,26 @@ impl Formation {
                 dead,
             };
             return (plan, 0.0, 0);
+        }
+        // Else the cheapest clear translation of the old placement (compact.rs): clear of the
+        // arena's discs by a robot's ORCA radius, of the wrecks as above.
+        let reach = self.p.kernels.robot_radius + self.p.orca_margin;
+        let clear = |q: Vec2| {
+            c.in_box(q)
+                && self.discs.iter().all(|d| (q - d.position).norm() >= d.radius + reach)
+                && dead.iter().all(|w| (q - Vec2::new(w[0], w[1])).norm() >= within)
+        };
+        if let Some(delta) = nearest_clear_shift(&positions, clear, r.shift_step, r.max_shift) {
+            let t = old.transform;
+            let plan = CompactPlan {
+                epoch: old.epoch + 1,
+                coordinator: self.robot,
+                transform: [t[0], t[1] + delta.x, t[2] + delta.y, t[3]],
+                kept,
+                moves,
+                dead,
+            };
+            return (plan, SHIFTED, 0);
         }
         let work = (positions.len() as f64).powi(3);
         params.optimiser.max_nodes = ((r.max_work / work) as usize).clamp(1, r.max_nodes);
