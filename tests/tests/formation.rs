@@ -174,7 +174,14 @@ fn a_robot_killed_among_100_under_swaps_re_forms_by_a_multi_hop_compact_re_plan(
         .to_string();
     let i = tmp_dir("formation-100-kill-i");
     let o = up(
-        &["--scenario", &sc, "--executor", "inprocess", "--chaos-at", "100:37"],
+        &[
+            "--scenario",
+            &sc,
+            "--executor",
+            "inprocess",
+            "--chaos-at",
+            "100:37",
+        ],
         &i,
     );
     assert!(o.status.success(), "{}", stderr(&o));
