@@ -1,5 +1,6 @@
 //! What formation robots say on the radio (bincode, one message per frame).
 
+use super::gossip::{Bitmap, Need};
 use serde::{Deserialize, Serialize};
 
 /// Every robot, every tick: where it is, how it moves, which slot it holds.
@@ -30,6 +31,24 @@ pub struct Plan {
     pub slots: Vec<u16>,
     /// Last positions of robots lost so far: static discs of radius r for ORCA and, in the
     /// plan, obstacles for constraint C2.
+    pub dead: Vec<[f64; 2]>,
+}
+
+/// A swaps re-plan for a swarm whose full [`Plan`] (members and sigma) exceeds
+/// `radio.max_message_bytes` (compact.rs): no members, no sigma; each robot assigns itself.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct CompactPlan {
+    /// Higher wins; equal epochs: the lower coordinator id wins (as [`Plan`]).
+    pub epoch: u32,
+    pub coordinator: u32,
+    /// [alpha, d_1, d_2, theta] of eq. (5).
+    pub transform: [f64; 4],
+    /// The template points of the pattern (bits over formation.template): slot j is the j-th.
+    pub kept: Bitmap,
+    /// (dropped template point, kept template point): the robot that held the first takes
+    /// the second (a kept point no live robot held).
+    pub moves: Vec<(u16, u16)>,
+    /// Wrecks planned around (as [`Plan::dead`]), the nearest the pattern first, capped.
     pub dead: Vec<[f64; 2]>,
 }
 
@@ -70,4 +89,8 @@ pub enum Msg {
     /// Swaps mode: dead robots' positions (the world's, from the sender's Sense frame or heard)
     /// that the sender's plan does not plan around yet: for the coordinator of the re-plan.
     Wrecks(Vec<[f64; 2]>),
+    /// Swaps mode, large swarms: the multi-hop election and gathering of a re-plan (gossip.rs).
+    Need(Need),
+    /// Swaps mode, large swarms: the re-planned pattern (compact.rs).
+    CompactPlan(CompactPlan),
 }

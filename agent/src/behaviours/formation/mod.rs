@@ -32,14 +32,17 @@
 //!
 //! Units: robot.v_max is per tick, so V_p = v_max / tau and the command is v tau.
 
+pub mod compact;
+pub mod gossip;
 pub mod messages;
 pub mod params;
 mod replan;
+mod replan_multihop;
 #[cfg(test)]
 mod tests;
 pub mod wrecks;
 
-pub use messages::{Assign, Msg, Plan, Status};
+pub use messages::{Assign, CompactPlan, Msg, Plan, Status};
 pub use params::{parse_params, Params};
 
 use crate::formation::hungarian::{assign_targets, Hungarian};
@@ -133,6 +136,17 @@ pub struct Formation {
     v_max_tick: f64,
     /// `FORMATION_TRACE` is set: print the measurement lines of [`Formation::trace_line`].
     trace: bool,
+    /// run.robots (the gossip's bitmap of ids).
+    robots: usize,
+    /// Whether the swaps re-plan's full plan fits one message (else the multi-hop compact
+    /// re-plan of replan_multihop.rs).
+    full_plan_fits: bool,
+    /// The multi-hop re-plan's timeout (ticks from the need's start).
+    replan_timeout: u64,
+    /// The multi-hop re-plan's gossip for the current need.
+    gathering: Option<gossip::Gathering>,
+    /// The compact form of the plan held, when it came as one (relayed as it came).
+    compact: Option<CompactPlan>,
 }
 
 impl Formation {
@@ -142,6 +156,14 @@ impl Formation {
         let template = f
             .template_points(sc.run.robots as usize)
             .unwrap_or_else(|e| panic!("{e} (the scenario was not validated)"));
+        let diagonal = sc.arena.width.hypot(sc.arena.height);
+        let hops = (diagonal / sc.radio.comm_radius.max(1e-9)).ceil() as u64;
+        let replan_timeout = p.gather_ticks as u64 + p.replan.ticks_per_hop * hops;
+        let full_plan_fits = compact::full_plan_fits(
+            sc.run.robots as usize,
+            p.replan.max_dead,
+            sc.radio.max_message_bytes,
+        );
         let discs = sc
             .arena
             .discs
@@ -178,6 +200,11 @@ impl Formation {
             sensing_radius: sc.robot.neighbour_sensing_radius,
             v_max_tick: sc.robot.v_max,
             trace: std::env::var_os("FORMATION_TRACE").is_some(),
+            robots: sc.run.robots as usize,
+            full_plan_fits,
+            replan_timeout,
+            gathering: None,
+            compact: None,
         }
     }
 
@@ -221,7 +248,7 @@ impl Formation {
             "formation: robot {} {what} epoch {} at tick {k} for {} robots{extra}: alpha {:.4} d [{:.4}, {:.4}] theta {:.4}, gap {gap:.4}, {nodes} nodes, {seconds:.3} s",
             self.robot,
             plan.epoch,
-            plan.members.len(),
+            plan.points.len(),
             plan.transform[0],
             plan.transform[1],
             plan.transform[2],
@@ -252,6 +279,7 @@ impl Formation {
             .filter(|s| *s < self.targets.len());
         self.assign_seq = 0;
         self.plan = Some(plan);
+        self.compact = None;
     }
 
     fn sub_template(&self, points: &[u16]) -> Template {
@@ -276,8 +304,9 @@ impl Formation {
     }
 
     /// Step 1.
-    fn listen(&mut self, inbox: &[&Received<Msg>], swaps: &mut Vec<SwapMessage>) {
+    fn listen(&mut self, inbox: &[&Received<Msg>], swaps: &mut Vec<SwapMessage>, needs: &mut Vec<gossip::Need>) {
         let mut plans = Vec::new();
+        let mut compacts = Vec::new();
         let mut assigns = Vec::new();
         let my_epoch = self.plan.as_ref().map(|p| p.epoch);
         self.heard_older = false;
@@ -298,6 +327,11 @@ impl Formation {
                     self.ghosts.remove(&r.from);
                 }
                 Msg::Plan(p) => plans.push(p.clone()),
+                Msg::CompactPlan(c) => compacts.push(c.clone()),
+                Msg::Need(n) => {
+                    self.heard_older |= my_epoch.is_some_and(|e| n.epoch < e);
+                    needs.push(n.clone());
+                }
                 Msg::Assign(a) => assigns.push((r.from, a.clone())),
                 Msg::Wrecks(ws) => {
                     for w in ws {
@@ -340,6 +374,11 @@ impl Formation {
         for p in plans {
             if self.better(&p) {
                 self.install(p);
+            }
+        }
+        for c in compacts {
+            if self.better(&compact::plan_of(&c)) {
+                self.install_compact(c);
             }
         }
         for (from, a) in assigns {
@@ -558,6 +597,7 @@ impl Formation {
         me: Vec2,
         alive: u32,
         inbox: &[SwapMessage],
+        needs: &[gossip::Need],
         out: &mut Outbox<Msg>,
     ) -> Option<[f64; 4]> {
         if self.plan.is_none() {
@@ -572,7 +612,11 @@ impl Formation {
                 dead: Vec::new(),
             });
         }
-        let report = self.replan_step(k, me, alive);
+        let report = if self.full_plan_fits {
+            self.replan_step(k, me, alive)
+        } else {
+            self.replan_multihop(k, alive, needs, out)
+        };
         self.adopt_for_swaps(k, me);
         let plan = self.plan.as_ref().expect("installed above");
         let epoch = plan.epoch;
@@ -581,7 +625,10 @@ impl Formation {
                 || plan.coordinator == self.robot
                 || self.heard_older)
         {
-            out.broadcast(Msg::Plan(plan.clone()));
+            match &self.compact {
+                Some(c) => out.broadcast(Msg::CompactPlan(c.clone())),
+                None => out.broadcast(Msg::Plan(plan.clone())),
+            };
         }
         // Wrecks the plan was not made around: for the coordinator of the next re-plan.
         let news: Vec<[f64; 2]> = self
@@ -621,7 +668,21 @@ impl Formation {
         if !wrecks.is_empty() && epoch == 0 {
             agent.take_vacancy(&self.targets, &wrecks, &neighbours, blocked_within);
         }
-        let msgs = agent.step(k, me, &self.targets, &neighbours, inbox, &self.p.swaps);
+        // Multi-hop re-plan: no new swap while gathering (min gain infinite: no proposal, every
+        // new one rejected), so the handshakes in flight settle before the plan comes and the
+        // robots' template points are a permutation when they assign themselves (without
+        // this, 7 slots were doubled at 100 robots, kill 100:37: handshakes cut by the plan).
+        let frozen;
+        let swap_params = if self.gathering.is_some() {
+            frozen = crate::formation::swaps::SwapParams {
+                min_gain: f64::INFINITY,
+                ..self.p.swaps.clone()
+            };
+            &frozen
+        } else {
+            &self.p.swaps
+        };
+        let msgs = agent.step(k, me, &self.targets, &neighbours, inbox, swap_params);
         self.slot = Some(agent.target);
         for m in msgs {
             let _ = match m {
@@ -743,7 +804,8 @@ impl Behaviour for Formation {
         let k = sense.tick;
         let me = Vec2::new(sense.pos[0], sense.pos[1]);
         let mut swaps = Vec::new();
-        self.listen(inbox, &mut swaps);
+        let mut needs = Vec::new();
+        self.listen(inbox, &mut swaps, &mut needs);
         self.track_ghosts(sense, me);
         for w in self.statics.wrecks_in(sense) {
             wrecks::remember(&mut self.wrecks, w);
@@ -757,7 +819,7 @@ impl Behaviour for Formation {
                 .any(|n| (Vec2::new(n.pos[0], n.pos[1]) - w).norm() < r)
         });
         let report = if self.f.reassignment == Reassignment::Swaps {
-            self.swap_step(k, me, sense.alive_robots, &swaps, out)
+            self.swap_step(k, me, sense.alive_robots, &swaps, &needs, out)
         } else {
             self.coordinate(k, me, sense.alive_robots, out)
         };

@@ -54,6 +54,32 @@ pub struct ReplanParams {
     /// coordinator's broadcast reaches only its comm radius, and loss drops some).
     /// [chosen] 20.
     pub relay_ticks: u64,
+    /// Large swarms (the full plan exceeds `radio.max_message_bytes`; compact.rs, gossip.rs):
+    /// the coordinator solves at the latest `gather_ticks + ticks_per_hop * hops` ticks after
+    /// the need began, hops = ceil(box diagonal / comm_radius), the network's diameter.
+    /// [chosen] 4: at loss 0.3 a hop fails 0.3 per tick, but every robot re-sends its gossip
+    /// every tick, so 4 ticks a hop miss with 0.3^4 = 0.008 per link.
+    pub ticks_per_hop: u64,
+    /// Large swarms: the optimiser's node budget is max_work / n^3 (a node solves an n x n
+    /// assignment, O(n^3)), at most `max_nodes`, at least 1. [chosen] 5e8: 500 nodes at 100
+    /// robots (the unbounded 99-robot solve took 12 721 nodes, 55 s on the loaded machine),
+    /// 4 at 500.
+    pub max_work: f64,
+    /// Large swarms: at most this many moves in a compact plan (the robots whose point a
+    /// wreck blocks). [chosen] 12 (6 bytes each at 500 robots).
+    pub max_moves: usize,
+    /// Large swarms: at most this many wrecks in a compact plan, the nearest the pattern
+    /// first. [chosen] 12 (16 bytes each; with the 63-byte bitmap and 12 moves a 500-robot
+    /// plan stays under 512 bytes).
+    pub max_dead: usize,
+    /// Large swarms: when a wreck blocks a kept slot, the old placement is translated by the
+    /// least clear shift on rings this far apart (compact.rs `nearest_clear_shift`) before
+    /// the budgeted optimiser is tried. [chosen] 0.25 (one V_p tau step of configs/
+    /// formation-100.toml).
+    pub shift_step: f64,
+    /// ... and at most this far. [chosen] 6.0: three times the blocked distance 2 (r +
+    /// orca_margin) = 2.1, room for a wreck between two rows of the thick letter.
+    pub max_shift: f64,
 }
 
 impl Default for ReplanParams {
@@ -63,6 +89,12 @@ impl Default for ReplanParams {
             theta_range: [-std::f64::consts::PI, std::f64::consts::PI],
             max_nodes: 20_000,
             relay_ticks: 20,
+            ticks_per_hop: 4,
+            max_work: 5e8,
+            max_moves: 12,
+            max_dead: 12,
+            shift_step: 0.25,
+            max_shift: 6.0,
         }
     }
 }
@@ -163,5 +195,11 @@ pub fn validate(sc: &Scenario, c: &Check) -> Result<(), ConfigError> {
         1,
         100_000_000,
     )?;
+    c.range_u("formation.kernels.replan.ticks_per_hop", p.replan.ticks_per_hop, 0, 1_000_000)?;
+    c.range_f("formation.kernels.replan.max_work", p.replan.max_work, 1.0, 1e18, false)?;
+    c.range_u("formation.kernels.replan.max_moves", p.replan.max_moves as u64, 0, 1_000)?;
+    c.range_u("formation.kernels.replan.max_dead", p.replan.max_dead as u64, 0, 1_000)?;
+    c.range_f("formation.kernels.replan.shift_step", p.replan.shift_step, 0.0, 1e6, true)?;
+    c.range_f("formation.kernels.replan.max_shift", p.replan.max_shift, 0.0, 1e6, false)?;
     Ok(())
 }

@@ -1,0 +1,208 @@
+//! The swaps re-plan in a multi-hop swarm whose full plan does not fit one message (100 and
+//! 500 robots): the election and gathering by gossip (gossip.rs), the compact plan
+//! (compact.rs), solved by a budgeted branch-and-bound. The triggers are replan.rs's.
+//!
+//! Per tick, a robot in a need (its own trigger, or a neighbour's gossip of its key) merges
+//! the gossip heard, adds itself, makes and accepts no new swap, and, if it is the lowest id
+//! known (the candidate), the handshakes in flight have settled (`swaps.timeout_ticks +
+//! settle_ticks` since the need began), `known` counts `alive` robots and `held` leaves the
+//! deficit of points vacant, or the timeout (`replan.ticks_per_hop`) passed, solves;
+//! otherwise it broadcasts its gossip. Two
+//! robots may solve for one key (each took itself for the lowest at the timeout): the lower
+//! coordinator's plan wins ([`Formation::better`]) and every robot relays the plan it holds
+//! for `relay_ticks`, and whenever it hears a robot on an older epoch, so it floods.
+//!
+//! The optimiser's positions are the kept points' old slots (the coordinator hears only its
+//! neighbours' positions): the re-plan looks for the placement nearest the old pattern that
+//! keeps every slot clear of the wrecks (C2), so the robots' self-assignment (keep your point)
+//! stays near the optimum of eq. (14) for the robots at their slots.
+
+use super::compact::{choose, dead_list, nearest_clear_shift, own_slot, plan_of};
+use super::gossip::{Gathering, Need};
+use super::messages::CompactPlan;
+use super::replan::NO_PLACEMENT;
+use super::{Formation, Msg};
+use crate::formation::constraints::PatternConstraints;
+use crate::formation::optimise::optimise_in;
+use swarm::geometry::Vec2;
+use swarm::Outbox;
+
+/// The gap a re-plan reports when it translated the old placement (no bound: not a
+/// certificate of eq. 14's optimum).
+pub const SHIFTED: f64 = -2.0;
+
+impl Formation {
+    /// The template point this robot holds in its plan.
+    pub(super) fn held_point(&self) -> Option<u16> {
+        let plan = self.plan.as_ref()?;
+        plan.points.get(self.slot?).copied()
+    }
+
+    /// One tick of the multi-hop re-plan (see the module comment); the plan report on the
+    /// tick it solved.
+    pub(super) fn replan_multihop(
+        &mut self,
+        k: u64,
+        alive: u32,
+        needs: &[Need],
+        out: &mut Outbox<Msg>,
+    ) -> Option<[f64; 4]> {
+        let epoch = self.plan.as_ref()?.epoch;
+        let joined = needs.iter().any(|n| n.epoch == epoch && n.alive == alive);
+        if !joined && !self.replan_needed(alive) {
+            self.gathering = None;
+            return None;
+        }
+        if !self.gathering.as_ref().is_some_and(|g| g.is_for(epoch, alive)) {
+            let points = self.template.len();
+            self.gathering = Some(Gathering::start(k, epoch, alive, self.robots, points));
+        }
+        let point = self.held_point().map(|p| p as usize);
+        let g = self.gathering.as_mut().expect("started above");
+        for n in needs {
+            g.merge(n);
+        }
+        g.note(self.robot, point);
+        if g.need.candidate == self.robot {
+            let plan = self.plan.as_ref().expect("checked above");
+            let deficit = plan.points.len().saturating_sub(alive as usize);
+            let vacant = plan
+                .points
+                .iter()
+                .filter(|p| !g.need.held.contains(**p as usize))
+                .count();
+            // The handshakes in flight at the need's start have settled (swaps are frozen
+            // while gathering, mod.rs).
+            let settled = k >= g.since + self.p.swaps.timeout_ticks + self.p.swaps.settle_ticks;
+            let gathered =
+                settled && g.need.known.count() >= alive as usize && vacant >= deficit;
+            if gathered || k >= g.since + self.replan_timeout {
+                let since = g.since;
+                let known = g.need.known.count();
+                let started = std::time::Instant::now();
+                let (compact, gap, nodes) = self.solve_compact(alive);
+                let seconds = started.elapsed().as_secs_f64();
+                let slot = own_slot(&compact, self.held_point());
+                let extra = format!(
+                    ", {} wrecks, {} moves, {known} of {alive} known, need since {since}, {} bytes",
+                    compact.dead.len(),
+                    compact.moves.len(),
+                    super::compact::compact_len(&compact),
+                );
+                let report = self.adopt_solved(k, (plan_of(&compact), gap, nodes), seconds, "re-plans (swaps, compact)", extra);
+                self.slot = slot;
+                self.compact = Some(compact);
+                self.gathering = None;
+                return Some(report);
+            }
+        }
+        out.broadcast(Msg::Need(g.need.clone()));
+        None
+    }
+
+    /// The compact plan for `alive` robots from the gathered `held` set: (plan, gap, nodes).
+    fn solve_compact(&self, alive: u32) -> (CompactPlan, f64, usize) {
+        let old = self.plan.as_ref().expect("a re-plan replaces a plan");
+        let held = &self.gathering.as_ref().expect("gathering").need.held;
+        let r = &self.p.replan;
+        let n = (alive as usize).min(old.points.len()).max(1);
+        let (kept, moves) = choose(
+            &old.points,
+            &self.targets,
+            held,
+            &self.wrecks,
+            self.blocked_within(),
+            n,
+            r.max_moves,
+        );
+        // Positions: the kept points' old slots.
+        let slots: Vec<usize> = (0..old.points.len())
+            .filter(|j| kept.contains(old.points[*j] as usize))
+            .collect();
+        let positions: Vec<Vec2> = slots.iter().map(|j| self.targets[*j]).collect();
+        let dead = dead_list(&old.dead, &self.wrecks, &positions, r.max_dead);
+        let points: Vec<u16> = kept.iter().map(|p| p as u16).collect();
+        let sub = self.sub_template(&points);
+        let mut params = self.p.kernels.clone();
+        params.obstacle_centres.extend(dead.iter().copied());
+        // With the old slots as positions the old placement costs 0, the global minimum of
+        // eq. (14) without the wrecks: it is kept when no wreck blocks a kept slot (the
+        // re-plan trigger's test, replan.rs: so it does not fire again) and every kept slot
+        // is in the box (C1). Its spacing is at least the old pattern's (a subset of its
+        // points): the fixed epoch-0 C of configs/formation-100.toml is not checked against
+        // C3's margin either (with that check every run of docs/formation.md 9 went to the
+        // optimiser). Else the budgeted branch-and-bound places the pattern with the wrecks
+        // in C2.
+        let c = PatternConstraints::new(&params);
+        let within = self.blocked_within();
+        let unblocked = positions.iter().all(|q| {
+            c.in_box(*q) && dead.iter().all(|w| (q - Vec2::new(w[0], w[1])).norm() >= within)
+        });
+        if unblocked {
+            let plan = CompactPlan {
+                epoch: old.epoch + 1,
+                coordinator: self.robot,
+                transform: old.transform,
+                kept,
+                moves,
+                dead,
+            };
+            return (plan, 0.0, 0);
+        }
+        // Else the cheapest clear translation of the old placement (compact.rs): clear of the
+        // arena's discs by a robot's ORCA radius, of the wrecks as above.
+        let reach = self.p.kernels.robot_radius + self.p.orca_margin;
+        let clear = |q: Vec2| {
+            c.in_box(q)
+                && self.discs.iter().all(|d| (q - d.position).norm() >= d.radius + reach)
+                && dead.iter().all(|w| (q - Vec2::new(w[0], w[1])).norm() >= within)
+        };
+        if let Some(delta) = nearest_clear_shift(&positions, clear, r.shift_step, r.max_shift) {
+            let t = old.transform;
+            let plan = CompactPlan {
+                epoch: old.epoch + 1,
+                coordinator: self.robot,
+                transform: [t[0], t[1] + delta.x, t[2] + delta.y, t[3]],
+                kept,
+                moves,
+                dead,
+            };
+            return (plan, SHIFTED, 0);
+        }
+        let work = (positions.len() as f64).powi(3);
+        params.optimiser.max_nodes = ((r.max_work / work) as usize).clamp(1, r.max_nodes);
+        let (transform, gap, nodes) =
+            match optimise_in(&positions, &sub, &params, r.alpha_range, r.theta_range) {
+                Ok(s) => (
+                    [s.transform.alpha, s.transform.d[0], s.transform.d[1], s.transform.theta],
+                    s.gap,
+                    s.nodes,
+                ),
+                Err(e) => {
+                    eprintln!("formation: robot {} re-plan found no placement: {e}", self.robot);
+                    (old.transform, NO_PLACEMENT, 0)
+                }
+            };
+        (
+            CompactPlan {
+                epoch: old.epoch + 1,
+                coordinator: self.robot,
+                transform,
+                kept,
+                moves,
+                dead,
+            },
+            gap,
+            nodes,
+        )
+    }
+
+    /// Adopts a compact plan heard: this robot's slot from its template point (before the
+    /// plan replaces the old one), or none (it takes the nearest in `adopt_for_swaps`).
+    pub(super) fn install_compact(&mut self, c: CompactPlan) {
+        let slot = own_slot(&c, self.held_point());
+        self.install(plan_of(&c));
+        self.slot = slot.filter(|s| *s < self.targets.len());
+        self.compact = Some(c);
+    }
+}
