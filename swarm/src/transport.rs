@@ -17,10 +17,12 @@ use std::path::PathBuf;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Arc;
 
+mod act_sink;
 mod air_source;
 mod error;
 mod sense_source;
 mod service;
+pub use act_sink::{ActSink, ActSource};
 pub use air_source::{AirGot, AirSink, AirSource};
 pub use error::{Port, TransportError, TransportResult};
 pub use sense_source::{SenseGot, SenseSink, SenseSource};

@@ -171,7 +171,7 @@ fn lengths_from_a_cell_are_bounded_and_bad_segments_refused() {
 /// write (every byte of the area and every field of the Action), whatever the interleaving.
 #[test]
 fn a_writer_racing_a_reader_never_hands_out_a_torn_action() {
-    const TICKS: u64 = 20_000;
+    const TICKS: u64 = 100_000;
     const AREA: usize = 512;
     let p = prefix("acts-race");
     let mut cells = ActCells::create(&p, 1, AREA).unwrap();
@@ -181,6 +181,10 @@ fn a_writer_racing_a_reader_never_hands_out_a_torn_action() {
     let writer = std::thread::spawn(move || {
         for t in 0..TICKS {
             w.write(t, fill(t, 0));
+            // A pause, so the reader finds stamped buffers as well as ones being written.
+            for _ in 0..200 {
+                std::hint::spin_loop();
+            }
         }
         d.store(true, Ordering::Release);
     });
