@@ -16,7 +16,12 @@ fn roam_with_acts(tag: &str, acts: &str) -> PathBuf {
     file
 }
 
-fn read(dir: &Path) -> (swarm::recording::RecordingHeader, Vec<swarm::recording::TickRecord>) {
+fn read(
+    dir: &Path,
+) -> (
+    swarm::recording::RecordingHeader,
+    Vec<swarm::recording::TickRecord>,
+) {
     let f = std::fs::File::open(dir.join("recording.bin")).unwrap();
     swarm::recording::read_recording(std::io::BufReader::new(f)).unwrap()
 }
@@ -49,12 +54,23 @@ fn acts_cells_iceoryx2_and_inprocess_record_the_same_run() {
     ];
     let ice_sc = roam_with_acts("acts-same-ice", "iceoryx2");
     let runs = [
-        ("cells", vec!["--scenario", roam(), "--executor", "processes"]),
+        (
+            "cells",
+            vec!["--scenario", roam(), "--executor", "processes"],
+        ),
         (
             "iceoryx2",
-            vec!["--scenario", ice_sc.to_str().unwrap(), "--executor", "processes"],
+            vec![
+                "--scenario",
+                ice_sc.to_str().unwrap(),
+                "--executor",
+                "processes",
+            ],
         ),
-        ("inprocess", vec!["--scenario", roam(), "--executor", "inprocess"]),
+        (
+            "inprocess",
+            vec!["--scenario", roam(), "--executor", "inprocess"],
+        ),
     ];
     let mut dirs = Vec::new();
     for (tag, args) in runs {
@@ -76,7 +92,11 @@ fn acts_cells_iceoryx2_and_inprocess_record_the_same_run() {
     let (hi, ti) = read(&dirs[1]);
     assert_eq!(tc.len(), 300);
     assert!(tc == ti, "the acts' transport changed the run");
-    let named: Vec<&str> = hi.scenario.lines().filter(|l| l.contains("acts =")).collect();
+    let named: Vec<&str> = hi
+        .scenario
+        .lines()
+        .filter(|l| l.contains("acts ="))
+        .collect();
     assert_eq!(named, ["acts = \"iceoryx2\""]);
     let rest: Vec<&str> = hi
         .scenario
@@ -84,7 +104,10 @@ fn acts_cells_iceoryx2_and_inprocess_record_the_same_run() {
         .filter(|l| !l.contains("acts ="))
         .collect();
     assert_eq!(rest, hc.scenario.lines().collect::<Vec<_>>());
-    assert_eq!((hi.seed, hi.robots, hi.version), (hc.seed, hc.robots, hc.version));
+    assert_eq!(
+        (hi.seed, hi.robots, hi.version),
+        (hc.seed, hc.robots, hc.version)
+    );
     // The radio carried the messages, with loss and delay.
     let sum = assert_counters_add_up(&dirs[0]);
     assert!(sum.delivered > 1000 && sum.dropped_loss > 300, "{sum:?}");
@@ -155,7 +178,10 @@ fn an_agent_sigkilled_under_acts_cells_is_survived_and_the_counters_add_up() {
     }
     assert_eq!(ticks[tick as usize - 1].alive[5], 1);
     let last = ticks.last().unwrap();
-    assert!(ticks[tick as usize].poses[0] != last.poses[0], "robot 0 moved on");
+    assert!(
+        ticks[tick as usize].poses[0] != last.poses[0],
+        "robot 0 moved on"
+    );
     let sum = assert_counters_add_up(&out);
     assert!(sum.delivered > 10_000, "{sum:?}");
     let m = &s["messages"];

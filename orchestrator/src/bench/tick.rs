@@ -151,7 +151,13 @@ pub fn bench_tick(sizes: &[u32], ticks: u64) -> BenchResult<Vec<Row>> {
         let ticks = ticks_for(n, ticks);
         let (ring, cells) = (FrameTransport::Ring, ActTransport::Cells);
         let rt = runtime(n, ticks, BarrierKind::Futex, ring, cells)?;
-        let rt_sx = runtime(n, ticks, BarrierKind::Futex, FrameTransport::Iceoryx2, cells)?;
+        let rt_sx = runtime(
+            n,
+            ticks,
+            BarrierKind::Futex,
+            FrameTransport::Iceoryx2,
+            cells,
+        )?;
         let rt_ax = runtime(n, ticks, BarrierKind::Futex, ring, ActTransport::Iceoryx2)?;
         let rt_ev = runtime(n, ticks, BarrierKind::Iox2Event, ring, cells)?;
         let search = if n <= SEARCH_MAX_ROBOTS {

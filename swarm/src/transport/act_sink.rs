@@ -235,7 +235,11 @@ impl ActSink {
     /// Sends tick `tick`'s action: `step` writes the tick's messages into the message area
     /// it is given (in place: the cell's, or the loaned sample's) and returns the Action
     /// (its `radio_bytes` the bytes it wrote).
-    pub fn send(&mut self, tick: u64, step: impl FnOnce(&mut [u8]) -> Action) -> TransportResult<()> {
+    pub fn send(
+        &mut self,
+        tick: u64,
+        step: impl FnOnce(&mut [u8]) -> Action,
+    ) -> TransportResult<()> {
         match self {
             ActSink::Cells(w) => {
                 w.write(tick, step);

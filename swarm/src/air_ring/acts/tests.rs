@@ -56,7 +56,10 @@ fn written_actions_are_read_by_tick_parity_and_only_for_the_tick_asked() {
     let mut cells = ActCells::create(&p, 3, 200).unwrap();
     let mut w = ActCellWriter::open(&p, 2).unwrap();
     let mut area = Vec::new();
-    assert!(cells.read(2, 0, |_| true, &mut area).is_none(), "no action yet");
+    assert!(
+        cells.read(2, 0, |_| true, &mut area).is_none(),
+        "no action yet"
+    );
     w.write(4, fill(4, 2));
     w.write(5, fill(5, 2));
     let (t, a) = cells.read(2, 4, |t| t == 4, &mut area).expect("tick 4");
@@ -66,7 +69,10 @@ fn written_actions_are_read_by_tick_parity_and_only_for_the_tick_asked() {
     // The other robots' cells are untouched; a tick not asked for is not read.
     assert!(cells.read(1, 4, |_| true, &mut area).is_none());
     assert!(cells.read(2, 4, |t| t == 6, &mut area).is_none());
-    assert!(cells.read(3, 4, |_| true, &mut area).is_none(), "no robot 3");
+    assert!(
+        cells.read(3, 4, |_| true, &mut area).is_none(),
+        "no robot 3"
+    );
     // Tick 6 replaces tick 4 (the same parity).
     w.write(6, fill(6, 2));
     assert!(cells.read(2, 4, |t| t == 4, &mut area).is_none());
@@ -101,16 +107,13 @@ fn a_torn_write_is_refused() {
     let mut half = w.begin(5);
     half.area_mut()[..10].fill(0xee);
     std::mem::forget(half);
-    assert!(cells.read(0, 5, |_| true, &mut area).is_none(), "nothing stamped");
+    assert!(
+        cells.read(0, 5, |_| true, &mut area).is_none(),
+        "nothing stamped"
+    );
     // A whole write of tick 7 lands between the copy of tick 5's and the stamp's check.
     w.write(5, fill(5, 0));
-    let got = cells.read_with(
-        0,
-        5,
-        |t| t == 5,
-        &mut area,
-        || w.write(7, fill(7, 0)),
-    );
+    let got = cells.read_with(0, 5, |t| t == 5, &mut area, || w.write(7, fill(7, 0)));
     assert!(got.is_none(), "overtaken read refused");
     assert!(area.is_empty());
     assert_eq!(cells.torn(), 1);
@@ -207,7 +210,14 @@ fn a_writer_racing_a_reader_never_hands_out_a_torn_action() {
         }
     }
     writer.join().unwrap();
-    assert_eq!(last, [Some(TICKS - 2), Some(TICKS - 1)], "the last writes read");
+    assert_eq!(
+        last,
+        [Some(TICKS - 2), Some(TICKS - 1)],
+        "the last writes read"
+    );
     assert!(accepted >= 2);
-    eprintln!("{accepted} reads accepted, {} refused as torn", cells.torn());
+    eprintln!(
+        "{accepted} reads accepted, {} refused as torn",
+        cells.torn()
+    );
 }
