@@ -475,12 +475,11 @@ pub fn run(args: &WorldArgs) -> Result<i32> {
             }
         }
         sent.clear();
-        for i in 0..n as usize {
-            actions[i] = None;
-            if !world.alive[i] {
-                continue;
+        for (i, a) in actions.iter_mut().enumerate() {
+            *a = None;
+            if world.alive[i] {
+                *a = acts.take(i as u32, k, &mut sent);
             }
-            actions[i] = acts.take(i as u32, k, &mut sent);
         }
         let rec = world.apply(&actions, &sent);
         outputs.push(&rec, &world)?;
