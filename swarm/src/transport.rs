@@ -279,6 +279,20 @@ pub fn act_publisher(
         })
 }
 
+/// The world's subscriber of robot i's act service: this tick's sample and the next's
+/// (real-time mode: one late).
+pub fn act_subscriber(
+    svc: &ActService,
+) -> TransportResult<iceoryx2::port::subscriber::Subscriber<ipc::Service, [u8], Action>> {
+    svc.subscriber_builder()
+        .buffer_size(2)
+        .create()
+        .map_err(|source| TransportError::Subscriber {
+            service: ServiceId::of(svc),
+            source,
+        })
+}
+
 /// The world's air publisher: its data segment grows by powers of two to the largest tick
 /// (the air of 1,000 robots in one square is megabytes; of the same robots spread out,
 /// kilobytes).

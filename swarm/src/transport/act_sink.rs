@@ -61,17 +61,8 @@ impl ActSource {
                 (0..n)
                     .map(|i| {
                         let service = act_service(node, i, true)?;
-                        // This tick's and the next's (real-time mode: one late).
-                        let subscriber = service
-                            .subscriber_builder()
-                            .buffer_size(2)
-                            .create()
-                            .map_err(|source| TransportError::Subscriber {
-                                service: ServiceId::Act(i),
-                                source,
-                            })?;
                         Ok(ActPort {
-                            subscriber,
+                            subscriber: super::act_subscriber(&service)?,
                             _service: service,
                         })
                     })

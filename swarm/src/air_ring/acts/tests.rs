@@ -1,16 +1,5 @@
 use super::*;
-
-fn prefix(tag: &str) -> String {
-    format!("swtest{}_{tag}_", std::process::id())
-}
-
-fn ours(p: &str) -> usize {
-    std::fs::read_dir("/dev/shm")
-        .unwrap()
-        .filter_map(|e| e.ok())
-        .filter(|e| e.file_name().to_string_lossy().starts_with(p))
-        .count()
-}
+use crate::air_ring::tests::{ours, prefix};
 
 /// Tick t's message area byte j.
 fn byte(t: u64, j: usize) -> u8 {
