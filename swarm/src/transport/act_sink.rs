@@ -265,3 +265,96 @@ impl ActSink {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::air::ActTx;
+    use crate::frames::RadioHeader;
+
+    /// Tick t's action of robot 0 with one message whose payload is `[t as u8; 3]`.
+    fn act(t: u64) -> impl FnOnce(&mut [u8]) -> Action {
+        move |area: &mut [u8]| {
+            let mut tx = ActTx::new(area);
+            let h = RadioHeader {
+                tick: t,
+                len: 3,
+                ..RadioHeader::default()
+            };
+            tx.transmit(&h, &mut |b| b.fill(t as u8));
+            let mut a = Action::idle(t, 0);
+            a.radio_bytes = tx.used as u32;
+            a
+        }
+    }
+
+    fn ticks_sent(sent: &Air) -> Vec<u64> {
+        sent.messages()
+            .map(|(h, p)| {
+                assert_eq!(p, [h.tick as u8; 3]);
+                h.tick
+            })
+            .collect()
+    }
+
+    /// Real-time mode over the cells: an action late for its tick is taken once, at the next
+    /// tick the world reads, its messages after that tick's own; actions of an earlier agent
+    /// (before `since`) and of ticks not yet released are not taken.
+    #[test]
+    fn late_actions_in_cells_are_taken_once_after_the_ticks_own() {
+        let p = format!("swtest{}_acts-late_", std::process::id());
+        let mut src = ActSource::Cells {
+            cells: ActCells::create(&p, 1, 256).unwrap(),
+            area: Vec::new(),
+            late_area: Vec::new(),
+            taken: vec![None],
+        };
+        let mut w = ActCellWriter::open(&p, 0).unwrap();
+        let (mut sent, mut scratch) = (Air::default(), Air::default());
+        let mut take = |src: &mut ActSource, k: u64, since: u64, sent: &mut Air| {
+            sent.clear();
+            let (c, l) = src.take_realtime(0, k, since, sent, &mut scratch);
+            (c.map(|a| a.tick), l.map(|a| a.tick))
+        };
+        w.write(0, act(0));
+        assert_eq!(take(&mut src, 0, 0, &mut sent), (Some(0), None));
+        assert_eq!(ticks_sent(&sent), [0]);
+        // Tick 1 missed: written after its deadline, with tick 2's on time.
+        assert_eq!(take(&mut src, 1, 0, &mut sent), (None, None));
+        w.write(1, act(1));
+        w.write(2, act(2));
+        assert_eq!(take(&mut src, 2, 0, &mut sent), (Some(2), Some(1)));
+        assert_eq!(
+            ticks_sent(&sent),
+            [2, 1],
+            "this tick's messages, then the late"
+        );
+        // Nothing new: neither is taken again.
+        assert_eq!(take(&mut src, 3, 0, &mut sent), (None, None));
+        assert!(sent.is_empty());
+        // Two late ticks (4 and 5) by tick 6: only the newest counts.
+        w.write(4, act(4));
+        w.write(5, act(5));
+        assert_eq!(take(&mut src, 6, 0, &mut sent), (None, Some(5)));
+        assert_eq!(ticks_sent(&sent), [5]);
+        // A tick not released yet is not taken; a restarted agent from tick 9 on: the old
+        // agent's tick 7 is not late for it.
+        w.write(8, act(8));
+        assert_eq!(take(&mut src, 7, 0, &mut sent), (None, None));
+        w.write(7, act(7));
+        assert_eq!(take(&mut src, 9, 9, &mut sent), (None, None));
+        w.write(9, act(9));
+        assert_eq!(take(&mut src, 9, 9, &mut sent), (Some(9), None));
+        // A dead robot's actions are forgotten.
+        w.write(10, act(10));
+        src.discard(0);
+        assert_eq!(take(&mut src, 11, 9, &mut sent), (None, None));
+        // Lock-step takes tick k's only.
+        w.write(12, act(12));
+        assert_eq!(src.take(0, 13, &mut sent).map(|a| a.tick), None);
+        sent.clear();
+        assert_eq!(src.take(0, 12, &mut sent).map(|a| a.tick), Some(12));
+        assert_eq!(ticks_sent(&sent), [12]);
+        assert_eq!(src.torn(), 0);
+    }
+}
