@@ -7,7 +7,7 @@ use std::time::Duration;
 use swarm::air::ActTx;
 use swarm::barrier::{BarrierError, TickBarrier, Wake};
 use swarm::scenario::Scenario;
-use swarm::transport::{self, ServiceId, TransportError};
+use swarm::transport::{self, TransportError};
 use swarm::{AgentRuntime, Behaviour, Received};
 
 /// Why an agent process stopped before the run ended.
@@ -67,8 +67,9 @@ fn run_loop<B: Behaviour>(args: &AgentArgs, mut rt: AgentRuntime<B>) -> Result<i
     // `frame`), or its own iceoryx2 service (read in place).
     let mut sense_in = transport::SenseSource::open(&node, &args.prefix, sc, robot)?;
     let mut frame = swarm::frames::Sense::zeroed();
-    let act_svc = transport::act_service(&node, robot, false)?;
-    let act_pub = transport::act_publisher(&act_svc, sc)?;
+    // Actions (`runtime.acts`): this robot's cell in the world's acts segment, or its own
+    // iceoryx2 service.
+    let mut act_out = transport::ActSink::open(&node, &args.prefix, sc, robot)?;
     // The air (`radio.air`): the world's ring (a hold cell of this robot's own while a
     // read or a zero-copy view lasts) or the iceoryx2 air service.
     let mut air_in = transport::AirSource::open(&node, &args.prefix, sc, robot)?;
@@ -85,7 +86,6 @@ fn run_loop<B: Behaviour>(args: &AgentArgs, mut rt: AgentRuntime<B>) -> Result<i
     let held_limit = transport::air_held(sc);
     // Air samples held by zero-copy views.
     let live: Arc<AtomicUsize> = Arc::default();
-    let area = transport::act_slice_len(sc);
     let mut inbox: Vec<Received<B::Msg>> = Vec::new();
     // Real-time mode (the world does not wait past a tick's deadline): a slow agent can find
     // the Sense frame or the air of a later tick than the one it woke for. It keeps them for
@@ -174,26 +174,15 @@ fn run_loop<B: Behaviour>(args: &AgentArgs, mut rt: AgentRuntime<B>) -> Result<i
                 _ => {}
             },
         }
-        let sample = act_pub
-            .loan_slice_uninit(area)
-            .map_err(|source| TransportError::Loan {
-                service: ServiceId::Act(robot),
-                source,
-            })?;
-        // SAFETY: the slot is shared memory of the publisher's data segment, mapped from
-        // tmpfs: its bytes are always initialised (zero when first mapped, then whatever an
-        // earlier tick left), and every u8 value is valid. The world reads only the
-        // `radio_bytes` that ActTx writes.
-        let mut sample = unsafe { sample.assume_init() };
-        let mut tx = ActTx::new(sample.payload_mut());
-        let mut action = rt.step_owned(sense, &inbox, malformed, &mut tx);
-        action.radio_bytes = tx.used as u32;
-        inbox.clear();
-        *sample.user_header_mut() = action;
-        sample.send().map_err(|source| TransportError::Send {
-            service: ServiceId::Act(robot),
-            source,
+        // The messages are written in place into the cell's (or the loaned sample's)
+        // message area; the world reads only the `radio_bytes` that ActTx writes.
+        act_out.send(k, |area| {
+            let mut tx = ActTx::new(area);
+            let mut action = rt.step_owned(sense, &inbox, malformed, &mut tx);
+            action.radio_bytes = tx.used as u32;
+            action
         })?;
+        inbox.clear();
         drop(got);
         drop(kept);
         barrier.ack_with(robot, k, bell);

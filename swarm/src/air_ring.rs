@@ -575,6 +575,7 @@ impl crate::blob::AsBytes for AirRead {
     }
 }
 
+pub mod acts;
 pub mod sense;
 
 #[cfg(test)]

@@ -325,6 +325,31 @@ pub struct RuntimeParams {
     /// resolved scenario leaves the default out).
     #[serde(default, skip_serializing_if = "FrameTransport::is_ring")]
     pub sense: FrameTransport,
+    /// How each agent hands the world its Action frame and the tick's messages
+    /// (multi-process executor): in its own cell of one world-made shared-memory segment
+    /// (`swarm::air_ring::acts`, default: no iceoryx2 port operation a tick) or one iceoryx2
+    /// service per robot (kept to measure both). The same actions either way: recordings do
+    /// not depend on it (and a resolved scenario leaves the default out).
+    #[serde(default, skip_serializing_if = "ActTransport::is_cells")]
+    pub acts: ActTransport,
+}
+
+/// `runtime.acts`: the transport of the agents' Action frames to the world.
+#[derive(Serialize, Deserialize, Clone, Copy, Debug, PartialEq, Eq, Default)]
+#[serde(rename_all = "kebab-case")]
+pub enum ActTransport {
+    /// Per-robot cells of one shared-memory segment (`swarm::air_ring::acts`): the agent
+    /// writes its cell, the world reads every cell after the acks.
+    #[default]
+    Cells,
+    /// One iceoryx2 publish-subscribe service per robot.
+    Iceoryx2,
+}
+
+impl ActTransport {
+    fn is_cells(&self) -> bool {
+        *self == ActTransport::Cells
+    }
 }
 
 /// `runtime.sense`: the transport of a per-tick frame between the world and the agents.
@@ -1070,5 +1095,16 @@ mod tests {
         let sc = Scenario::default();
         let again = Scenario::parse(&sc.to_toml(), "resolved").unwrap();
         assert_eq!(sc, again);
+    }
+
+    #[test]
+    fn acts_default_to_cells_and_are_left_out_of_a_resolved_scenario() {
+        assert_eq!(Scenario::default().runtime.acts, ActTransport::Cells);
+        assert!(!Scenario::default().to_toml().contains("acts ="));
+        let ice = Scenario::parse("[runtime]\nacts = \"iceoryx2\"\n", "t.toml").unwrap();
+        assert_eq!(ice.runtime.acts, ActTransport::Iceoryx2);
+        assert!(ice.to_toml().contains("acts = \"iceoryx2\""));
+        assert_eq!(Scenario::parse(&ice.to_toml(), "r.toml").unwrap(), ice);
+        assert!(Scenario::parse("[runtime]\nacts = \"ring\"\n", "t.toml").is_err());
     }
 }

@@ -17,10 +17,12 @@ use std::path::PathBuf;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Arc;
 
+mod act_sink;
 mod air_source;
 mod error;
 mod sense_source;
 mod service;
+pub use act_sink::{ActSink, ActSource};
 pub use air_source::{AirGot, AirSink, AirSource};
 pub use error::{Port, TransportError, TransportResult};
 pub use sense_source::{SenseGot, SenseSink, SenseSource};
@@ -272,6 +274,20 @@ pub fn act_publisher(
         .max_loaned_samples(1)
         .create()
         .map_err(|source| TransportError::Publisher {
+            service: ServiceId::of(svc),
+            source,
+        })
+}
+
+/// The world's subscriber of robot i's act service: this tick's sample and the next's
+/// (real-time mode: one late).
+pub fn act_subscriber(
+    svc: &ActService,
+) -> TransportResult<iceoryx2::port::subscriber::Subscriber<ipc::Service, [u8], Action>> {
+    svc.subscriber_builder()
+        .buffer_size(2)
+        .create()
+        .map_err(|source| TransportError::Subscriber {
             service: ServiceId::of(svc),
             source,
         })

@@ -23,11 +23,6 @@ pub struct WorldArgs {
     pub live: bool,
 }
 
-struct Robot {
-    act: Subscriber<ipc::Service, [u8], Action>,
-    _act_svc: transport::ActService,
-}
-
 /// Publishes the messages due at tick `k` as one air (`swarm::air`) through the run's air
 /// transport (`radio.air`: the world's ring, or the iceoryx2 service), before the tick is
 /// released: every agent reads its list in it. The world lends its airs
@@ -39,65 +34,6 @@ fn publish_air(air: &mut transport::AirSink, world: &World, sent: &Air, k: u64) 
         swarm::air::write_air_from(world.air(), sent.bytes(), world.n, k, out)
     })?;
     Ok(())
-}
-
-/// Robot i's latest action and its messages (appended to `sent`; `World::apply` judges
-/// both). A message area that does not parse leaves the action without messages (the world
-/// then refuses its radio report).
-fn take_action(act: &Subscriber<ipc::Service, [u8], Action>, sent: &mut Air) -> Option<Action> {
-    let mut latest = None;
-    while let Ok(Some(s)) = act.receive() {
-        latest = Some(s);
-    }
-    let s = latest?;
-    let a = *s.user_header();
-    let used = (a.radio_bytes as usize).min(s.payload().len());
-    if let Some(msgs) = swarm::air::act_messages(&s.payload()[..used]) {
-        use swarm::wire::RadioTx;
-        for (h, p) in msgs {
-            sent.transmit(&h, &mut |b| b.copy_from_slice(p));
-        }
-    }
-    Some(a)
-}
-
-/// Real-time mode: robot i's act samples at tick `k`'s deadline. The one of tick k (its
-/// messages go to `sent`) is this tick's action; one of an earlier tick arrived after that
-/// tick's deadline: its messages go out now (into `sent`) and its command is superseded.
-/// Only the newest late sample counts (the act buffer holds 2, and an agent sends at most one
-/// late action between two reads of the world); samples of a tick before `since` (an earlier
-/// agent's, before a restart) and of ticks not yet released are dropped.
-fn take_actions_realtime(
-    act: &Subscriber<ipc::Service, [u8], Action>,
-    k: u64,
-    since: u64,
-    sent: &mut Air,
-    late_msgs: &mut Air,
-) -> (Option<Action>, Option<Action>) {
-    use swarm::wire::RadioTx;
-    let (mut cur, mut late) = (None, None);
-    late_msgs.clear();
-    while let Ok(Some(s)) = act.receive() {
-        let a = *s.user_header();
-        let into = if a.tick == k {
-            cur = Some(a);
-            &mut *sent
-        } else if a.tick < k && a.tick >= since {
-            late = Some(a);
-            late_msgs.clear();
-            &mut *late_msgs
-        } else {
-            continue;
-        };
-        let used = (a.radio_bytes as usize).min(s.payload().len());
-        if let Some(msgs) = swarm::air::act_messages(&s.payload()[..used]) {
-            for (h, p) in msgs {
-                into.transmit(&h, &mut |b| b.copy_from_slice(p));
-            }
-        }
-    }
-    sent.append(late_msgs);
-    (cur, late)
 }
 
 /// Real-time mode's clock and each robot's progress: when the world last saw each robot
@@ -329,21 +265,10 @@ pub fn run(args: &WorldArgs) -> Result<i32> {
     world.lend_air();
     let config = transport::run_config(&args.prefix)?;
     let node = transport::node(&config, "world")?;
-    let mut robots = Vec::with_capacity(n as usize);
     // Sense frames (`runtime.sense`): the world's ring beside the air, or a service a robot.
     let mut senses = transport::SenseSink::create(&node, &args.prefix, sc)?;
-    for i in 0..n {
-        let act_svc = transport::act_service(&node, i, true)?;
-        let act = act_svc
-            .subscriber_builder()
-            .buffer_size(2)
-            .create()
-            .map_err(|e| format!("act subscriber: {e:?}"))?;
-        robots.push(Robot {
-            act,
-            _act_svc: act_svc,
-        });
-    }
+    // Actions (`runtime.acts`): every robot's cell of one segment, or a service a robot.
+    let mut acts = transport::ActSource::create(&node, &args.prefix, sc)?;
     let mut air = transport::AirSink::create(&node, &args.prefix, sc)?;
     let status_svc = transport::status_service(&node, true)?;
     let status_pub = status_svc
@@ -483,11 +408,11 @@ pub fn run(args: &WorldArgs) -> Result<i32> {
                 (actions[i], late[i]) = (None, None);
                 if !world.alive[i] {
                     // Nothing of a dead robot's agent is read later as late.
-                    while let Ok(Some(_)) = robots[i].act.receive() {}
+                    acts.discard(i as u32);
                     continue;
                 }
-                (actions[i], late[i]) = take_actions_realtime(
-                    &robots[i].act,
+                (actions[i], late[i]) = acts.take_realtime(
+                    i as u32,
                     k,
                     clock.since[i],
                     &mut sent,
@@ -550,12 +475,11 @@ pub fn run(args: &WorldArgs) -> Result<i32> {
             }
         }
         sent.clear();
-        for i in 0..n as usize {
-            actions[i] = None;
-            if !world.alive[i] {
-                continue;
+        for (i, a) in actions.iter_mut().enumerate() {
+            *a = None;
+            if world.alive[i] {
+                *a = acts.take(i as u32, k, &mut sent);
             }
-            actions[i] = take_action(&robots[i].act, &mut sent);
         }
         let rec = world.apply(&actions, &sent);
         outputs.push(&rec, &world)?;

@@ -396,14 +396,7 @@ impl WorldRadio {
         let mut acts = Vec::new();
         for i in 0..n {
             let svc = transport::act_service(node, i, true)?;
-            let sub = svc
-                .subscriber_builder()
-                .buffer_size(2)
-                .create()
-                .map_err(|source| TransportError::Subscriber {
-                    service: ServiceId::Act(i),
-                    source,
-                })?;
+            let sub = transport::act_subscriber(&svc)?;
             acts.push((svc, sub));
         }
         Ok(WorldRadio {

@@ -1,6 +1,6 @@
 use super::*;
 
-fn prefix(tag: &str) -> String {
+pub(super) fn prefix(tag: &str) -> String {
     format!("swtest{}_{tag}_", std::process::id())
 }
 
@@ -21,7 +21,7 @@ fn intact(a: &AirRead) -> bool {
     a.header.tick == a.tick && a.bytes()[..len].iter().all(|&b| b == a.tick as u8)
 }
 
-fn ours(p: &str) -> usize {
+pub(super) fn ours(p: &str) -> usize {
     std::fs::read_dir("/dev/shm")
         .unwrap()
         .filter_map(|e| e.ok())

@@ -141,6 +141,9 @@ pub enum TransportError {
     /// The world's air ring (`radio.air = "ring"`) could not be made, opened or read.
     #[error(transparent)]
     AirRing(#[from] crate::air_ring::AirRingError),
+    /// The agents' act cells (`runtime.acts = "cells"`) could not be made or opened.
+    #[error(transparent)]
+    ActCells(#[from] crate::air_ring::acts::ActCellsError),
 }
 
 impl TransportError {
@@ -167,6 +170,7 @@ impl TransportError {
                 static AIR: ServiceId = ServiceId::Air;
                 Some(&AIR)
             }
+            ActCells(_) => None,
         }
     }
 
