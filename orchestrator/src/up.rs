@@ -663,7 +663,17 @@ fn print_formation(fm: &serde_json::Value, ticks: &serde_json::Value) {
         fm["min_robot_clearance"].as_f64().unwrap_or(f64::NAN),
         fm["min_obstacle_clearance"].as_f64().unwrap_or(f64::NAN)
     );
-    for p in fm["plans"].as_array().into_iter().flatten() {
+    // A swarm that re-plans often (a plan a lost member) lists hundreds: the first and last
+    // few, and how many between.
+    let plans: Vec<&serde_json::Value> = fm["plans"].as_array().into_iter().flatten().collect();
+    const SHOWN: usize = 3;
+    for (i, p) in plans.iter().enumerate() {
+        if plans.len() > 2 * SHOWN && i == SHOWN {
+            println!("    ... {} more plans ...", plans.len() - 2 * SHOWN);
+        }
+        if plans.len() > 2 * SHOWN && (SHOWN..plans.len() - SHOWN).contains(&i) {
+            continue;
+        }
         println!(
             "    plan epoch {} by robot {} at tick {}: alpha {:.3} theta {:.3}  gap {:.3}  {:.2} s",
             p["epoch"],

@@ -23,6 +23,12 @@ fn encoded_len(msg: &Msg) -> usize {
 /// Whether the full plan for `robots` robots, with `max_dead` wrecks, fits one message of
 /// `max_message_bytes` (its worst case: every id and slot at its largest).
 pub fn full_plan_fits(robots: usize, max_dead: usize, max_message_bytes: u32) -> bool {
+    full_plan_len(robots, max_dead) <= max_message_bytes as usize
+}
+
+/// The encoded size of the full plan for `robots` robots with `max_dead` wrecks, at its worst
+/// case (every id and slot at its largest).
+pub fn full_plan_len(robots: usize, max_dead: usize) -> usize {
     let top = robots.saturating_sub(1);
     let plan = Plan {
         epoch: u32::MAX,
@@ -33,7 +39,7 @@ pub fn full_plan_fits(robots: usize, max_dead: usize, max_message_bytes: u32) ->
         slots: vec![top as u16; robots],
         dead: vec![[0.0; 2]; max_dead],
     };
-    encoded_len(&Msg::Plan(plan)) <= max_message_bytes as usize
+    encoded_len(&Msg::Plan(plan))
 }
 
 /// The encoded size of a compact plan message.

@@ -226,3 +226,24 @@ fn under_swaps_a_death_makes_the_lowest_robot_heard_since_re_plan_around_the_wre
     // It repeats the plan for the others.
     assert!(out.queued().iter().any(|(_, m)| matches!(m, Msg::Plan(p) if p.epoch == 1)));
 }
+
+/// A coordinator mode whose plan cannot fit one message is refused at load, naming the key,
+/// the sizes and the allowed values; swaps (the compact plan) are accepted.
+#[test]
+fn a_coordinator_plan_too_large_for_one_message_is_refused_and_swaps_accepted() {
+    let mut sc = Scenario::load(std::path::Path::new(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../configs/formation-500.toml"
+    )))
+    .unwrap();
+    assert!(crate::behaviours::validate(&sc, "formation-500.toml").is_ok());
+    sc.formation.as_mut().unwrap().reassignment = Reassignment::PerStep;
+    let e = crate::behaviours::validate(&sc, "formation-500.toml").unwrap_err();
+    assert_eq!(e.key, "formation.reassignment");
+    let need = compact::full_plan_len(500, 0);
+    assert!(need > 512, "{need}");
+    assert!(e.message.contains(&need.to_string()), "{}", e.message);
+    assert!(e.message.contains("\"swaps\""), "{}", e.message);
+    sc.radio.max_message_bytes = need as u32;
+    assert!(crate::behaviours::validate(&sc, "formation-500.toml").is_ok());
+}
