@@ -674,6 +674,15 @@ fn print_formation(fm: &serde_json::Value, ticks: &serde_json::Value) {
         if plans.len() > 2 * SHOWN && (SHOWN..plans.len() - SHOWN).contains(&i) {
             continue;
         }
+        if p["epoch"].is_null() {
+            // Its parameters come on the next two ticks; a newer plan of the same robot
+            // within them takes them (world/src/mission/formation.rs, PlanReport).
+            println!(
+                "    plan by robot {} at tick {}: superseded before its parameters were reported",
+                p["robot"], p["tick"]
+            );
+            continue;
+        }
         println!(
             "    plan epoch {} by robot {} at tick {}: alpha {:.3} theta {:.3}  gap {:.3}  {:.2} s",
             p["epoch"],
