@@ -61,6 +61,21 @@ use swarm::sections::formation::{
 };
 use swarm::{Behaviour, Command, Outbox, Received, Sense};
 
+/// How far inside 2 r of a live robot a remembered wreck may lie and still be taken for a
+/// wreck (the world keeps discs apart; ORCA's margin lets a live robot graze one). [chosen]
+/// 0.05, ORCA's `orca_margin` default.
+const WRECK_OVERLAP_TOLERANCE: f64 = 0.05;
+
+/// The remembered wreck positions that can be wrecks: those not within 2 r (less
+/// [`WRECK_OVERLAP_TOLERANCE`]) of this robot at `me` or of a live robot of its Sense frame.
+fn real_wrecks(remembered: Vec<Vec2>, me: Vec2, live: &[Disc], robot_radius: f64) -> Vec<Vec2> {
+    let clear = 2.0 * robot_radius - WRECK_OVERLAP_TOLERANCE;
+    remembered
+        .into_iter()
+        .filter(|p| (p - me).norm() >= clear && live.iter().all(|o| (p - o.position).norm() >= clear))
+        .collect()
+}
+
 /// The registry's name of this behaviour.
 pub const NAME: &str = "formation";
 
@@ -781,7 +796,12 @@ impl Formation {
         for d in self.plan.iter().flat_map(|p| p.dead.iter()) {
             wrecks::remember(&mut dead, Vec2::new(d[0], d[1]));
         }
-        for pos in dead.into_iter().chain(self.ghosts.values().copied()) {
+        // A wreck is a disc no live robot can stand within 2 r of: a remembered position
+        // that close to this robot or to a robot the Sense frame shows alive is stale (a
+        // robot taken for lost while alive, e.g. a coordinator out of its radio range), and
+        // as a static disc over a live one it would leave ORCA no feasible velocity.
+        let remembered: Vec<Vec2> = dead.into_iter().chain(self.ghosts.values().copied()).collect();
+        for pos in real_wrecks(remembered, me, &robots, k.robot_radius) {
             obstacles.push(Disc {
                 position: pos,
                 velocity: Vec2::zeros(),

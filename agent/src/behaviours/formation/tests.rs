@@ -247,3 +247,24 @@ fn a_coordinator_plan_too_large_for_one_message_is_refused_and_swaps_accepted() 
     sc.radio.max_message_bytes = need as u32;
     assert!(crate::behaviours::validate(&sc, "formation-500.toml").is_ok());
 }
+
+/// A remembered wreck on this robot or on a live neighbour is stale and dropped; one touching a
+/// live robot (2 r apart, a real wreck can be that close) and one in free space are kept.
+#[test]
+fn stale_wrecks_on_live_robots_are_dropped_and_real_ones_kept() {
+    let r = 1.0;
+    let me = Vec2::new(0.0, 0.0);
+    let live = [Disc {
+        position: Vec2::new(10.0, 0.0),
+        velocity: Vec2::zeros(),
+        radius: r,
+    }];
+    let remembered = vec![
+        Vec2::new(0.3, 0.0),  // on this robot: it was taken for lost
+        Vec2::new(10.5, 0.5), // on the live neighbour
+        Vec2::new(12.0, 0.0), // touching the neighbour: a wreck can lie there
+        Vec2::new(5.0, 5.0),  // free space
+    ];
+    let kept = real_wrecks(remembered, me, &live, r);
+    assert_eq!(kept, vec![Vec2::new(12.0, 0.0), Vec2::new(5.0, 5.0)]);
+}
