@@ -62,9 +62,11 @@ impl WorldCopy {
 /// (payload bytes, encoding, air, the world's copies): `seq` is a `Vec<u8>` as serde encodes
 /// it (element by element), `bytes` the same bytes as one byte string, `blob` the same wire
 /// bytes received in place (`swarm::Blob`, zero-copy), `raw` raw iceoryx2 without the runtime
-/// (no air, no world). The air is `radio.air`: the world's ring (the runtime's default) or the
+/// (no air, no world), `raw-copy` the same with each received payload copied into an owned
+/// buffer (what a `bytes` receiver gets: the counterpart the raw rows, which drop their samples
+/// unread, do not make). The air is `radio.air`: the world's ring (the runtime's default) or the
 /// iceoryx2 air service. The `copy` rows are the world's old three-copy path (`WorldCopy`).
-pub const CASES: [(usize, &str, Option<AirTransport>, WorldCopy); 16] = [
+pub const CASES: [(usize, &str, Option<AirTransport>, WorldCopy); 18] = [
     (64, "seq", Some(AirTransport::Ring), WorldCopy::Lent),
     (4096, "seq", Some(AirTransport::Ring), WorldCopy::Lent),
     (64, "bytes", Some(AirTransport::Ring), WorldCopy::Lent),
@@ -81,6 +83,8 @@ pub const CASES: [(usize, &str, Option<AirTransport>, WorldCopy); 16] = [
     (4096, "blob", Some(AirTransport::Iceoryx2), WorldCopy::Lent),
     (64, "raw", None, WorldCopy::Lent),
     (4096, "raw", None, WorldCopy::Lent),
+    (64, "raw-copy", None, WorldCopy::Lent),
+    (4096, "raw-copy", None, WorldCopy::Lent),
 ];
 
 /// The air's name in the table and in a child's `--mode` (`enc:air`).
@@ -201,24 +205,27 @@ pub fn print(rows: &[Row]) {
         .iter()
         .filter(|r| r.encoding == "bytes" || r.encoding == "blob")
     {
-        if let Some(raw) = rows
-            .iter()
-            .find(|x| x.encoding == "raw" && x.payload_bytes == r.payload_bytes)
-        {
-            println!(
-                "runtime ({}, {} air, world {}) ticks/s / raw iceoryx2 ticks/s at {} B: {:.2}x",
-                r.encoding,
-                r.air,
-                r.world,
-                r.payload_bytes,
-                r.ticks_per_s / raw.ticks_per_s.max(1e-9)
-            );
+        for base in ["raw", "raw-copy"] {
+            if let Some(raw) = rows
+                .iter()
+                .find(|x| x.encoding == base && x.payload_bytes == r.payload_bytes)
+            {
+                println!(
+                    "runtime ({}, {} air, world {}) ticks/s / {base} iceoryx2 ticks/s at {} B: {:.2}x",
+                    r.encoding,
+                    r.air,
+                    r.world,
+                    r.payload_bytes,
+                    r.ticks_per_s / raw.ticks_per_s.max(1e-9)
+                );
+            }
         }
     }
     println!("messages/s counts (message, receiver) pairs decoded by the receivers' runtimes (raw: taken off the services); MiB/s = messages/s x payload.");
     println!("enc: seq = the payload is a Vec<u8> (serde encodes it byte by byte), bytes = the same bytes as one byte string,");
     println!("     blob = the same wire bytes as a swarm::Blob, received in place (zero-copy: no decode copy),");
-    println!("     raw = raw iceoryx2, one service per robot, the same barrier: loan, copy in, send; receive one per sender, drop unread.");
+    println!("     raw = raw iceoryx2, one service per robot, the same barrier: loan, copy in, send; receive one per sender, drop unread;");
+    println!("     raw-copy = the same, each received payload copied into an owned Vec<u8> (what a bytes receiver holds).");
     println!("world: lent = the world copies each payload twice (act sample -> tick buffer -> air, Medium::transmit_lent), as the world process does;");
     println!("       copy = three times (-> the medium's own air too, Medium::transmit), the path before World::lend_air.");
 }
@@ -245,7 +252,7 @@ fn one(
         let barrier = TickBarrier::create(&prefix, n)?;
         let config = transport::run_config(&prefix)?;
         let node = transport::node(&config, "bench-tput")?;
-        let radio = if enc == "raw" {
+        let radio = if enc.starts_with("raw") {
             Radio::Raw(
                 (0..n)
                     .map(|i| raw_service(&node, i, &sc, true))
@@ -584,7 +591,8 @@ pub fn child(a: &ChildArgs) -> i32 {
     let r = match enc {
         "bytes" => child_run::<BytesBlob>(a, air),
         "blob" => child_run::<BlobMsg>(a, air),
-        "raw" => child_raw(a),
+        "raw" => child_raw(a, false),
+        "raw-copy" => child_raw(a, true),
         _ => child_run::<SeqBlob>(a, air),
     };
     match r {
@@ -664,8 +672,9 @@ fn child_run<M: Make>(a: &ChildArgs, air: AirTransport) -> BenchResult<()> {
 
 /// The raw iceoryx2 child: one service per robot, every robot subscribed to every other's,
 /// no runtime (no encode, no range / loss decision, no decode). Every robot sends one message
-/// a tick, so a receiver takes exactly one off each other robot's service.
-fn child_raw(a: &ChildArgs) -> BenchResult<()> {
+/// a tick, so a receiver takes exactly one off each other robot's service. `copy`: each payload
+/// is copied into an owned buffer (the `raw-copy` rows).
+fn child_raw(a: &ChildArgs, copy: bool) -> BenchResult<()> {
     let (n, me) = (a.robots, a.index);
     let sc = scenario(n, a.size, AirTransport::Ring);
     let barrier = TickBarrier::open(&a.prefix)?;
@@ -706,6 +715,9 @@ fn child_raw(a: &ChildArgs) -> BenchResult<()> {
             for (_, sub) in links.iter() {
                 if let Ok(Some(m)) = sub.receive() {
                     std::hint::black_box(m.user_header().seq);
+                    if copy {
+                        std::hint::black_box(m.payload().to_vec());
+                    }
                     got += 1;
                 }
             }
