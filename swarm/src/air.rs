@@ -83,15 +83,32 @@ fn read_header(bytes: &[u8], at: usize) -> Option<RadioHeader> {
 /// past its end).
 pub fn act_messages(bytes: &[u8]) -> Option<Vec<(RadioHeader, &[u8])>> {
     let mut out = Vec::new();
-    let mut at = 0;
-    while at < bytes.len() {
-        let h = read_header(bytes, at)?;
-        let len = h.len as usize;
-        let p = bytes.get(at + HEADER..at + HEADER + len)?;
-        out.push((h, p));
-        at = at.checked_add(act_entry_bytes(len))?;
+    for_each_act_message(bytes, |h, p| out.push((*h, p))).then_some(out)
+}
+
+/// [`act_messages`] without its list: calls `each` with every (header, payload) of a
+/// well-formed area in send order and returns true; a malformed area calls it for none and
+/// returns false. The world's tick path (no allocation a robot a tick).
+pub fn for_each_act_message<'a>(
+    bytes: &'a [u8],
+    mut each: impl FnMut(&RadioHeader, &'a [u8]),
+) -> bool {
+    let walk = |each: &mut dyn FnMut(&RadioHeader, &'a [u8])| -> Option<()> {
+        let mut at = 0;
+        while at < bytes.len() {
+            let h = read_header(bytes, at)?;
+            let len = h.len as usize;
+            let p = bytes.get(at + HEADER..at + HEADER + len)?;
+            each(&h, p);
+            at = at.checked_add(act_entry_bytes(len))?;
+        }
+        Some(())
+    };
+    // First pass: the whole area parses; second: hand out its messages.
+    if walk(&mut |_, _| {}).is_none() {
+        return false;
     }
-    Some(out)
+    walk(&mut each).is_some()
 }
 
 /// One tick's transmissions as the air carries them: built by the world's medium, published

@@ -19,11 +19,7 @@ use iceoryx2::prelude::*;
 /// area that does not parse hands none (the world then refuses the action's radio report,
 /// counting its messages malformed).
 fn transmit_area(area: &[u8], into: &mut Air) {
-    if let Some(msgs) = crate::air::act_messages(area) {
-        for (h, p) in msgs {
-            into.transmit(&h, &mut |b| b.copy_from_slice(p));
-        }
-    }
+    crate::air::for_each_act_message(area, |h, p| into.transmit(h, &mut |b| b.copy_from_slice(p)));
 }
 
 /// One robot's act service as the world subscribes to it.
