@@ -152,6 +152,8 @@ struct Granted {
     /// The target it took (the proposer's old one).
     took: usize,
     deadline: u64,
+    /// A blocked robot's proposal (blocked.rs): the hold starts when the swap stands.
+    blocked: bool,
 }
 
 /// One robot's side of the swap protocol.
@@ -170,6 +172,10 @@ pub struct SwapAgent {
     answered: BTreeMap<usize, (u64, bool)>,
     /// Progress towards the target, for the blocked-robot swap.
     watch: Option<Watch>,
+    /// Blocked swaps taken part in (either side, a reverted one included), and the partner
+    /// of the last one.
+    blocked_swaps: u32,
+    blocked_partner: Option<usize>,
 }
 
 /// How much robots i, j at `pi`, `pj` holding `a`, `b` gain by swapping (eq. 4 costs).
@@ -191,6 +197,8 @@ impl SwapAgent {
             quiet_until: 0,
             answered: BTreeMap::new(),
             watch: None,
+            blocked_swaps: 0,
+            blocked_partner: None,
         }
     }
 
@@ -285,6 +293,8 @@ impl SwapAgent {
                             self.target = pd.to_target;
                             if let Some(b) = p.blocked.as_ref().filter(|_| pd.blocked) {
                                 self.quiet_until = self.quiet_until.max(now + b.hold_ticks);
+                                self.blocked_swaps += 1;
+                                self.blocked_partner = Some(pd.to);
                             }
                         }
                         self.pending = None;
@@ -320,14 +330,19 @@ impl SwapAgent {
                             let fits = free
                                 && if blocked {
                                     p.blocked.as_ref().is_some_and(|b| {
-                                        blocked::accepts(position, targets[to_target], -gain(), b)
+                                        self.blocked_swaps < b.max_swaps
+                                            && self.blocked_partner != Some(from)
+                                            && blocked::accepts(
+                                                position,
+                                                targets[to_target],
+                                                -gain(),
+                                                b,
+                                            )
                                     })
                                 } else {
                                     gain() > p.min_gain
                                 };
                             if fits && blocked {
-                                let hold = p.blocked.as_ref().map_or(0, |b| b.hold_ticks);
-                                self.quiet_until = now + hold;
                                 if std::env::var_os("BLOCKED_DEBUG").is_some() {
                                     eprintln!("BLOCKEDSWAP {now} {from} {} price {:.2} dfrom {:.2}", self.id, -gain(), (theirs - targets[from_target]).norm());
                                 }
@@ -338,6 +353,7 @@ impl SwapAgent {
                                     gave: self.target,
                                     took: from_target,
                                     deadline,
+                                    blocked,
                                 });
                                 self.target = from_target;
                             }
@@ -356,9 +372,19 @@ impl SwapAgent {
         }
         if let Some(g) = self.granted {
             let seen = neighbours.iter().find(|n| n.id == g.proposer);
+            let stands = |me: &mut Self| {
+                // A blocked swap that stands: the receiver's hold and count (a reverted one
+                // leaves neither, so the blocked robot's retry is heard).
+                if let Some(b) = p.blocked.as_ref().filter(|_| g.blocked) {
+                    me.quiet_until = me.quiet_until.max(now + b.hold_ticks);
+                    me.blocked_swaps += 1;
+                    me.blocked_partner = Some(g.proposer);
+                }
+                me.granted = None;
+            };
             if seen.is_some_and(|n| n.target == g.gave) {
                 // The proposer committed.
-                self.granted = None;
+                stands(self);
             } else if seen.is_some_and(|n| {
                 n.target == g.took && n.tick >= g.deadline && n.tick < g.deadline + p.settle_ticks
             }) {
@@ -368,7 +394,7 @@ impl SwapAgent {
                 }
                 self.granted = None;
             } else if now >= g.deadline + p.settle_ticks {
-                self.granted = None;
+                stands(self);
             }
         }
         if let Some(pd) = self.pending {
@@ -438,12 +464,13 @@ impl SwapAgent {
         neighbours: &'a [NeighbourView],
         p: &SwapParams,
     ) -> Option<(f64, &'a NeighbourView)> {
-        let b = p.blocked.as_ref()?;
+        let b = p.blocked.as_ref().filter(|b| self.blocked_swaps < b.max_swaps)?;
         let mine = targets[self.target];
         let mut best: Option<(f64, &NeighbourView)> = None;
         for n in neighbours.iter().filter(|n| {
             n.target < targets.len()
                 && n.target != self.target
+                && Some(n.id) != self.blocked_partner
                 && (n.position - position).norm() <= p.range
                 && (n.position - targets[n.target]).norm() <= b.in_place
                 && blocked::in_the_way(position, mine, n.position, b.corridor)

@@ -186,6 +186,7 @@ pub fn validate(sc: &Scenario, c: &Check) -> Result<(), ConfigError> {
         c.range_f(&key("corridor"), b.corridor, 0.0, 1e6, true)?;
         c.range_f(&key("max_price"), b.max_price, 0.0, 1e9, false)?;
         c.range_u(&key("hold_ticks"), b.hold_ticks, 0, 1_000_000)?;
+        c.range_u(&key("max_swaps"), b.max_swaps as u64, 0, 1_000_000)?;
     }
     c.range_f("formation.kernels.orca_margin", p.orca_margin, 0.0, 1e6, false)?;
     let o = &k.optimiser;
