@@ -121,7 +121,11 @@ fn the_enclosed_configuration_is_stuck_without_the_rule_and_swap_stable() {
     assert!(swap_gain(at[4], at[0], slots[4], slots[0]) < 0.0);
     let r = run(&slots, at, &params(None), 400, false, |_, _| false);
     assert_eq!(r.formed, None);
-    assert!((r.at[4] - slots[4]).norm() > 3.0, "robot 4 got in: {:?}", r.at[4]);
+    assert!(
+        (r.at[4] - slots[4]).norm() > 3.0,
+        "robot 4 got in: {:?}",
+        r.at[4]
+    );
     assert!(r.changes.iter().all(|c| c.is_empty()), "{:?}", r.changes);
 }
 
@@ -136,7 +140,11 @@ fn a_robot_behind_a_ring_of_in_place_robots_gets_in_within_the_wait_and_a_few_ti
     // 4 onto robot 2's old slot.
     assert_eq!((r.agents[4].target, r.agents[2].target), (2, 4));
     assert_eq!(r.changes[4].len(), 1);
-    assert!(r.changes[4][0] >= wait, "swapped at {} before the wait", r.changes[4][0]);
+    assert!(
+        r.changes[4][0] >= wait,
+        "swapped at {} before the wait",
+        r.changes[4][0]
+    );
     let formed = r.formed.expect("formed");
     // The swap at the wait, a round trip, then 2.2 at STEP = 0.25 a tick (9 ticks) for the
     // in-place robot, robot 4 behind it.
@@ -158,9 +166,17 @@ fn under_lost_replies_the_blocked_swap_is_given_up_reverted_and_retried() {
         matches!(m, Message::Reply { .. }) && round <= first_deadline
     });
     assert_eq!((r.agents[4].target, r.agents[2].target), (2, 4));
-    assert_eq!(r.changes[2].len(), 3, "accept, revert, accept: {:?}", r.changes[2]);
+    assert_eq!(
+        r.changes[2].len(),
+        3,
+        "accept, revert, accept: {:?}",
+        r.changes[2]
+    );
     let formed = r.formed.expect("formed");
-    assert!(formed <= first_deadline + p.settle_ticks + 25, "formed at {formed}");
+    assert!(
+        formed <= first_deadline + p.settle_ticks + 25,
+        "formed at {formed}"
+    );
 }
 
 #[test]
@@ -178,11 +194,23 @@ fn after_a_blocked_swap_the_pair_holds_for_hold_ticks_though_swapping_back_would
     }
     let b = BlockedParams::default();
     let hold = b.hold_ticks;
-    let r = run(&slots, at.clone(), &params(Some(b.clone())), 300, true, |_, _| false);
+    let r = run(
+        &slots,
+        at.clone(),
+        &params(Some(b.clone())),
+        300,
+        true,
+        |_, _| false,
+    );
     let c = &r.changes[4];
     assert!(c.len() >= 2, "{c:?}");
     for w in c.windows(2) {
-        assert!(w[1] >= w[0] + hold, "robot 4 swapped at {} and again at {}", w[0], w[1]);
+        assert!(
+            w[1] >= w[0] + hold,
+            "robot 4 swapped at {} and again at {}",
+            w[0],
+            w[1]
+        );
     }
     let r0 = run(
         &slots,

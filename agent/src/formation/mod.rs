@@ -24,9 +24,9 @@ pub mod swaps;
 pub mod template;
 
 #[cfg(test)]
-mod sim_tests;
-#[cfg(test)]
 mod blocked_tests;
+#[cfg(test)]
+mod sim_tests;
 #[cfg(test)]
 mod test_support;
 

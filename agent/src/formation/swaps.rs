@@ -342,11 +342,6 @@ impl SwapAgent {
                                 } else {
                                     gain() > p.min_gain
                                 };
-                            if fits && blocked {
-                                if std::env::var_os("BLOCKED_DEBUG").is_some() {
-                                    eprintln!("BLOCKEDSWAP {now} {from} {} price {:.2} dfrom {:.2}", self.id, -gain(), (theirs - targets[from_target]).norm());
-                                }
-                            }
                             if fits {
                                 self.granted = Some(Granted {
                                     proposer: from,
@@ -464,7 +459,10 @@ impl SwapAgent {
         neighbours: &'a [NeighbourView],
         p: &SwapParams,
     ) -> Option<(f64, &'a NeighbourView)> {
-        let b = p.blocked.as_ref().filter(|b| self.blocked_swaps < b.max_swaps)?;
+        let b = p
+            .blocked
+            .as_ref()
+            .filter(|b| self.blocked_swaps < b.max_swaps)?;
         let mine = targets[self.target];
         let mut best: Option<(f64, &NeighbourView)> = None;
         for n in neighbours.iter().filter(|n| {
