@@ -12,6 +12,7 @@
 //! - [`orca`] and [`linear_program`]: eqs. (17)-(26), ORCA (van den Berg et al. 2011).
 //! - [`swaps`]: beyond the paper, a decentralised pairwise-swap reassignment.
 
+pub mod blocked;
 pub mod constraints;
 pub mod hungarian;
 pub mod linear_program;
@@ -22,6 +23,8 @@ pub mod preferred;
 pub mod swaps;
 pub mod template;
 
+#[cfg(test)]
+mod blocked_tests;
 #[cfg(test)]
 mod sim_tests;
 #[cfg(test)]

@@ -38,7 +38,14 @@
 //! the same slot (at most `timeout_ticks` + `settle_ticks` ticks; ORCA keeps them apart).
 //! The fixed point is swap-stable (no neighbouring pair within range gains from swapping),
 //! which is not always the optimal assignment that the centralised Hungarian finds.
+//!
+//! The blocked-robot swap (blocked.rs, `SwapParams::blocked`) is the one exception to the
+//! gain and id rules: a robot stalled short of an enclosed slot proposes to an in-place
+//! neighbour in its way, of any id, at a bounded price (`Propose { blocked: true, .. }`),
+//! through the same handshake; both then hold still in the protocol for `hold_ticks`. The
+//! summed cost then rises by at most `max_price` per such swap.
 
+use super::blocked::{self, BlockedParams, Watch};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use swarm::geometry::Vec2;
@@ -60,6 +67,11 @@ pub struct SwapParams {
     /// receiver decides from its status frames. [chosen] 10: the receiver misses all ten
     /// statuses with probability 0.3^10 = 6e-6 at loss 0.3.
     pub settle_ticks: u64,
+    /// The blocked-robot swap (blocked.rs). None: off. Left out of the resolved scenario
+    /// when None, so the scenarios without swaps keep their recordings; the behaviour's
+    /// `parse_params` fills in the default for `reassignment = "swaps"`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub blocked: Option<BlockedParams>,
 }
 
 impl Default for SwapParams {
@@ -69,6 +81,7 @@ impl Default for SwapParams {
             range: 7.5,
             timeout_ticks: 6,
             settle_ticks: 10,
+            blocked: None,
         }
     }
 }
@@ -86,6 +99,8 @@ pub enum Message {
         to_target: usize,
         from_position: [f64; 2],
         deadline: u64,
+        /// A blocked robot's proposal (blocked.rs): judged by price, not gain.
+        blocked: bool,
     },
     /// The receiver's answer to proposal `seq`.
     Reply {
@@ -125,6 +140,7 @@ struct Pending {
     from_target: usize,
     to_target: usize,
     deadline: u64,
+    blocked: bool,
 }
 
 /// An acceptance whose proposer's side is not known yet.
@@ -136,6 +152,8 @@ struct Granted {
     /// The target it took (the proposer's old one).
     took: usize,
     deadline: u64,
+    /// A blocked robot's proposal (blocked.rs): the hold starts when the swap stands.
+    blocked: bool,
 }
 
 /// One robot's side of the swap protocol.
@@ -152,6 +170,12 @@ pub struct SwapAgent {
     quiet_until: u64,
     /// The last proposal answered per proposer: (seq, accepted).
     answered: BTreeMap<usize, (u64, bool)>,
+    /// Progress towards the target, for the blocked-robot swap.
+    watch: Option<Watch>,
+    /// Blocked swaps taken part in (either side, a reverted one included), and the partner
+    /// of the last one.
+    blocked_swaps: u32,
+    blocked_partner: Option<usize>,
 }
 
 /// How much robots i, j at `pi`, `pj` holding `a`, `b` gain by swapping (eq. 4 costs).
@@ -172,6 +196,9 @@ impl SwapAgent {
             granted: None,
             quiet_until: 0,
             answered: BTreeMap::new(),
+            watch: None,
+            blocked_swaps: 0,
+            blocked_partner: None,
         }
     }
 
@@ -238,7 +265,8 @@ impl SwapAgent {
     /// One step at tick `now`: handle the frames addressed to this robot (in the order given),
     /// settle a granted acceptance from the proposer's status, give up a proposal past its
     /// deadline, then retry the pending proposal or make a new one to the best neighbour of
-    /// higher id within range.
+    /// higher id within range, or, if none and this robot is blocked (blocked.rs), to the
+    /// in-place neighbour in its way at the least price.
     pub fn step(
         &mut self,
         now: u64,
@@ -263,6 +291,11 @@ impl SwapAgent {
                     {
                         if accepted {
                             self.target = pd.to_target;
+                            if let Some(b) = p.blocked.as_ref().filter(|_| pd.blocked) {
+                                self.quiet_until = self.quiet_until.max(now + b.hold_ticks);
+                                self.blocked_swaps += 1;
+                                self.blocked_partner = Some(pd.to);
+                            }
                         }
                         self.pending = None;
                     }
@@ -274,29 +307,48 @@ impl SwapAgent {
                     to_target,
                     from_position,
                     deadline,
+                    blocked,
                     ..
                 } => {
                     let accepted = match self.answered.get(&from) {
                         Some(&(s, a)) if s == seq => a,
                         _ => {
                             let theirs = Vec2::new(from_position[0], from_position[1]);
-                            let fits = !self.is_busy()
+                            let free = !self.is_busy()
                                 && now >= self.quiet_until
                                 && now < deadline
                                 && self.target == to_target
-                                && from_target < targets.len()
-                                && swap_gain(
+                                && from_target < targets.len();
+                            let gain = || {
+                                swap_gain(
                                     theirs,
                                     position,
                                     targets[from_target],
                                     targets[to_target],
-                                ) > p.min_gain;
+                                )
+                            };
+                            let fits = free
+                                && if blocked {
+                                    p.blocked.as_ref().is_some_and(|b| {
+                                        self.blocked_swaps < b.max_swaps
+                                            && self.blocked_partner != Some(from)
+                                            && blocked::accepts(
+                                                position,
+                                                targets[to_target],
+                                                -gain(),
+                                                b,
+                                            )
+                                    })
+                                } else {
+                                    gain() > p.min_gain
+                                };
                             if fits {
                                 self.granted = Some(Granted {
                                     proposer: from,
                                     gave: self.target,
                                     took: from_target,
                                     deadline,
+                                    blocked,
                                 });
                                 self.target = from_target;
                             }
@@ -315,9 +367,19 @@ impl SwapAgent {
         }
         if let Some(g) = self.granted {
             let seen = neighbours.iter().find(|n| n.id == g.proposer);
+            let stands = |me: &mut Self| {
+                // A blocked swap that stands: the receiver's hold and count (a reverted one
+                // leaves neither, so the blocked robot's retry is heard).
+                if let Some(b) = p.blocked.as_ref().filter(|_| g.blocked) {
+                    me.quiet_until = me.quiet_until.max(now + b.hold_ticks);
+                    me.blocked_swaps += 1;
+                    me.blocked_partner = Some(g.proposer);
+                }
+                me.granted = None;
+            };
             if seen.is_some_and(|n| n.target == g.gave) {
                 // The proposer committed.
-                self.granted = None;
+                stands(self);
             } else if seen.is_some_and(|n| {
                 n.target == g.took && n.tick >= g.deadline && n.tick < g.deadline + p.settle_ticks
             }) {
@@ -327,7 +389,7 @@ impl SwapAgent {
                 }
                 self.granted = None;
             } else if now >= g.deadline + p.settle_ticks {
-                self.granted = None;
+                stands(self);
             }
         }
         if let Some(pd) = self.pending {
@@ -336,6 +398,10 @@ impl SwapAgent {
                 self.quiet_until = pd.deadline + p.settle_ticks;
             }
         }
+        let stalled = p.blocked.as_ref().filter(|b| b.enabled).is_some_and(|b| {
+            let d = (position - targets[self.target]).norm();
+            Watch::update(&mut self.watch, now, self.target, d, b)
+        });
         if !self.is_busy() && now >= self.quiet_until {
             let mine = targets[self.target];
             let mut best: Option<(f64, &NeighbourView)> = None;
@@ -351,6 +417,11 @@ impl SwapAgent {
                     best = Some((gain, n));
                 }
             }
+            let mut blocked = false;
+            if best.is_none() && stalled {
+                best = self.in_the_way(position, targets, neighbours, p);
+                blocked = best.is_some();
+            }
             if let Some((_, n)) = best {
                 self.seq += 1;
                 self.pending = Some(Pending {
@@ -359,6 +430,7 @@ impl SwapAgent {
                     from_target: self.target,
                     to_target: n.target,
                     deadline: now + p.timeout_ticks,
+                    blocked,
                 });
             }
         }
@@ -371,9 +443,44 @@ impl SwapAgent {
                 to_target: pd.to_target,
                 from_position: [position.x, position.y],
                 deadline: pd.deadline,
+                blocked: pd.blocked,
             });
         }
         out
+    }
+
+    /// For a blocked robot: the in-place neighbour in its way (blocked.rs) within range whose
+    /// swap costs the least (ties: the lower id), if that is at most `max_price`; with the
+    /// gain (minus the price) as the first member.
+    fn in_the_way<'a>(
+        &self,
+        position: Vec2,
+        targets: &[Vec2],
+        neighbours: &'a [NeighbourView],
+        p: &SwapParams,
+    ) -> Option<(f64, &'a NeighbourView)> {
+        let b = p
+            .blocked
+            .as_ref()
+            .filter(|b| self.blocked_swaps < b.max_swaps)?;
+        let mine = targets[self.target];
+        let mut best: Option<(f64, &NeighbourView)> = None;
+        for n in neighbours.iter().filter(|n| {
+            n.target < targets.len()
+                && n.target != self.target
+                && Some(n.id) != self.blocked_partner
+                && (n.position - position).norm() <= p.range
+                && (n.position - targets[n.target]).norm() <= b.in_place
+                && blocked::in_the_way(position, mine, n.position, b.corridor)
+        }) {
+            let gain = swap_gain(position, n.position, mine, targets[n.target]);
+            if -gain <= b.max_price
+                && best.is_none_or(|(g, o)| gain > g || (gain == g && n.id < o.id))
+            {
+                best = Some((gain, n));
+            }
+        }
+        best
     }
 }
 

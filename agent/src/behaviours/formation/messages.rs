@@ -78,6 +78,8 @@ pub enum Msg {
         deadline: u64,
         /// The plan the targets are slots of: a robot on another plan ignores it.
         epoch: u32,
+        /// A blocked robot's proposal (agent/src/formation/blocked.rs).
+        blocked: bool,
     },
     /// The answer to proposal `seq` (of the plan of `epoch`).
     Reply {

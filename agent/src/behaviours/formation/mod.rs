@@ -389,6 +389,7 @@ impl Formation {
                     from_position,
                     deadline,
                     epoch,
+                    blocked,
                 } if *to == self.robot && Some(*epoch) == my_epoch => swaps.push(SwapMessage::Propose {
                     from: r.from as usize,
                     to: *to as usize,
@@ -397,6 +398,7 @@ impl Formation {
                     to_target: *to_target as usize,
                     from_position: *from_position,
                     deadline: *deadline,
+                    blocked: *blocked,
                 }),
                 Msg::Reply {
                     to,
@@ -719,6 +721,7 @@ impl Formation {
         let swap_params = if self.gathering.is_some() {
             frozen = crate::formation::swaps::SwapParams {
                 min_gain: f64::INFINITY,
+                blocked: None,
                 ..self.p.swaps.clone()
             };
             &frozen
@@ -736,6 +739,7 @@ impl Formation {
                     to_target,
                     from_position,
                     deadline,
+                    blocked,
                     ..
                 } => out.send(
                     to as u32,
@@ -747,6 +751,7 @@ impl Formation {
                         from_position,
                         deadline,
                         epoch,
+                        blocked,
                     },
                 ),
                 SwapMessage::Reply {

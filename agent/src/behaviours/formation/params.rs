@@ -3,11 +3,12 @@
 //! scenario already holds elsewhere (box, radius, obstacles, V_p, epsilon) are derived from it,
 //! so each has one source.
 
+use crate::formation::blocked::BlockedParams;
 use crate::formation::swaps::SwapParams;
 use crate::formation::FormationParams;
 use serde::{Deserialize, Serialize};
 use swarm::scenario::{Check, ConfigError, Scenario};
-use swarm::sections::formation::FormationSection;
+use swarm::sections::formation::{FormationSection, Reassignment};
 
 /// `formation.kernels`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -138,6 +139,11 @@ pub fn parse_params(sc: &Scenario) -> Result<Params, String> {
     // robot.v_max is per tick: V_p = v_max / tau.
     k.max_speed = sc.robot.v_max / k.time_step;
     k.epsilon = f.epsilon;
+    // The blocked-robot swap acts only in the swaps mode: resolved (and so recorded) there
+    // alone, so that the other scenarios' recordings keep their bytes.
+    if f.reassignment == Reassignment::Swaps {
+        p.swaps.blocked.get_or_insert_with(BlockedParams::default);
+    }
     Ok(p)
 }
 
@@ -171,6 +177,17 @@ pub fn validate(sc: &Scenario, c: &Check) -> Result<(), ConfigError> {
     c.range_f("formation.kernels.swaps.range", p.swaps.range, 0.0, 1e9, true)?;
     c.range_u("formation.kernels.swaps.timeout_ticks", p.swaps.timeout_ticks, 1, 1_000_000)?;
     c.range_u("formation.kernels.swaps.settle_ticks", p.swaps.settle_ticks, 1, 1_000_000)?;
+    if let Some(b) = &p.swaps.blocked {
+        let key = |k: &str| format!("formation.kernels.swaps.blocked.{k}");
+        c.range_u(&key("wait_ticks"), b.wait_ticks, 1, 1_000_000)?;
+        c.range_f(&key("progress"), b.progress, 0.0, 1e6, true)?;
+        c.range_f(&key("in_place"), b.in_place, 0.0, 1e6, true)?;
+        c.range_f(&key("min_distance"), b.min_distance, b.in_place, 1e6, false)?;
+        c.range_f(&key("corridor"), b.corridor, 0.0, 1e6, true)?;
+        c.range_f(&key("max_price"), b.max_price, 0.0, 1e9, false)?;
+        c.range_u(&key("hold_ticks"), b.hold_ticks, 0, 1_000_000)?;
+        c.range_u(&key("max_swaps"), b.max_swaps as u64, 0, 1_000_000)?;
+    }
     c.range_f("formation.kernels.orca_margin", p.orca_margin, 0.0, 1e6, false)?;
     let o = &k.optimiser;
     for (key, r) in [
