@@ -277,7 +277,8 @@ impl SwapAgent {
         p: &SwapParams,
     ) -> Vec<Message> {
         let mut out = Vec::new();
-        for m in inbox.iter().filter(|m| m.to() == self.id) {
+        let me = self.id;
+        for m in inbox.iter().filter(|m| m.to() == me) {
             match *m {
                 Message::Reply {
                     from,
@@ -292,9 +293,7 @@ impl SwapAgent {
                         if accepted {
                             self.target = pd.to_target;
                             if let Some(b) = p.blocked.as_ref().filter(|_| pd.blocked) {
-                                self.quiet_until = self.quiet_until.max(now + b.hold_ticks);
-                                self.blocked_swaps += 1;
-                                self.blocked_partner = Some(pd.to);
+                                self.blocked_swap_stands(now, pd.to, b);
                             }
                         }
                         self.pending = None;
@@ -371,9 +370,7 @@ impl SwapAgent {
                 // A blocked swap that stands: the receiver's hold and count (a reverted one
                 // leaves neither, so the blocked robot's retry is heard).
                 if let Some(b) = p.blocked.as_ref().filter(|_| g.blocked) {
-                    me.quiet_until = me.quiet_until.max(now + b.hold_ticks);
-                    me.blocked_swaps += 1;
-                    me.blocked_partner = Some(g.proposer);
+                    me.blocked_swap_stands(now, g.proposer, b);
                 }
                 me.granted = None;
             };
@@ -447,6 +444,14 @@ impl SwapAgent {
             });
         }
         out
+    }
+
+    /// A blocked swap with `partner` stands (either side): hold still for `hold_ticks`,
+    /// count it, and remember the partner (no second one in a row with it).
+    fn blocked_swap_stands(&mut self, now: u64, partner: usize, b: &BlockedParams) {
+        self.quiet_until = self.quiet_until.max(now + b.hold_ticks);
+        self.blocked_swaps += 1;
+        self.blocked_partner = Some(partner);
     }
 
     /// For a blocked robot: the in-place neighbour in its way (blocked.rs) within range whose
