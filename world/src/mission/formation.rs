@@ -253,7 +253,12 @@ impl FormationMission {
                 all = false;
             }
         }
-        (all, in_place)
+        // A dead robot on a slot of the live robots' plan leaves a hole in the pattern: it
+        // is complete only once a re-plan for the robots left is adopted.
+        let hole = self.slots.iter().zip(&self.alive).any(|(s, alive)| {
+            !alive && s.is_some_and(|s| Some(s.epoch) == epoch)
+        });
+        (all && !hole, in_place)
     }
 }
 
@@ -453,6 +458,24 @@ mod tests {
         let mut m = FormationMission::new(&sc).unwrap();
         m.discs = vec![([10.0, 0.0], 2.0)];
         m
+    }
+
+    #[test]
+    fn a_robot_dead_on_a_slot_of_the_plan_leaves_a_hole_until_a_re_plan() {
+        let mut m = mission(3);
+        let poses = [[0.0, 0.0, 0.0], [3.0, 0.0, 0.0], [6.0, 0.0, 0.0]];
+        for i in 0..3 {
+            m.observe(i, [3.0 * i as f64, 0.0, i as f64, 1.0]);
+        }
+        // Robot 2 dies before it stands on its slot: the two left stand on theirs.
+        m.update(0, &poses, &[true, true, false], &mut vec![]);
+        assert_eq!(m.progress(), (2, 2));
+        assert!(!m.complete(), "robot 2's slot of epoch 1 is a hole");
+        // A re-plan (epoch 2) for the two left.
+        m.observe(0, [0.0, 0.0, 0.0, 2.0]);
+        m.observe(1, [3.0, 0.0, 1.0, 2.0]);
+        m.update(1, &poses, &[true, true, false], &mut vec![]);
+        assert!(m.complete());
     }
 
     #[test]

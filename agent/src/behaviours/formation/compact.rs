@@ -16,7 +16,7 @@ use super::messages::{CompactPlan, Msg, Plan};
 use swarm::geometry::Vec2;
 
 /// The bincode configuration of the radio (swarm's wire format: standard, varints).
-fn encoded_len(msg: &Msg) -> usize {
+pub(super) fn encoded_len(msg: &Msg) -> usize {
     bincode::serde::encode_to_vec(msg, bincode::config::standard()).map_or(usize::MAX, |b| b.len())
 }
 

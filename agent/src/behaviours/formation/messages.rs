@@ -1,6 +1,7 @@
 //! What formation robots say on the radio (bincode, one message per frame).
 
 use super::gossip::{Bitmap, Need};
+use super::relay::{Head, Sigma, Up};
 use serde::{Deserialize, Serialize};
 
 /// Every robot, every tick: where it is, how it moves, which slot it holds.
@@ -95,4 +96,10 @@ pub enum Msg {
     Need(Need),
     /// Swaps mode, large swarms: the re-planned pattern (compact.rs).
     CompactPlan(CompactPlan),
+    /// Relayed centralised mode (relay.rs): the beacon and a part of the position table.
+    Up(Up),
+    /// Relayed centralised mode: the root's pattern.
+    Head(Head),
+    /// Relayed centralised mode: a part of the assignment.
+    Sigma(Sigma),
 }

@@ -36,6 +36,8 @@ pub mod compact;
 pub mod gossip;
 pub mod messages;
 pub mod params;
+pub mod relay;
+mod relay_step;
 mod replan;
 mod replan_multihop;
 #[cfg(test)]
@@ -94,6 +96,9 @@ fn coordinator_plan_fits(sc: &Scenario, c: &Check) -> Result<(), ConfigError> {
     if f.reassignment == Reassignment::Swaps {
         return Ok(());
     }
+    if let Some(r) = parse_params(sc).ok().and_then(|p| p.relay) {
+        return relay::check(sc, c, &r);
+    }
     let need = compact::full_plan_len(sc.run.robots as usize, 0);
     if need <= sc.radio.max_message_bytes as usize {
         return Ok(());
@@ -107,7 +112,8 @@ fn coordinator_plan_fits(sc: &Scenario, c: &Check) -> Result<(), ConfigError> {
         format!(
             "\"{mode}\" sends the coordinator's plan for {} robots in one message ({need} bytes), \
              more than radio.max_message_bytes = {}: raise radio.max_message_bytes to at least \
-             {need}, or use reassignment = \"swaps\" (allowed: \"per-step\", \"one-shot\", \"swaps\")",
+             {need}, add a [formation.kernels.relay] table (the plan relayed in parts over many \
+             hops), or use reassignment = \"swaps\" (allowed: \"per-step\", \"one-shot\", \"swaps\")",
             sc.run.robots, sc.radio.max_message_bytes
         ),
     ))
@@ -190,6 +196,8 @@ pub struct Formation {
     gathering: Option<gossip::Gathering>,
     /// The compact form of the plan held, when it came as one (relayed as it came).
     compact: Option<CompactPlan>,
+    /// The relayed centralised mode's state (`formation.kernels.relay` present).
+    relay: Option<relay_step::RelayState>,
 }
 
 impl Formation {
@@ -207,6 +215,10 @@ impl Formation {
             p.replan.max_dead,
             sc.radio.max_message_bytes,
         );
+        let relay_params = match f.reassignment {
+            Reassignment::Swaps => None,
+            _ => p.relay.clone(),
+        };
         let discs = sc
             .arena
             .discs
@@ -248,6 +260,7 @@ impl Formation {
             replan_timeout,
             gathering: None,
             compact: None,
+            relay: relay_params.map(|r| relay_step::RelayState::new(robot, r, diagonal, sc.radio.comm_radius)),
         }
     }
 
@@ -873,6 +886,9 @@ impl Behaviour for Formation {
         });
         let report = if self.f.reassignment == Reassignment::Swaps {
             self.swap_step(k, me, sense.alive_robots, &swaps, &needs, out)
+        } else if self.relay.is_some() {
+            let vel = Vec2::new(sense.vel[0], sense.vel[1]) / self.tau();
+            self.relay_step(k, me, vel, sense.alive_robots, inbox, out)
         } else {
             self.coordinate(k, me, sense.alive_robots, out)
         };

@@ -3,6 +3,7 @@
 //! scenario already holds elsewhere (box, radius, obstacles, V_p, epsilon) are derived from it,
 //! so each has one source.
 
+use super::relay::RelayParams;
 use crate::formation::blocked::BlockedParams;
 use crate::formation::swaps::SwapParams;
 use crate::formation::FormationParams;
@@ -31,6 +32,10 @@ pub struct Params {
     /// The re-plan after a robot is killed under `reassignment = "swaps"`
     /// (`formation.kernels.replan`).
     pub replan: ReplanParams,
+    /// The relayed centralised mode (`formation.kernels.relay`, relay.rs): absent, the
+    /// coordinator's plan goes out in one message to the robots in its radio range.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub relay: Option<RelayParams>,
 }
 
 /// The swaps mode's re-plan when the swarm is short of the pattern's slots (a robot died) or
@@ -108,6 +113,7 @@ impl Default for Params {
             swaps: SwapParams::default(),
             orca_margin: 0.05,
             replan: ReplanParams::default(),
+            relay: None,
         }
     }
 }
