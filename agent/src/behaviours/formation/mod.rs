@@ -37,6 +37,7 @@ pub mod gossip;
 pub mod messages;
 pub mod params;
 pub mod relay;
+mod relay_place;
 mod relay_step;
 mod replan;
 mod replan_multihop;

@@ -42,6 +42,9 @@ pub struct RelayParams {
     /// Entries of the position table in one gathering message. [chosen] 20 (22 bytes each:
     /// the message stays under 512 bytes).
     pub entries_per_message: usize,
+    /// Wrecks in one gathering message (round robin over those the plan was not made
+    /// around). [chosen] 2 (8 bytes each).
+    pub wrecks_per_message: usize,
     /// Slots of sigma in one chunk. [chosen] 150 (at most 3 bytes each: 450 bytes).
     pub sigma_chunk: usize,
     /// A robot repeats a head or chunk newer than the one it held for this many ticks.
@@ -60,6 +63,7 @@ impl Default for RelayParams {
             ticks_per_hop: 3,
             hop_factor: 1.5,
             entries_per_message: 20,
+            wrecks_per_message: 2,
             sigma_chunk: 150,
             repeat_ticks: 3,
             refresh_ticks: 10,
@@ -87,6 +91,7 @@ pub fn check(sc: &Scenario, c: &Check, p: &RelayParams) -> Result<(), ConfigErro
     c.range_u(&key("ticks_per_hop"), p.ticks_per_hop, 1, 1_000_000)?;
     c.range_f(&key("hop_factor"), p.hop_factor, 1.0, 1e6, false)?;
     c.range_u(&key("entries_per_message"), p.entries_per_message as u64, 1, 10_000)?;
+    c.range_u(&key("wrecks_per_message"), p.wrecks_per_message as u64, 0, 10_000)?;
     c.range_u(&key("sigma_chunk"), p.sigma_chunk as u64, 1, u16::MAX as u64)?;
     c.range_u(&key("repeat_ticks"), p.repeat_ticks, 1, 1_000_000)?;
     c.range_u(&key("refresh_ticks"), p.refresh_ticks, 1, 1_000_000)?;
@@ -113,6 +118,7 @@ pub fn check(sc: &Scenario, c: &Check, p: &RelayParams) -> Result<(), ConfigErro
                 stamp: u32::MAX,
                 hops: u16::MAX,
                 entries: vec![entry; p.entries_per_message],
+                wrecks: vec![[0.0; 2]; p.wrecks_per_message],
             })),
         ),
         (
@@ -184,6 +190,9 @@ pub struct Up {
     pub stamp: u32,
     pub hops: u16,
     pub entries: Vec<Entry>,
+    /// Wrecks (dead robots' positions, the world's) the sender knows and its plan was not
+    /// made around: relayed towards the root like the entries, for its re-plan.
+    pub wrecks: Vec<[f32; 2]>,
 }
 
 /// The root's pattern, flooded.
@@ -340,6 +349,7 @@ impl Relay {
             stamp: self.stamp as u32,
             hops: self.hops,
             entries,
+            wrecks: Vec::new(),
         }
     }
 

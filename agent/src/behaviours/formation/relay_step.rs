@@ -13,7 +13,8 @@
 //! least clear shift of it (compact.rs), else the budgeted branch-and-bound; then eq. (15)
 //! by the Hungarian method on the gathered positions, each extrapolated over its age.
 
-use super::compact::{dead_list, nearest_clear_shift};
+use super::compact::dead_list;
+use super::relay_place::place;
 use super::gossip::Bitmap;
 use super::relay::{chunks, estimate, member_index, Head, Relay, RelayParams, Sigma, Up};
 use super::replan::NO_PLACEMENT;
@@ -89,6 +90,30 @@ pub fn plan_of_head(h: &Head) -> Plan {
     }
 }
 
+/// Adds template points (lowest index first) to `points` up to `n`, of `len`; ascending.
+fn fill_points(points: &mut Vec<u16>, n: usize, len: usize) {
+    for j in 0..len as u16 {
+        if points.len() >= n {
+            break;
+        }
+        if !points.contains(&j) {
+            points.push(j);
+        }
+    }
+    points.truncate(n);
+    points.sort_unstable();
+}
+
+/// Two wreck positions closer than this are one wreck (a relayed one is rounded to f32).
+const SAME_WRECK: f64 = 1e-3;
+
+/// Adds `w` to `known` unless a wreck within [`SAME_WRECK`] is there already.
+fn remember_near(known: &mut Vec<Vec2>, w: Vec2) {
+    if !known.iter().any(|k| (k - w).norm() < SAME_WRECK) {
+        known.push(w);
+    }
+}
+
 fn bitmap_of(ids: impl Iterator<Item = usize>, n: usize) -> Bitmap {
     let mut b = Bitmap::with_len(n);
     for i in ids {
@@ -131,6 +156,11 @@ impl Formation {
         st.relay.elect(k, &beacons);
         for u in ups {
             st.relay.absorb(u);
+            if u.root == st.relay.root && u.hops > st.relay.hops {
+                for w in &u.wrecks {
+                    remember_near(&mut self.wrecks, Vec2::new(w[0] as f64, w[1] as f64));
+                }
+            }
         }
         st.relay.note_self(k, me, vel);
         for h in heads {
@@ -157,7 +187,9 @@ impl Formation {
             None
         };
         self.slot_from_chunks(&mut st);
-        out.broadcast(Msg::Up(st.relay.up(k, st.params.entries_per_message)));
+        let mut up = st.relay.up(k, st.params.entries_per_message);
+        up.wrecks = self.unplanned_wrecks(k, st.params.wrecks_per_message);
+        out.broadcast(Msg::Up(up));
         if let Some(h) = &st.head {
             let root = h.coordinator == self.robot;
             if k < st.head_at + st.params.repeat_ticks
@@ -175,6 +207,36 @@ impl Formation {
         }
         self.relay = Some(st);
         report
+    }
+
+    /// Up to `n` of the wrecks this robot knows that its plan was not made around, a
+    /// different window of them every tick.
+    fn unplanned_wrecks(&self, k: u64, n: usize) -> Vec<[f32; 2]> {
+        let planned = |w: &Vec2| {
+            self.plan
+                .iter()
+                .flat_map(|p| p.dead.iter())
+                .any(|d| (Vec2::new(d[0], d[1]) - w).norm() < SAME_WRECK)
+        };
+        let news: Vec<&Vec2> = self.wrecks.iter().filter(|w| !planned(w)).collect();
+        if news.is_empty() {
+            return Vec::new();
+        }
+        let start = k as usize % news.len();
+        (0..n.min(news.len()))
+            .map(|i| news[(start + i) % news.len()])
+            .map(|w| [w.x as f32, w.y as f32])
+            .collect()
+    }
+
+    /// Whether a known wreck the plan was not made around blocks one of its slots.
+    fn wreck_blocks_a_slot(&self) -> bool {
+        let Some(plan) = &self.plan else { return false };
+        let within = self.blocked_within();
+        self.wrecks.iter().any(|w| {
+            !plan.dead.iter().any(|d| (Vec2::new(d[0], d[1]) - w).norm() < SAME_WRECK)
+                && self.targets.iter().any(|t| (t - w).norm() < within)
+        })
     }
 
     /// This robot's slot from the newest chunk of its head's assignment that holds it.
@@ -217,6 +279,7 @@ impl Formation {
                 p.coordinator != self.robot
                     || p.members.len() != alive as usize
                     || fresh.iter().any(|m| !p.members.contains(m))
+                    || self.wreck_blocks_a_slot()
             }
         };
         if due && may_plan && (complete || waited) {
@@ -313,10 +376,10 @@ impl Formation {
         let positions = self.member_positions(k, me, &members, &[], &st.relay);
         let tau = self.tau();
         let old_sigma = self.known_sigma(st);
-        // The pattern's template points and wrecks: the old plan's less the points of the
-        // members that left (their last positions become wrecks).
-        let (mut points, mut dead, old_transform, epoch) = match &self.plan {
-            None => (Vec::new(), Vec::new(), None, 1),
+        // The wrecks: the old plan's, the left members' last positions and those known.
+        let mut prefer: Vec<u16> = Vec::new();
+        let (mut dead, old_transform, epoch) = match &self.plan {
+            None => (Vec::new(), None, 1),
             Some(old) => {
                 let mut left_points = Vec::new();
                 let mut dead = old.dead.clone();
@@ -332,37 +395,22 @@ impl Formation {
                         left_points.extend(old.points.get(*s as usize));
                     }
                 }
-                let points: Vec<u16> = old
-                    .points
-                    .iter()
-                    .copied()
-                    .filter(|p| !left_points.contains(p))
-                    .collect();
-                (points, dead, Some(old.transform), old.epoch + 1)
+                prefer = old.points.iter().copied().filter(|p| !left_points.contains(p)).collect();
+                (dead, Some(old.transform), old.epoch + 1)
             }
         };
-        for j in 0..self.template.len() as u16 {
-            if points.len() >= n {
-                break;
-            }
-            if !points.contains(&j) {
-                points.push(j);
-            }
-        }
-        points.truncate(n);
-        points.sort_unstable();
-        let wrecks: Vec<Vec2> = self.wrecks.clone();
-        let sub = self.sub_template(&points);
         let reading = self.p.kernels.transform_reading;
         let mut params = self.p.kernels.clone();
         let budget = (self.p.replan.max_work / (n as f64).powi(3)) as usize;
-        // The transform: the old one when no slot is blocked, else its least clear shift,
-        // else the budgeted optimiser (a first plan: the pattern choice, budgeted).
+        let whole = self.sub_template(&(0..self.template.len() as u16).collect::<Vec<_>>());
+        // A re-plan: the old transform's points clear of the wrecks, else its least
+        // translation with enough clear points (relay_place.rs), else the budgeted optimiser
+        // on the preferred points; a first plan: the pattern choice, budgeted.
         let within = self.blocked_within();
-        let (transform, gap, nodes) = match old_transform {
+        let (transform, points, gap, nodes) = match old_transform {
             Some(t) => {
-                let targets = transform_of(t).targets(reading, &sub);
-                dead = dead_list(&dead, &wrecks, &targets, st.params.max_dead);
+                let all = transform_of(t).targets(reading, &whole);
+                dead = dead_list(&dead, &self.wrecks, &all, st.params.max_dead);
                 params.obstacle_centres.extend(dead.iter().copied());
                 let c = PatternConstraints::new(&params);
                 let reach = self.p.kernels.robot_radius + self.p.orca_margin;
@@ -372,23 +420,30 @@ impl Formation {
                         && dead.iter().all(|w| (q - Vec2::new(w[0], w[1])).norm() >= within)
                 };
                 let r = &self.p.replan;
-                if targets.iter().all(|q| clear(*q)) {
-                    (t, 0.0, 0)
-                } else if let Some(delta) = nearest_clear_shift(&targets, clear, r.shift_step, r.max_shift) {
-                    ([t[0], t[1] + delta.x, t[2] + delta.y, t[3]], SHIFTED, 0)
-                } else {
-                    params.optimiser.max_nodes = budget.clamp(1, r.max_nodes);
-                    match optimise_in(&positions, &sub, &params, r.alpha_range, r.theta_range) {
-                        Ok(s) => (
-                            [s.transform.alpha, s.transform.d[0], s.transform.d[1], s.transform.theta],
-                            s.gap,
-                            s.nodes,
-                        ),
-                        Err(_) => (t, NO_PLACEMENT, 0),
+                match place(&all, &prefer, n, clear, r.shift_step, r.max_shift) {
+                    Some((delta, points)) if delta == Vec2::zeros() => (t, points, 0.0, 0),
+                    Some((delta, points)) => ([t[0], t[1] + delta.x, t[2] + delta.y, t[3]], points, SHIFTED, 0),
+                    None => {
+                        let mut points = prefer.clone();
+                        fill_points(&mut points, n, self.template.len());
+                        let sub = self.sub_template(&points);
+                        params.optimiser.max_nodes = budget.clamp(1, r.max_nodes);
+                        match optimise_in(&positions, &sub, &params, r.alpha_range, r.theta_range) {
+                            Ok(s) => (
+                                [s.transform.alpha, s.transform.d[0], s.transform.d[1], s.transform.theta],
+                                points,
+                                s.gap,
+                                s.nodes,
+                            ),
+                            Err(_) => (t, points, NO_PLACEMENT, 0),
+                        }
                     }
                 }
             }
             None => {
+                let mut points = Vec::new();
+                fill_points(&mut points, n, self.template.len());
+                let sub = self.sub_template(&points);
                 params.optimiser.max_nodes = budget.clamp(1, params.optimiser.max_nodes);
                 let solved = match self.f.pattern {
                     PatternChoice::Optimise => {
@@ -401,14 +456,16 @@ impl Formation {
                 match solved {
                     Some(s) => (
                         [s.transform.alpha, s.transform.d[0], s.transform.d[1], s.transform.theta],
+                        points,
                         s.gap,
                         s.nodes,
                     ),
-                    None if self.f.pattern == PatternChoice::Fixed => (self.f.transform, 0.0, 0),
-                    None => (self.f.transform, NO_PLACEMENT, 0),
+                    None if self.f.pattern == PatternChoice::Fixed => (self.f.transform, points, 0.0, 0),
+                    None => (self.f.transform, points, NO_PLACEMENT, 0),
                 }
             }
         };
+        let sub = self.sub_template(&points);
         let targets = transform_of(transform).targets(reading, &sub);
         let mut sigma = Vec::new();
         if assign_targets(&positions, &targets, &mut self.hungarian, &mut sigma).is_err() {
