@@ -198,3 +198,60 @@ fn assert_survivors_re_formed(
     idx.sort_unstable();
     assert_eq!(idx, (0..robots as u64 - 1).collect::<Vec<u64>>(), "{exec}");
 }
+
+/// The centralised per-step mode relayed over many hops (comm radius 15, loss 0.3): the root
+/// (robot 0, the lowest id) is SIGKILLed after it planned; robot 1 is elected, gathers the 99
+/// positions over the hops and re-plans for them; real processes give the in-process
+/// recording.
+#[test]
+fn the_relayed_coordinator_of_100_killed_is_replaced_and_the_99_form_its_re_plan() {
+    let _g = serial();
+    let sc = config("formation-100-centralised.toml");
+    let p = tmp_dir("formation-relay-p");
+    let i = tmp_dir("formation-relay-i");
+    for (dir, exec) in [(&p, "processes"), (&i, "inprocess")] {
+        let args = [
+            "--scenario",
+            &sc,
+            "--executor",
+            exec,
+            "--seed",
+            "2",
+            "--chaos-at",
+            "100:0",
+        ];
+        let o = up(&args, dir);
+        assert!(o.status.success(), "{exec}: {}", stderr(&o));
+        let s = summary(dir);
+        let f = formation(dir);
+        assert_eq!(f["formed"], true, "{exec}: {f}");
+        assert_eq!(f["overlapping_pairs"], 0, "{exec}: {f}");
+        assert_eq!(s["alive_at_end"], 99, "{exec}: {s}");
+        let plans = f["plans"].as_array().unwrap();
+        assert_eq!(plans.len(), 2, "{exec}: {f}");
+        assert_eq!(
+            (&plans[0]["robot"], &plans[0]["epoch"]),
+            (&0.into(), &1.into()),
+            "{f}"
+        );
+        assert_eq!(
+            (&plans[1]["robot"], &plans[1]["epoch"]),
+            (&1.into(), &2.into()),
+            "{f}"
+        );
+        assert!(plans[0]["tick"].as_u64().unwrap() < 100, "{f}");
+        assert!(plans[1]["tick"].as_u64().unwrap() > 100, "{f}");
+        let slots = f["slots"].as_array().unwrap();
+        let mut idx: Vec<u64> = (1..100)
+            .map(|r| {
+                assert_eq!(slots[r]["epoch"], 2, "{exec}: robot {r}: {}", slots[r]);
+                slots[r]["index"].as_u64().unwrap()
+            })
+            .collect();
+        idx.sort_unstable();
+        assert_eq!(idx, (0..99).collect::<Vec<u64>>(), "{exec}");
+    }
+    let rec = |d: &std::path::Path| std::fs::read(d.join("recording.bin")).unwrap();
+    assert!(rec(&p) == rec(&i), "the executors differ");
+    assert_left_nothing(&p);
+}
