@@ -4,14 +4,13 @@
 //! The root plans once its table holds a position newer than the last change of the live
 //! count (Sense `alive_robots`, the world's) for `alive` robots, or at the timeout (then for
 //! those it has). A dead robot sends nothing after its death, so its entry never becomes that
-//! fresh: the robots missing from a complete table are exactly the dead. It re-plans (epoch +
-//! 1) when the live count changes, when it took over from another coordinator (the old one
-//! is silent: a new root is elected when its beacon's stamp is older than the timeout), or
-//! when it hears of a robot that is not a member (at most once per timeout). A re-plan keeps
-//! the old pattern's template points less the points of the members that left, planned
-//! around their last positions (wrecks): the old transform when no slot is blocked, else the
-//! least clear shift of it (compact.rs), else the budgeted branch-and-bound; then eq. (15)
-//! by the Hungarian method on the gathered positions, each extrapolated over its age.
+//! fresh: the robots missing from a complete table are exactly the dead. It re-plans with the
+//! next epoch when the live count changes, when it took over from another coordinator (the
+//! old one is silent: a new root is elected when its beacon's stamp is older than the
+//! timeout), when it hears of a robot that is not a member, or when a wreck the plan was not
+//! made around blocks a slot (at most once per timeout). Where the re-plan puts the pattern:
+//! relay_place.rs. Per step, eq. (15) by the Hungarian method on the gathered positions, each
+//! extrapolated over its age.
 
 use super::compact::dead_list;
 use super::relay_place::place;

@@ -244,8 +244,36 @@ fn a_coordinator_plan_too_large_for_one_message_is_refused_and_swaps_accepted() 
     assert!(need > 512, "{need}");
     assert!(e.message.contains(&need.to_string()), "{}", e.message);
     assert!(e.message.contains("\"swaps\""), "{}", e.message);
+    assert!(e.message.contains("[formation.kernels.relay]"), "{}", e.message);
     sc.radio.max_message_bytes = need as u32;
     assert!(crate::behaviours::validate(&sc, "formation-500.toml").is_ok());
+}
+
+/// The relayed mode at 500 robots is accepted at 512 bytes and 8 messages a tick; chunks too
+/// large for a message, or too many for a tick, are refused naming the key to change.
+#[test]
+fn the_relayed_mode_is_checked_against_the_message_size_and_the_messages_per_tick() {
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../configs/formation-500-centralised.toml");
+    let mut sc = Scenario::load(std::path::Path::new(path)).unwrap();
+    let validate = |sc: &Scenario| crate::behaviours::validate(sc, "formation-500-centralised.toml");
+    assert!(validate(&sc).is_ok(), "{:?}", validate(&sc).err());
+    let set = |sc: &mut Scenario, key: &str, v: i64| {
+        let f = sc.formation.as_mut().unwrap();
+        let relay = f.kernels.get_mut("relay").and_then(|r| r.as_table_mut()).unwrap();
+        relay.insert(key.into(), toml::Value::Integer(v));
+    };
+    set(&mut sc, "sigma_chunk", 400);
+    let e = validate(&sc).unwrap_err();
+    assert_eq!(e.key, "formation.kernels.relay.sigma_chunk", "{e:?}");
+    assert!(e.message.contains("max_message_bytes = 512"), "{}", e.message);
+    set(&mut sc, "sigma_chunk", 50);
+    let e = validate(&sc).unwrap_err();
+    assert_eq!(e.key, "formation.kernels.relay.sigma_chunk", "{e:?}");
+    assert!(e.message.contains("max_messages_per_tick = 8"), "{}", e.message);
+    set(&mut sc, "sigma_chunk", 150);
+    set(&mut sc, "entries_per_message", 40);
+    let e = validate(&sc).unwrap_err();
+    assert_eq!(e.key, "formation.kernels.relay.entries_per_message", "{e:?}");
 }
 
 /// A remembered wreck on this robot or on a live neighbour is stale and dropped; one touching a
