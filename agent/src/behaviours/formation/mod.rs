@@ -710,7 +710,9 @@ impl Formation {
         let Some(agent) = &mut self.swap else {
             return report;
         };
-        if !wrecks.is_empty() && epoch == 0 {
+        // Not while a multi-hop re-plan gathers: its `held` set counts each robot's point once
+        // (gossip.rs).
+        if !wrecks.is_empty() && epoch == 0 && self.gathering.is_none() {
             agent.take_vacancy(&self.targets, &wrecks, &neighbours, blocked_within);
         }
         // Multi-hop re-plan: no new swap while gathering (min gain infinite: no proposal, every

@@ -3,11 +3,11 @@
 //! (compact.rs), solved by a budgeted branch-and-bound. The triggers are replan.rs's.
 //!
 //! Per tick, a robot in a need (its own trigger, or a neighbour's gossip of its key) merges
-//! the gossip heard, adds itself, makes and accepts no new swap, and, if it is the lowest id
-//! known (the candidate), the handshakes in flight have settled (`swaps.timeout_ticks +
-//! settle_ticks` since the need began), `known` counts `alive` robots and `held` leaves the
-//! deficit of points vacant, or the timeout (`replan.ticks_per_hop`) passed, solves;
-//! otherwise it broadcasts its gossip. Two
+//! the gossip heard, adds itself (its point once it is final: in no handshake), makes and
+//! accepts no new swap, takes no vacancy, and, if it is the lowest id known (the candidate),
+//! every live robot's final point is known (`settled` counts `alive`: `held` is exact) and
+//! leaves the deficit of points vacant, or the timeout (`replan.ticks_per_hop`) passed,
+//! solves; otherwise it broadcasts its gossip. Two
 //! robots may solve for one key (each took itself for the lowest at the timeout): the lower
 //! coordinator's plan wins ([`Formation::better`]) and every robot relays the plan it holds
 //! for `relay_ticks`, and whenever it hears a robot on an older epoch, so it floods.
@@ -58,24 +58,20 @@ impl Formation {
             self.gathering = Some(Gathering::start(k, epoch, alive, self.robots, points));
         }
         let point = self.held_point().map(|p| p as usize);
+        // Its point is final once it is in no handshake: while gathering no new swap or
+        // vacancy changes it (gossip.rs).
+        let final_point = !self.swap.as_ref().is_some_and(|a| a.is_busy());
         let g = self.gathering.as_mut().expect("started above");
         for n in needs {
             g.merge(n);
         }
-        g.note(self.robot, point);
+        g.note(self.robot, point, final_point);
         if g.need.candidate == self.robot {
             let plan = self.plan.as_ref().expect("checked above");
             let deficit = plan.points.len().saturating_sub(alive as usize);
-            let vacant = plan
-                .points
-                .iter()
-                .filter(|p| !g.need.held.contains(**p as usize))
-                .count();
-            // The handshakes in flight at the need's start have settled (swaps are frozen
-            // while gathering, mod.rs).
-            let settled = k >= g.since + self.p.swaps.timeout_ticks + self.p.swaps.settle_ticks;
-            let gathered =
-                settled && g.need.known.count() >= alive as usize && vacant >= deficit;
+            // Every live robot's final point is known (so `held` is exact and the handshakes
+            // in flight at the need's start have settled) and the deficit is vacant.
+            let gathered = g.complete() && g.vacant(&plan.points) >= deficit;
             if gathered || k >= g.since + self.replan_timeout {
                 let since = g.since;
                 let known = g.need.known.count();
