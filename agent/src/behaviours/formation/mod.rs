@@ -38,6 +38,7 @@ pub mod messages;
 pub mod params;
 mod replan;
 mod replan_multihop;
+mod shift_drop;
 #[cfg(test)]
 mod tests;
 pub mod wrecks;

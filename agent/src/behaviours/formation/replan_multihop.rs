@@ -21,6 +21,7 @@ use super::compact::{choose, dead_list, nearest_clear_shift, own_slot, plan_of};
 use super::gossip::{Gathering, Need};
 use super::messages::CompactPlan;
 use super::replan::NO_PLACEMENT;
+use super::shift_drop::{Search, SHIFTED_AND_DROPPED};
 use super::{Formation, Msg};
 use crate::formation::constraints::PatternConstraints;
 use crate::formation::optimise::optimise_in;
@@ -164,6 +165,40 @@ impl Formation {
                 dead,
             };
             return (plan, SHIFTED, 0);
+        }
+        // Else shift-and-drop (shift_drop.rs): a translation of the whole old pattern that
+        // leaves enough points clear, the blocked ones dropped and their robots moved to the
+        // vacancies.
+        let mut all_wrecks: Vec<Vec2> = dead.iter().map(|w| Vec2::new(w[0], w[1])).collect();
+        for w in &self.wrecks {
+            super::wrecks::remember(&mut all_wrecks, *w);
+        }
+        let clear_all = |q: Vec2| {
+            c.in_box(q)
+                && self.discs.iter().all(|d| (q - d.position).norm() >= d.radius + reach)
+                && all_wrecks.iter().all(|w| (q - w).norm() >= within)
+        };
+        let search = Search {
+            points: &old.points,
+            targets: &self.targets,
+            held,
+            wrecks: &all_wrecks,
+            n,
+            max_moves: r.max_moves,
+            step: r.shift_step,
+            max_shift: r.max_shift,
+        };
+        if let Some(s) = search.best(&clear_all) {
+            let t = old.transform;
+            let plan = CompactPlan {
+                epoch: old.epoch + 1,
+                coordinator: self.robot,
+                transform: [t[0], t[1] + s.delta.x, t[2] + s.delta.y, t[3]],
+                kept: s.kept,
+                moves: s.moves,
+                dead,
+            };
+            return (plan, SHIFTED_AND_DROPPED, 0);
         }
         let work = (positions.len() as f64).powi(3);
         params.optimiser.max_nodes = ((r.max_work / work) as usize).clamp(1, r.max_nodes);

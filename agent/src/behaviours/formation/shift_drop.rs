@@ -1,0 +1,213 @@
+//! Shift-and-drop placement for the compact re-plan (replan_multihop.rs), when several
+//! robots died: tried after the old placement and the least clear translation of the old
+//! placement's kept slots (compact.rs `nearest_clear_shift`) both failed, before the budgeted
+//! branch-and-bound (useless at 100 and 500 robots, docs/formation.md 9).
+//!
+//! Several wrecks (a cluster of deaths) can block more kept slots than any translation of
+//! the kept set clears. But the old pattern has one point per robot that ever lived: the dead
+//! robots' points are vacant, so a translation only needs `n` clear points of the old
+//! pattern, not the kept set's. For every translation delta (0, then rings `shift_step`
+//! apart, 16 directions each, up to `max_shift`) the points the translated pattern leaves
+//! blocked (out of the box, on an arena disc, within 2 (r + orca_margin) of a wreck) are
+//! dropped first ([`choose_by`]), then the vacant ones; each dropped point a live robot holds
+//! moves to a kept vacant point (at most `max_moves`, else the delta is refused). Of the
+//! admissible deltas the one of least cost wins: eq. (14)'s sum of squared distances with
+//! every robot on its old slot, n_kept |delta|^2 plus each moved robot's squared distance
+//! from its old slot to its new one. The plan reports the gap [`SHIFTED_AND_DROPPED`].
+
+use super::compact::{choose_by, nearest_wreck};
+use super::gossip::Bitmap;
+use swarm::geometry::Vec2;
+
+/// The gap a re-plan reports for a shift-and-drop placement (a sentinel: a report must be
+/// finite and this is no bound). The others: replan.rs `NO_PLACEMENT` = -1 (no placement
+/// found, the old transform kept), replan_multihop.rs `SHIFTED` = -2 (the kept slots
+/// translated, nothing dropped beyond the vacant points).
+pub const SHIFTED_AND_DROPPED: f64 = -3.0;
+
+/// Directions on each ring of translations (as compact.rs `nearest_clear_shift`).
+const DIRECTIONS: usize = 16;
+
+/// A shift-and-drop placement: the translation, the kept points, the moves, its cost.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ShiftDrop {
+    pub delta: Vec2,
+    pub kept: Bitmap,
+    pub moves: Vec<(u16, u16)>,
+    pub cost: f64,
+}
+
+/// The search's inputs: the old pattern (`points`, its slots `targets`), the points live
+/// robots hold (`held`, exact: gossip.rs), the wrecks (for the order of drops), how many
+/// points to keep (`n`), and the limits.
+pub struct Search<'a> {
+    pub points: &'a [u16],
+    pub targets: &'a [Vec2],
+    pub held: &'a Bitmap,
+    pub wrecks: &'a [Vec2],
+    pub n: usize,
+    pub max_moves: usize,
+    pub step: f64,
+    pub max_shift: f64,
+}
+
+impl Search<'_> {
+    /// The candidate translations in order: 0, then ring by ring.
+    fn deltas(&self) -> Vec<Vec2> {
+        let rings = if self.step > 0.0 {
+            (self.max_shift / self.step).floor() as usize
+        } else {
+            0
+        };
+        let mut out = vec![Vec2::zeros()];
+        for i in 1..=rings {
+            for j in 0..DIRECTIONS {
+                let a = std::f64::consts::TAU * j as f64 / DIRECTIONS as f64;
+                out.push(Vec2::new(a.cos(), a.sin()) * (self.step * i as f64));
+            }
+        }
+        out
+    }
+
+    /// The placement at `delta`, if every kept slot is clear and every robot whose point is
+    /// dropped has a move.
+    fn at(&self, delta: Vec2, clear: &dyn Fn(Vec2) -> bool) -> Option<ShiftDrop> {
+        let shifted: Vec<Vec2> = self.targets.iter().map(|t| t + delta).collect();
+        let ok: Vec<bool> = shifted.iter().map(|q| clear(*q)).collect();
+        if ok.iter().filter(|c| **c).count() < self.n {
+            return None;
+        }
+        let blocked = |j: usize| !ok[j];
+        let distance = |j: usize| nearest_wreck(shifted[j], self.wrecks);
+        let (kept, moves) = choose_by(
+            self.points,
+            self.targets,
+            self.held,
+            &blocked,
+            &distance,
+            self.n,
+            self.max_moves,
+        );
+        let index = |p: u16| self.points.iter().position(|q| *q == p);
+        let all_clear = (0..self.points.len())
+            .filter(|j| kept.contains(self.points[*j] as usize))
+            .all(|j| ok[j]);
+        let dropped_held = (0..self.points.len())
+            .filter(|j| {
+                let p = self.points[*j] as usize;
+                !kept.contains(p) && self.held.contains(p)
+            })
+            .count();
+        if !all_clear || dropped_held > moves.len() {
+            return None;
+        }
+        let moved: f64 = moves
+            .iter()
+            .filter_map(|(f, t)| Some((self.targets[index(*f)?] - shifted[index(*t)?]).norm_squared()))
+            .sum();
+        let stay = (0..self.points.len())
+            .filter(|j| {
+                let p = self.points[*j] as usize;
+                kept.contains(p) && self.held.contains(p)
+            })
+            .count();
+        let cost = stay as f64 * delta.norm_squared() + moved;
+        Some(ShiftDrop {
+            delta,
+            kept,
+            moves,
+            cost,
+        })
+    }
+
+    /// The admissible placement of least cost (the first in [`Search::deltas`]'s order on a
+    /// tie), or None.
+    pub fn best(&self, clear: &dyn Fn(Vec2) -> bool) -> Option<ShiftDrop> {
+        let mut best: Option<ShiftDrop> = None;
+        for delta in self.deltas() {
+            if let Some(s) = self.at(delta, clear) {
+                if best.as_ref().is_none_or(|b| s.cost < b.cost) {
+                    best = Some(s);
+                }
+            }
+        }
+        best
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::compact::{choose, nearest_clear_shift};
+    use super::*;
+
+    /// Twelve slots in a row 2.2 apart; two robots died, their points (10, 11, at the row's
+    /// end) vacant, their wrecks between slots 1 and 2 and between 3 and 4, each blocking
+    /// both neighbours (within 2.1): 4 held points blocked, 2 vacancies. No translation up
+    /// to 1.65 clears the old kept set (vertically it needs 1.79), but a sideways shift by
+    /// half a spacing puts two slots on the wrecks and leaves the other ten clear: drop those
+    /// two, move their robots to the vacancies.
+    #[test]
+    fn shift_and_drop_places_the_pattern_where_no_translation_clears_every_kept_slot() {
+        let targets: Vec<Vec2> = (0..12).map(|i| Vec2::new(2.2 * i as f64, 0.0)).collect();
+        let points: Vec<u16> = (0..12).collect();
+        let wrecks = [Vec2::new(3.3, 0.0), Vec2::new(7.7, 0.0)];
+        let mut held = Bitmap::with_len(12);
+        for p in 0..10 {
+            held.insert(p);
+        }
+        let within = 2.1;
+        let clear = |q: Vec2| nearest_wreck(q, &wrecks) >= within;
+        let (step, max_shift) = (0.55, 1.65);
+        // The old path: the kept set of the old placement, then its least clear translation.
+        let (kept0, _) = choose(&points, &targets, &held, &wrecks, within, 10, 12);
+        let kept_slots: Vec<Vec2> = kept0.iter().map(|p| targets[p]).collect();
+        assert!(!kept_slots.iter().all(|q| clear(*q)), "the old placement is blocked");
+        assert!(nearest_clear_shift(&kept_slots, clear, step, max_shift).is_none());
+        let search = Search {
+            points: &points,
+            targets: &targets,
+            held: &held,
+            wrecks: &wrecks,
+            n: 10,
+            max_moves: 12,
+            step,
+            max_shift,
+        };
+        let s = search.best(&clear).expect("a shift-and-drop placement");
+        assert!(s.delta.norm() > 0.0);
+        assert_eq!(s.kept.count(), 10);
+        for p in s.kept.iter() {
+            assert!(clear(targets[p] + s.delta), "kept point {p} blocked");
+        }
+        // Every live robot keeps its point or moves to a vacant kept one: distinct slots.
+        let mut slots: Vec<u16> = held
+            .iter()
+            .map(|p| {
+                let p = p as u16;
+                if s.kept.contains(p as usize) {
+                    p
+                } else {
+                    s.moves.iter().find(|(f, _)| *f == p).expect("a move").1
+                }
+            })
+            .collect();
+        slots.sort_unstable();
+        slots.dedup();
+        assert_eq!(slots.len(), 10, "slots are distinct");
+        assert_eq!(s.moves.len(), 2);
+        // Least cost: no admissible delta is cheaper.
+        for d in search.deltas() {
+            if let Some(o) = search.at(d, &clear) {
+                assert!(o.cost >= s.cost);
+            }
+        }
+        // Three wrecks leave fewer than ten clear points at every delta: none.
+        let more = [wrecks[0], wrecks[1], Vec2::new(12.1, 0.0)];
+        let clear3 = |q: Vec2| nearest_wreck(q, &more) >= within;
+        let s3 = Search {
+            wrecks: &more,
+            ..search
+        };
+        assert!(s3.best(&clear3).is_none());
+    }
+}
