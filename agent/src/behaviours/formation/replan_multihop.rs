@@ -21,7 +21,7 @@ use super::compact::{choose, dead_list, nearest_clear_shift, own_slot, plan_of};
 use super::gossip::{Gathering, Need};
 use super::messages::CompactPlan;
 use super::replan::NO_PLACEMENT;
-use super::shift_drop::{Search, SHIFTED_AND_DROPPED};
+use super::shift_drop::{Search, CLEARANCE_SLACK, SHIFTED_AND_DROPPED};
 use super::{Formation, Msg};
 use crate::formation::constraints::PatternConstraints;
 use crate::formation::optimise::optimise_in;
@@ -176,7 +176,7 @@ impl Formation {
         let clear_all = |q: Vec2| {
             c.in_box(q)
                 && self.discs.iter().all(|d| (q - d.position).norm() >= d.radius + reach)
-                && all_wrecks.iter().all(|w| (q - w).norm() >= within)
+                && all_wrecks.iter().all(|w| (q - w).norm() >= within + CLEARANCE_SLACK)
         };
         let search = Search {
             points: &old.points,
