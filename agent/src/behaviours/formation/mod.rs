@@ -33,6 +33,7 @@
 //! Units: robot.v_max is per tick, so V_p = v_max / tau and the command is v tau.
 
 pub mod compact;
+pub mod detour;
 pub mod gossip;
 pub mod messages;
 pub mod params;
@@ -50,7 +51,6 @@ use crate::formation::hungarian::{assign_targets, Hungarian};
 use crate::formation::linear_program::{Selected, Selection};
 use crate::formation::optimise::{optimise, optimise_without_rotation};
 use crate::formation::orca::{orca_velocity, Disc};
-use crate::formation::preferred::preferred_velocity;
 use crate::formation::swaps::{Message as SwapMessage, NeighbourView, SwapAgent};
 use crate::formation::{Template, Transform};
 use std::collections::BTreeMap;
@@ -777,10 +777,6 @@ impl Formation {
     fn motion(&self, sense: &Sense, me: Vec2) -> Vec2 {
         let k = &self.p.kernels;
         let tau = k.time_step;
-        let preferred = match self.slot {
-            Some(s) => preferred_velocity(me, self.targets[s], k.max_speed, k.k_a),
-            None => Vec2::zeros(),
-        };
         let r = k.robot_radius + self.p.orca_margin;
         let mine = Disc {
             position: me,
@@ -809,13 +805,16 @@ impl Formation {
         // robot taken for lost while alive, e.g. a coordinator out of its radio range), and
         // as a static disc over a live one it would leave ORCA no feasible velocity.
         let remembered: Vec<Vec2> = dead.into_iter().chain(self.ghosts.values().copied()).collect();
-        for pos in real_wrecks(remembered, me, &robots, k.robot_radius) {
+        let wrecks = real_wrecks(remembered, me, &robots, k.robot_radius);
+        for pos in &wrecks {
             obstacles.push(Disc {
-                position: pos,
+                position: *pos,
                 velocity: Vec2::zeros(),
                 radius: r,
             });
         }
+        // Eq. (16), steered round walls of wrecks in the swaps mode (detour.rs).
+        let preferred = self.preferred_with_detour(me, &wrecks);
         let sel = orca_velocity(&mine, preferred, &robots, &obstacles, k);
         if self.trace {
             self.trace_line(sense.tick, me, robots.len(), preferred, &sel);
