@@ -173,10 +173,15 @@ impl Formation {
         for w in &self.wrecks {
             super::wrecks::remember(&mut all_wrecks, *w);
         }
-        let clear_all = |q: Vec2| {
-            c.in_box(q)
-                && self.discs.iter().all(|d| (q - d.position).norm() >= d.radius + reach)
-                && all_wrecks.iter().all(|w| (q - w).norm() >= within + CLEARANCE_SLACK)
+        // First with the slack (slots the robots can reach beside a wreck), then without
+        // (measured: 100 robots seed 1, five kills at 100, the slack left no placement).
+        let clear_by = |slack: f64| {
+            let all_wrecks = &all_wrecks;
+            move |q: Vec2| {
+                c.in_box(q)
+                    && self.discs.iter().all(|d| (q - d.position).norm() >= d.radius + reach)
+                    && all_wrecks.iter().all(|w| (q - w).norm() >= within + slack)
+            }
         };
         let search = Search {
             points: &old.points,
@@ -188,7 +193,10 @@ impl Formation {
             step: r.shift_step,
             max_shift: r.max_shift,
         };
-        if let Some(s) = search.best(&clear_all) {
+        let found = search
+            .best(&clear_by(CLEARANCE_SLACK))
+            .or_else(|| search.best(&clear_by(0.0)));
+        if let Some(s) = found {
             let t = old.transform;
             let plan = CompactPlan {
                 epoch: old.epoch + 1,

@@ -29,7 +29,8 @@ pub const SHIFTED_AND_DROPPED: f64 = -3.0;
 /// placement must lie. [chosen] 0.4: measured (100 robots, seeds 2 and 3, kills 60:37,
 /// 62:38, 64:39): slots 2.11 and 2.17 from a wreck (just clear of 2.1) left their robots
 /// 0.24 and 0.07 short for 2,900 ticks (ORCA against the wreck and the neighbours), so the
-/// runs never formed; the robots stood 2.24-2.31 from the wreck.
+/// runs never formed; the robots stood 2.24-2.31 from the wreck. replan_multihop.rs tries
+/// the search without it when it finds nothing with it.
 pub const CLEARANCE_SLACK: f64 = 0.4;
 
 /// Directions on each ring of translations (as compact.rs `nearest_clear_shift`).
