@@ -175,8 +175,8 @@ impl Formation {
         }
         // First with the slack (slots the robots can reach beside a wreck), then without
         // (measured: 100 robots seed 1, five kills at 100, the slack left no placement).
+        let (c, all_wrecks) = (&c, &all_wrecks);
         let clear_by = |slack: f64| {
-            let all_wrecks = &all_wrecks;
             move |q: Vec2| {
                 c.in_box(q)
                     && self.discs.iter().all(|d| (q - d.position).norm() >= d.radius + reach)
@@ -187,7 +187,7 @@ impl Formation {
             points: &old.points,
             targets: &self.targets,
             held,
-            wrecks: &all_wrecks,
+            wrecks: all_wrecks,
             n,
             max_moves: r.max_moves,
             step: r.shift_step,
