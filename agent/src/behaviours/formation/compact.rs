@@ -223,8 +223,10 @@ mod tests {
     #[test]
     fn a_worst_case_compact_plan_and_need_of_500_robots_fit_512_bytes() {
         let params = super::super::params::ReplanParams::default();
-        let mut kept = Bitmap::with_len(500);
-        for p in 0..500 {
+        // Every template point and every spare point (shift_drop.rs) kept.
+        let points = 500 + super::super::shift_drop::MAX_SPARE;
+        let mut kept = Bitmap::with_len(points);
+        for p in 0..points {
             kept.insert(p);
         }
         let c = CompactPlan {

@@ -21,8 +21,8 @@ use super::compact::{choose, dead_list, nearest_clear_shift, own_slot, plan_of};
 use super::gossip::{Gathering, Need};
 use super::messages::CompactPlan;
 use super::replan::NO_PLACEMENT;
-use super::shift_drop::{Search, CLEARANCE_SLACK, SHIFTED_AND_DROPPED};
-use super::{Formation, Msg};
+use super::shift_drop::{spare_points, Search, CLEARANCE_SLACK, SHIFTED_AND_DROPPED};
+use super::{transform_of, Formation, Msg};
 use crate::formation::constraints::PatternConstraints;
 use crate::formation::optimise::optimise_in;
 use swarm::geometry::Vec2;
@@ -77,6 +77,7 @@ impl Formation {
                 let since = g.since;
                 let known = g.need.known.count();
                 let started = std::time::Instant::now();
+                self.extend_template();
                 let (compact, gap, nodes) = self.solve_compact(alive);
                 let seconds = started.elapsed().as_secs_f64();
                 let slot = own_slot(&compact, self.held_point());
@@ -192,10 +193,20 @@ impl Formation {
             max_moves: r.max_moves,
             step: r.shift_step,
             max_shift: r.max_shift,
+            keep_near_moves: false,
         };
         let found = search
             .best(&clear_by(CLEARANCE_SLACK))
             .or_else(|| search.best(&clear_by(0.0)));
+        // Else the same with the template's spare points (shift_drop.rs) as vacancies.
+        let (with_spare, spare_targets) = self.with_spares(&old.points, old.transform);
+        let spare_search = Search {
+            points: &with_spare,
+            targets: &spare_targets,
+            keep_near_moves: true,
+            ..search
+        };
+        let found = found.or_else(|| spare_search.best(&clear_by(CLEARANCE_SLACK)));
         if let Some(s) = found {
             let t = old.transform;
             let plan = CompactPlan {
@@ -236,9 +247,33 @@ impl Formation {
         )
     }
 
+    /// The old pattern's points and slots followed by the spare points (shift_drop.rs) under
+    /// `transform` (the template extended by [`Formation::extend_template`]).
+    fn with_spares(&self, points: &[u16], transform: [f64; 4]) -> (Vec<u16>, Vec<Vec2>) {
+        let spares: Vec<u16> = (self.robots..self.template.len()).map(|j| j as u16).collect();
+        let t = transform_of(transform);
+        let reading = self.p.kernels.transform_reading;
+        let mut all: Vec<u16> = points.to_vec();
+        all.extend(spares.iter().filter(|j| !points.contains(j)));
+        let targets = t.targets(reading, &self.sub_template(&all));
+        (all, targets)
+    }
+
+    /// Adds the spare points behind the template's one per robot (once; every robot the
+    /// same, from the template alone).
+    fn extend_template(&mut self) {
+        if self.template.len() == self.robots {
+            let spares = spare_points(&self.template);
+            self.template.extend(spares);
+        }
+    }
+
     /// Adopts a compact plan heard: this robot's slot from its template point (before the
     /// plan replaces the old one), or none (it takes the nearest in `adopt_for_swaps`).
     pub(super) fn install_compact(&mut self, c: CompactPlan) {
+        if c.kept.iter().any(|p| p >= self.template.len()) {
+            self.extend_template();
+        }
         let slot = own_slot(&c, self.held_point());
         self.install(plan_of(&c));
         self.slot = slot.filter(|s| *s < self.targets.len());

@@ -36,6 +36,47 @@ pub const CLEARANCE_SLACK: f64 = 0.4;
 /// Directions on each ring of translations (as compact.rs `nearest_clear_shift`).
 const DIRECTIONS: usize = 16;
 
+/// Spare points (beyond the template's one per robot) lie this far from every template
+/// point and from each other. [chosen] 2.2: the thick letters' arc spacing (their chords are
+/// at least 2.148), so a pattern with spares keeps the letters' separation (C3).
+pub const SPARE_SPACING: f64 = 2.2;
+
+/// Directions tried around each template point for a spare point (every 30 degrees).
+const SPARE_DIRECTIONS: usize = 12;
+
+/// At most this many spare points (a compact plan's kept bitmap grows by one bit each).
+/// [chosen] 256: the rim of the 500-robot C; a 756-bit bitmap keeps the worst-case compact
+/// plan and need under 512 bytes.
+pub const MAX_SPARE: usize = 256;
+
+/// The rim of `template`: points `SPARE_SPACING` from a template point (12 directions, in
+/// template order) and at least that far from every template point and every earlier spare,
+/// at most [`MAX_SPARE`]. Every robot computes the same list from the template alone. At 500
+/// robots three wrecks inside the thick C block more slots than the dead robots' points can
+/// replace at any translation (docs/formation.md 9): the spares are the vacancies of the last
+/// shift-and-drop search.
+pub fn spare_points(template: &[[f64; 2]]) -> Vec<[f64; 2]> {
+    let at = |p: &[f64; 2]| Vec2::new(p[0], p[1]);
+    let mut spares: Vec<Vec2> = Vec::new();
+    let clear = |q: Vec2, spares: &[Vec2]| {
+        let far = |o: Vec2| (q - o).norm() >= SPARE_SPACING - 1e-9;
+        template.iter().all(|p| far(at(p))) && spares.iter().all(|o| far(*o))
+    };
+    'outer: for p in template {
+        for d in 0..SPARE_DIRECTIONS {
+            let a = std::f64::consts::TAU * d as f64 / SPARE_DIRECTIONS as f64;
+            let q = at(p) + Vec2::new(a.cos(), a.sin()) * SPARE_SPACING;
+            if clear(q, &spares) {
+                spares.push(q);
+                if spares.len() >= MAX_SPARE {
+                    break 'outer;
+                }
+            }
+        }
+    }
+    spares.into_iter().map(|q| [q.x, q.y]).collect()
+}
+
 /// A shift-and-drop placement: the translation, the kept points, the moves, its cost.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ShiftDrop {
@@ -57,6 +98,9 @@ pub struct Search<'a> {
     pub max_moves: usize,
     pub step: f64,
     pub max_shift: f64,
+    /// Among the vacant points keep those nearest the robots that must move (with spare
+    /// points: many vacancies), else those farthest from a wreck (the first search's order).
+    pub keep_near_moves: bool,
 }
 
 impl Search<'_> {
@@ -86,7 +130,18 @@ impl Search<'_> {
             return None;
         }
         let blocked = |j: usize| !ok[j];
-        let distance = |j: usize| nearest_wreck(shifted[j], self.wrecks);
+        // The robots that must move stand on the blocked held slots (their old slots).
+        let movers: Vec<Vec2> = (0..self.points.len())
+            .filter(|j| !ok[*j] && self.held.contains(self.points[*j] as usize))
+            .map(|j| self.targets[j])
+            .collect();
+        let distance = |j: usize| {
+            if self.keep_near_moves && !self.held.contains(self.points[j] as usize) {
+                -nearest_wreck(shifted[j], &movers)
+            } else {
+                nearest_wreck(shifted[j], self.wrecks)
+            }
+        };
         let (kept, moves) = choose_by(
             self.points,
             self.targets,
@@ -177,6 +232,7 @@ mod tests {
             max_moves: 12,
             step,
             max_shift,
+            keep_near_moves: false,
         };
         let s = search.best(&clear).expect("a shift-and-drop placement");
         assert!(s.delta.norm() > 0.0);
@@ -214,5 +270,19 @@ mod tests {
             ..search
         };
         assert!(s3.best(&clear3).is_none());
+    }
+
+    #[test]
+    fn spare_points_ring_a_template_at_the_letter_spacing() {
+        let c = swarm::sections::formation::builtin_template("C", 100).unwrap();
+        let spares = spare_points(&c);
+        assert!(!spares.is_empty() && spares.len() <= MAX_SPARE);
+        let d = |a: &[f64; 2], b: &[f64; 2]| ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2)).sqrt();
+        for (i, q) in spares.iter().enumerate() {
+            let nearest = c.iter().map(|p| d(p, q)).fold(f64::INFINITY, f64::min);
+            assert!((nearest - SPARE_SPACING).abs() < 1e-6, "spare {i} {nearest}");
+            assert!(spares[..i].iter().all(|o| d(o, q) >= SPARE_SPACING - 1e-6));
+        }
+        assert_eq!(spare_points(&c), spares, "deterministic");
     }
 }
