@@ -683,16 +683,33 @@ fn print_formation(fm: &serde_json::Value, ticks: &serde_json::Value) {
             );
             continue;
         }
+        let gap = p["gap"].as_f64().unwrap_or(f64::NAN);
         println!(
-            "    plan epoch {} by robot {} at tick {}: alpha {:.3} theta {:.3}  gap {:.3}  {:.2} s",
+            "    plan epoch {} by robot {} at tick {}: alpha {:.3} theta {:.3}  gap {:.3}{}  {:.2} s",
             p["epoch"],
             p["robot"],
             p["tick"],
             p["alpha"].as_f64().unwrap_or(f64::NAN),
             p["theta"].as_f64().unwrap_or(f64::NAN),
-            p["gap"].as_f64().unwrap_or(f64::NAN),
+            gap,
+            gap_sentinel(gap),
             p["seconds"].as_f64().unwrap_or(f64::NAN)
         );
+    }
+}
+
+/// What a negative plan gap means: the swaps re-plan reports sentinels, not bounds (agent
+/// crate: replan.rs `NO_PLACEMENT` = -1, replan_multihop.rs `SHIFTED` = -2, shift_drop.rs
+/// `SHIFTED_AND_DROPPED` = -3). A gap the optimiser proved is never negative.
+fn gap_sentinel(gap: f64) -> &'static str {
+    if gap == -1.0 {
+        " (no placement found: old transform)"
+    } else if gap == -2.0 {
+        " (old pattern shifted: no certificate)"
+    } else if gap == -3.0 {
+        " (shifted, blocked slots dropped: no certificate)"
+    } else {
+        ""
     }
 }
 

@@ -166,6 +166,56 @@ fn a_robot_killed_among_100_under_swaps_re_forms_by_a_multi_hop_compact_re_plan(
     assert_left_nothing(&i);
 }
 
+/// Five robots of one cluster killed on one tick among 100 under swaps (docs/formation.md 9,
+/// "Several deaths (swaps)", seed 1, 100:37,100:74,100:2,100:83,100:71): the wrecks block more
+/// kept slots than any translation clears, so the compact re-plan shifts the old pattern and
+/// drops the slots it leaves blocked (gap sentinel -3); the 95 survivors form on distinct
+/// slots of epoch 1, 0 overlaps. In-process (about 1 s of test time here).
+#[test]
+fn five_robots_killed_at_once_among_100_under_swaps_re_form_by_shift_and_drop() {
+    let _g = serial();
+    let sc = config("formation-100.toml");
+    let i = tmp_dir("formation-100-five-kills-i");
+    let o = up(
+        &[
+            "--scenario",
+            &sc,
+            "--executor",
+            "inprocess",
+            "--chaos-at",
+            "100:37,100:74,100:2,100:83,100:71",
+        ],
+        &i,
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let s = summary(&i);
+    let f = formation(&i);
+    assert_eq!(f["formed"], true, "{f}");
+    assert_eq!(f["overlapping_pairs"], 0, "{f}");
+    assert_eq!(f["obstacle_overlaps"], 0, "{f}");
+    assert_eq!(s["alive_at_end"], 95, "{s}");
+    let plans = f["plans"].as_array().unwrap();
+    assert_eq!(plans.len(), 1, "{f}");
+    assert_eq!(
+        (plans[0]["robot"].as_u64(), plans[0]["epoch"].as_u64()),
+        (Some(0), Some(1)),
+        "{f}"
+    );
+    assert_eq!(plans[0]["gap"].as_f64(), Some(-3.0), "shift-and-drop: {f}");
+    let dead = [2usize, 37, 71, 74, 83];
+    let slots = f["slots"].as_array().unwrap();
+    let mut idx: Vec<u64> = (0..100)
+        .filter(|r| !dead.contains(r))
+        .map(|r| {
+            assert_eq!(slots[r]["epoch"], 1, "robot {r}: {}", slots[r]);
+            slots[r]["index"].as_u64().unwrap()
+        })
+        .collect();
+    idx.sort_unstable();
+    assert_eq!(idx, (0..95).collect::<Vec<u64>>());
+    assert_left_nothing(&i);
+}
+
 /// One kill under swaps, the run in `dir` (executor `exec`) of `robots` robots with robot
 /// `dead` killed at tick `at`: formed, 0 overlaps, one re-plan of epoch 1 by robot 0 after the
 /// kill, and the survivors on the distinct slots of the re-planned pattern.

@@ -85,16 +85,31 @@ pub fn choose(
     n: usize,
     max_moves: usize,
 ) -> (Bitmap, Vec<(u16, u16)>) {
-    let wreck_distance = |j: usize| {
-        wrecks
-            .iter()
-            .map(|w| (targets[j] - w).norm())
-            .fold(f64::INFINITY, f64::min)
-    };
+    let wreck_distance = |j: usize| nearest_wreck(targets[j], wrecks);
+    let blocked = |j: usize| wreck_distance(j) < blocked_within;
+    choose_by(points, targets, held, &blocked, &wreck_distance, n, max_moves)
+}
+
+/// The distance from `q` to the nearest of `wrecks` (infinite when none).
+pub fn nearest_wreck(q: Vec2, wrecks: &[Vec2]) -> f64 {
+    wrecks.iter().map(|w| (q - w).norm()).fold(f64::INFINITY, f64::min)
+}
+
+/// [`choose`] with the test of a blocked point (`blocked`, by index into `points`) and the
+/// order among the rest (`wreck_distance`, nearest dropped first) given: shift_drop.rs calls
+/// it for a translated placement.
+pub fn choose_by(
+    points: &[u16],
+    targets: &[Vec2],
+    held: &Bitmap,
+    blocked: &dyn Fn(usize) -> bool,
+    wreck_distance: &dyn Fn(usize) -> f64,
+    n: usize,
+    max_moves: usize,
+) -> (Bitmap, Vec<(u16, u16)>) {
     let is_held = |j: usize| held.contains(points[j] as usize);
     let mut order: Vec<usize> = (0..points.len()).collect();
     order.sort_by(|a, b| {
-        let blocked = |j: usize| wreck_distance(j) < blocked_within;
         blocked(*b)
             .cmp(&blocked(*a))
             .then(is_held(*a).cmp(&is_held(*b)))
@@ -208,8 +223,10 @@ mod tests {
     #[test]
     fn a_worst_case_compact_plan_and_need_of_500_robots_fit_512_bytes() {
         let params = super::super::params::ReplanParams::default();
-        let mut kept = Bitmap::with_len(500);
-        for p in 0..500 {
+        // Every template point and every spare point (shift_drop.rs) kept.
+        let points = 500 + super::super::shift_drop::MAX_SPARE;
+        let mut kept = Bitmap::with_len(points);
+        for p in 0..points {
             kept.insert(p);
         }
         let c = CompactPlan {
@@ -227,7 +244,8 @@ mod tests {
             alive: 500,
             candidate: 499,
             known: kept.clone(),
-            held: kept,
+            held: kept.clone(),
+            settled: kept,
         });
         let len = encoded_len(&need);
         assert!(len <= 512, "need {len} bytes");

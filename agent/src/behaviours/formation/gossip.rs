@@ -9,11 +9,21 @@
 //! - `candidate`: the lowest id it knows in the need (min-id flooding); after about the
 //!   network's diameter in hops every robot holds the global minimum, the coordinator;
 //! - `known`: the robots known alive in the need (a bit per robot id, OR-merged);
-//! - `held`: the template points their robots held while in the need (a bit per template
-//!   point, OR-merged): a point no live robot held is the dead robot's, vacant.
+//! - `held`: the template points the robots of `settled` hold (a bit per template point,
+//!   OR-merged): a point no live robot holds is a dead robot's, vacant;
+//! - `settled`: the robots whose point is in `held` (a bit per robot id, OR-merged).
 //!
-//! The coordinator solves once `known` counts `alive` robots and `held` leaves the deficit of
-//! points vacant, or at the timeout (replan.rs).
+//! `held` is exact, not the union over the gathering: a robot adds its point once, when the
+//! point is final for the need, i.e. when it is in no handshake ([`Gathering::note`] with
+//! `final_point`); while gathering it makes, accepts and takes no new swap or vacancy
+//! (mod.rs, replan_multihop.rs), so that point stays its point until the plan comes. (The
+//! union, the first version, counted both points of a robot that took a vacancy during the
+//! gathering, so `held` left fewer points vacant than the deficit and the coordinator waited
+//! for the timeout.) A robot in a handshake at the need's start adds its point when the
+//! handshake has settled; until then it is in `known` but not in `settled`.
+//!
+//! The coordinator solves once `settled` counts `alive` robots (so `held` is every live
+//! robot's point), or at the timeout (replan_multihop.rs).
 
 use serde::{Deserialize, Serialize};
 
@@ -65,8 +75,10 @@ pub struct Need {
     pub candidate: u32,
     /// Robots known alive in the need (bits by id).
     pub known: Bitmap,
-    /// Template points held by robots in the need (bits by template point).
+    /// Template points held by the robots of `settled` (bits by template point).
     pub held: Bitmap,
+    /// Robots whose final point is in `held` (bits by id).
+    pub settled: Bitmap,
 }
 
 /// One robot's gathering for a need.
@@ -89,6 +101,7 @@ impl Gathering {
                 candidate: u32::MAX,
                 known: Bitmap::with_len(robots),
                 held: Bitmap::with_len(points),
+                settled: Bitmap::with_len(robots),
             },
         }
     }
@@ -97,13 +110,32 @@ impl Gathering {
         self.need.epoch == epoch && self.need.alive == alive
     }
 
-    /// This robot's share: its id, and the template point it holds now (if any).
-    pub fn note(&mut self, robot: u32, point: Option<usize>) {
+    /// This robot's share: its id, and the template point it holds now (if any) when that
+    /// point is final for the need (`final_point`: the robot is in no handshake). The first
+    /// final point counts; a robot already settled adds nothing (its point cannot change
+    /// while gathering).
+    pub fn note(&mut self, robot: u32, point: Option<usize>, final_point: bool) {
         self.need.candidate = self.need.candidate.min(robot);
         self.need.known.insert(robot as usize);
-        if let Some(p) = point {
-            self.need.held.insert(p);
+        if final_point && !self.need.settled.contains(robot as usize) {
+            self.need.settled.insert(robot as usize);
+            if let Some(p) = point {
+                self.need.held.insert(p);
+            }
         }
+    }
+
+    /// Whether every live robot's final point is known: `held` is then exact.
+    pub fn complete(&self) -> bool {
+        self.need.settled.count() >= self.need.alive as usize
+    }
+
+    /// The points of `points` no settled robot holds.
+    pub fn vacant(&self, points: &[u16]) -> usize {
+        points
+            .iter()
+            .filter(|p| !self.need.held.contains(**p as usize))
+            .count()
     }
 
     /// Merges a neighbour's gossip of the same key (another key is ignored: it may count a
@@ -115,6 +147,7 @@ impl Gathering {
         self.need.candidate = self.need.candidate.min(other.candidate);
         self.need.known.merge(&other.known);
         self.need.held.merge(&other.held);
+        self.need.settled.merge(&other.settled);
         true
     }
 }
@@ -145,7 +178,7 @@ mod tests {
             .iter()
             .map(|id| {
                 let mut g = Gathering::start(3, 1, 10, 10, 12);
-                g.note(*id, Some(*id as usize + 2));
+                g.note(*id, Some(*id as usize + 2), true);
                 g
             })
             .collect();
@@ -172,8 +205,51 @@ mod tests {
         other.alive = 9;
         other.candidate = 0;
         let mut fresh = Gathering::start(9, 1, 10, 10, 12);
-        fresh.note(4, None);
+        fresh.note(4, None, true);
         assert!(!fresh.merge(&other));
         assert_eq!((fresh.need.candidate, fresh.need.known.count()), (4, 1));
+    }
+
+    /// Five robots on template points 0..5 of six (point 5 the dead robot's, deficit 1).
+    /// Robot 2 stands next to a wreck on point 2 and moves to the vacancy, point 5, during the
+    /// gathering, as a `take_vacancy` does: it is not final before it moved (here: it was in a
+    /// handshake; mod.rs freezes `take_vacancy` itself while gathering, so a final point stays
+    /// put). Robot 4 is in a handshake until round 2. Each round every robot notes its current
+    /// point and hears every other.
+    #[test]
+    fn held_is_exact_when_a_robot_takes_a_vacancy_during_the_gathering() {
+        let points: Vec<u16> = (0..6).collect();
+        // (robot, point per round, busy per round), rounds 0..3.
+        let rounds: [[(u32, usize, bool); 5]; 3] = [
+            [(0, 0, false), (1, 1, false), (2, 2, true), (3, 3, false), (4, 4, true)],
+            [(0, 0, false), (1, 1, false), (2, 5, false), (3, 3, false), (4, 4, true)],
+            [(0, 0, false), (1, 1, false), (2, 5, false), (3, 3, false), (4, 4, false)],
+        ];
+        let mut g: Vec<Gathering> = (0..5).map(|_| Gathering::start(10, 0, 5, 5, 6)).collect();
+        // The first version's rule: every point noted, OR-merged.
+        let mut union = Bitmap::with_len(6);
+        for (r, round) in rounds.iter().enumerate() {
+            for (i, (robot, point, busy)) in round.iter().enumerate() {
+                g[i].note(*robot, Some(*point), !busy);
+                union.insert(*point);
+            }
+            let sent: Vec<Need> = g.iter().map(|x| x.need.clone()).collect();
+            for x in &mut g {
+                for n in &sent {
+                    assert!(x.merge(n));
+                }
+            }
+            // Robot 4 is still in its handshake after rounds 0 and 1: not complete.
+            assert_eq!(g[0].complete(), r == 2, "round {r}");
+        }
+        for x in &g {
+            assert_eq!(x.need.held.iter().collect::<Vec<_>>(), vec![0, 1, 3, 4, 5]);
+            // Exactly the deficit vacant: the blocked point 2 the robot left.
+            assert_eq!(x.vacant(&points), 1);
+        }
+        // The union counted point 2 as held too: no point vacant, the gathering never
+        // complete (the coordinator waited for the timeout).
+        let vacant_union = points.iter().filter(|p| !union.contains(**p as usize)).count();
+        assert_eq!(vacant_union, 0);
     }
 }

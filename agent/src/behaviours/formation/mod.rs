@@ -33,6 +33,7 @@
 //! Units: robot.v_max is per tick, so V_p = v_max / tau and the command is v tau.
 
 pub mod compact;
+pub mod detour;
 pub mod gossip;
 pub mod messages;
 pub mod params;
@@ -41,6 +42,7 @@ mod relay_place;
 mod relay_step;
 mod replan;
 mod replan_multihop;
+mod shift_drop;
 #[cfg(test)]
 mod tests;
 pub mod wrecks;
@@ -52,7 +54,6 @@ use crate::formation::hungarian::{assign_targets, Hungarian};
 use crate::formation::linear_program::{Selected, Selection};
 use crate::formation::optimise::{optimise, optimise_without_rotation};
 use crate::formation::orca::{orca_velocity, Disc};
-use crate::formation::preferred::preferred_velocity;
 use crate::formation::swaps::{Message as SwapMessage, NeighbourView, SwapAgent};
 use crate::formation::{Template, Transform};
 use std::collections::BTreeMap;
@@ -724,7 +725,9 @@ impl Formation {
         let Some(agent) = &mut self.swap else {
             return report;
         };
-        if !wrecks.is_empty() && epoch == 0 {
+        // Not while a multi-hop re-plan gathers: its `held` set counts each robot's point once
+        // (gossip.rs).
+        if !wrecks.is_empty() && epoch == 0 && self.gathering.is_none() {
             agent.take_vacancy(&self.targets, &wrecks, &neighbours, blocked_within);
         }
         // Multi-hop re-plan: no new swap while gathering (min gain infinite: no proposal, every
@@ -788,10 +791,6 @@ impl Formation {
     fn motion(&self, sense: &Sense, me: Vec2) -> Vec2 {
         let k = &self.p.kernels;
         let tau = k.time_step;
-        let preferred = match self.slot {
-            Some(s) => preferred_velocity(me, self.targets[s], k.max_speed, k.k_a),
-            None => Vec2::zeros(),
-        };
         let r = k.robot_radius + self.p.orca_margin;
         let mine = Disc {
             position: me,
@@ -820,13 +819,16 @@ impl Formation {
         // robot taken for lost while alive, e.g. a coordinator out of its radio range), and
         // as a static disc over a live one it would leave ORCA no feasible velocity.
         let remembered: Vec<Vec2> = dead.into_iter().chain(self.ghosts.values().copied()).collect();
-        for pos in real_wrecks(remembered, me, &robots, k.robot_radius) {
+        let wrecks = real_wrecks(remembered, me, &robots, k.robot_radius);
+        for pos in &wrecks {
             obstacles.push(Disc {
-                position: pos,
+                position: *pos,
                 velocity: Vec2::zeros(),
                 radius: r,
             });
         }
+        // Eq. (16), steered round walls of wrecks in the swaps mode (detour.rs).
+        let preferred = self.preferred_with_detour(me, &wrecks);
         let sel = orca_velocity(&mine, preferred, &robots, &obstacles, k);
         if self.trace {
             self.trace_line(sense.tick, me, robots.len(), preferred, &sel);

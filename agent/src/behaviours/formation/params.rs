@@ -4,6 +4,7 @@
 //! so each has one source.
 
 use super::relay::RelayParams;
+use super::detour::DetourParams;
 use crate::formation::blocked::BlockedParams;
 use crate::formation::swaps::SwapParams;
 use crate::formation::FormationParams;
@@ -36,6 +37,11 @@ pub struct Params {
     /// coordinator's plan goes out in one message to the robots in its radio range.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub relay: Option<RelayParams>,
+    /// The wreck detour (detour.rs, `formation.kernels.detour`). None: off. Resolved only for
+    /// `reassignment = "swaps"` (like `swaps.blocked`), so the other scenarios' resolved
+    /// scenarios, and so their recordings, keep their bytes.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub detour: Option<DetourParams>,
 }
 
 /// The swaps mode's re-plan when the swarm is short of the pattern's slots (a robot died) or
@@ -114,6 +120,7 @@ impl Default for Params {
             orca_margin: 0.05,
             replan: ReplanParams::default(),
             relay: None,
+            detour: None,
         }
     }
 }
@@ -149,6 +156,7 @@ pub fn parse_params(sc: &Scenario) -> Result<Params, String> {
     // alone, so that the other scenarios' recordings keep their bytes.
     if f.reassignment == Reassignment::Swaps {
         p.swaps.blocked.get_or_insert_with(BlockedParams::default);
+        p.detour.get_or_insert_with(DetourParams::default);
     }
     Ok(p)
 }
@@ -195,6 +203,11 @@ pub fn validate(sc: &Scenario, c: &Check) -> Result<(), ConfigError> {
         c.range_u(&key("max_swaps"), b.max_swaps as u64, 0, 1_000_000)?;
     }
     c.range_f("formation.kernels.orca_margin", p.orca_margin, 0.0, 1e6, false)?;
+    if let Some(d) = &p.detour {
+        c.range_f("formation.kernels.detour.window", d.window, 0.0, 1e4, true)?;
+        // At most 1000 cells across (a search of a million cells at worst, every tick).
+        c.range_f("formation.kernels.detour.cell", d.cell, d.window / 500.0, d.window, false)?;
+    }
     let o = &k.optimiser;
     for (key, r) in [
         ("formation.kernels.optimiser.alpha_range", o.alpha_range),
