@@ -650,6 +650,14 @@ fn print_formation(fm: &serde_json::Value, ticks: &serde_json::Value) {
     } else {
         format!("not formed: censored at tick {ticks}")
     };
+    if fm["no_feasible_pattern"].as_bool() == Some(true) {
+        println!(
+            "  formation: NO FEASIBLE PATTERN: the optimiser found no placement of the template \
+             inside the box, clear of the discs and 2r + separation_margin apart (within \
+             formation.kernels.optimiser.max_nodes); the plan fell back to formation.transform. \
+             Move or shrink the discs, enlarge the arena, or widen alpha_range / theta_range"
+        );
+    }
     println!(
         "  formation: {formed}  robots in place {}/{}  L {:.1}  reassignments {}  overlapping pairs {}",
         fm["robots_in_place"],
@@ -680,6 +688,19 @@ fn print_formation(fm: &serde_json::Value, ticks: &serde_json::Value) {
             println!(
                 "    plan by robot {} at tick {}: superseded before its parameters were reported",
                 p["robot"], p["tick"]
+            );
+            continue;
+        }
+        if p["feasible"].as_bool() == Some(false) {
+            println!(
+                "    plan epoch {} by robot {} at tick {}: NO FEASIBLE PATTERN ({} nodes, {:.2} s): fallback alpha {:.3} theta {:.3}",
+                p["epoch"],
+                p["robot"],
+                p["tick"],
+                p["nodes"],
+                p["seconds"].as_f64().unwrap_or(f64::NAN),
+                p["alpha"].as_f64().unwrap_or(f64::NAN),
+                p["theta"].as_f64().unwrap_or(f64::NAN),
             );
             continue;
         }

@@ -32,6 +32,7 @@
 //!
 //! Units: robot.v_max is per tick, so V_p = v_max / tau and the command is v tau.
 
+mod checks;
 pub mod compact;
 pub mod gossip;
 pub mod messages;
@@ -82,7 +83,7 @@ pub const NAME: &str = "formation";
 /// Checks the formation behaviour's kernels against the scenario.
 pub fn validate(sc: &Scenario, c: &Check) -> Result<(), ConfigError> {
     crate::behaviours::require_holonomic(sc, c, NAME)?;
-    params::validate(sc, c)?;
+    checks::validate(sc, c).and_then(|()| params::validate(sc, c))?;
     coordinator_plan_fits(sc, c)
 }
 
@@ -617,7 +618,7 @@ impl Formation {
                 if assign_targets(&positions, &targets, &mut h, &mut sigma).is_err() {
                     sigma = (0..members.len()).collect();
                 }
-                (self.f.transform, sigma, 0.0, 0)
+                (self.f.transform, sigma, checks::no_plan_gap(self.f.pattern), 0)
             }
         };
         (
