@@ -422,3 +422,319 @@ fn fixed_slots(
     }
     Ok(())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const BASE: &str = include_str!("../../../../configs/formation.toml");
+
+    /// `BASE` with `extra` appended (and `edit` applied), written to a file of its own (so
+    /// the error's line is looked up in it), validated as `orchestrator up` does it.
+    fn check_with(name: &str, edit: &dyn Fn(&str) -> String, extra: &str) -> Result<(), ConfigError> {
+        let text = format!("{}\n{extra}", edit(BASE));
+        let dir = std::env::temp_dir().join(format!("formation-checks-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join(format!("{name}.toml"));
+        std::fs::write(&path, &text).unwrap();
+        let source = path.to_str().unwrap().to_string();
+        let sc = Scenario::parse(&text, &source).unwrap();
+        let r = super::super::validate(
+            &sc,
+            &Check {
+                key_source: &|_| source.clone(),
+            },
+        );
+        std::fs::remove_file(&path).unwrap();
+        r
+    }
+
+    fn check(name: &str, extra: &str) -> Result<(), ConfigError> {
+        check_with(name, &|t| t.to_string(), extra)
+    }
+
+    /// The error's key, that its source names `name.toml:LINE` and that its message holds
+    /// every one of `must`.
+    fn refused(r: Result<(), ConfigError>, name: &str, line: usize, key: &str, must: &[&str]) {
+        let e = r.expect_err("refused");
+        assert_eq!(e.key, key, "{e}");
+        assert!(e.source.ends_with(&format!("{name}.toml:{line}")), "{e}");
+        for m in must {
+            assert!(e.to_string().contains(m), "{m:?} in {e}");
+        }
+    }
+
+    fn base_lines() -> usize {
+        BASE.lines().count() + 1
+    }
+
+    #[test]
+    fn the_shipped_scenarios_and_a_resolved_one_pass() {
+        assert_eq!(check("base", ""), Ok(()));
+        for f in ["formation-n", "formation-r", "formation-100", "formation-500", "formation-swaps-16"] {
+            let path = format!("{}/../configs/{f}.toml", env!("CARGO_MANIFEST_DIR"));
+            let text = std::fs::read_to_string(&path).unwrap();
+            let sc = Scenario::parse(&text, &path).unwrap();
+            let c = Check {
+                key_source: &|_| path.clone(),
+            };
+            assert_eq!(super::super::validate(&sc, &c), Ok(()), "{f}");
+            // Its resolved scenario (every kernel key written, the derived ones too) passes.
+            let mut resolved = sc.clone();
+            super::super::resolve(&mut resolved).unwrap();
+            assert_eq!(super::super::validate(&resolved, &c), Ok(()), "{f} resolved");
+        }
+    }
+
+    #[test]
+    fn a_typo_under_formation_kernels_is_refused_with_the_allowed_keys() {
+        let at = base_lines() + 2;
+        refused(
+            check("typo", "[formation.kernels]\ntime_stpe = 0.3\n"),
+            "typo",
+            at,
+            "formation.kernels.time_stpe",
+            &["not a key of `formation.kernels`", "time_step", "k_a", "optimiser"],
+        );
+        refused(
+            check("typo2", "[formation.kernels.optimiser]\nalpha_rang = [1.0, 1.5]\n"),
+            "typo2",
+            at,
+            "formation.kernels.optimiser.alpha_rang",
+            &["formation.kernels.optimiser", "alpha_range", "max_nodes"],
+        );
+        refused(
+            check("typo3", "[formation.kernels.swaps.blocked]\nwait_tick = 3\n"),
+            "typo3",
+            at,
+            "formation.kernels.swaps.blocked.wait_tick",
+            &["wait_ticks"],
+        );
+    }
+
+    #[test]
+    fn a_wrong_type_names_its_own_key() {
+        let at = base_lines() + 2;
+        refused(
+            check("type", "[formation.kernels]\nk_a = \"fast\"\n"),
+            "type",
+            at,
+            "formation.kernels.k_a",
+            &["wrong type", "expected f64", "default: 1.0"],
+        );
+        refused(
+            check("enum", "[formation.kernels]\nobstacle_constraint = \"cirle\"\n"),
+            "enum",
+            at,
+            "formation.kernels.obstacle_constraint",
+            &["square", "circle"],
+        );
+        refused(
+            check("table", "[formation.kernels]\noptimiser = 3\n"),
+            "table",
+            at,
+            "formation.kernels.optimiser",
+            &["wrong type"],
+        );
+        refused(
+            check("nested", "[formation.kernels.replan]\nmax_nodes = -4\n"),
+            "nested",
+            at,
+            "formation.kernels.replan.max_nodes",
+            &["wrong type"],
+        );
+    }
+
+    #[test]
+    fn a_derived_kernel_key_is_refused_unless_it_holds_the_derived_value() {
+        let at = base_lines() + 2;
+        refused(
+            check("derived", "[formation.kernels]\nepsilon = 0.5\n"),
+            "derived",
+            at,
+            "formation.kernels.epsilon",
+            &["formation.epsilon", "0.05"],
+        );
+        refused(
+            check("speed", "[formation.kernels]\nmax_speed = 3\n"),
+            "speed",
+            at,
+            "formation.kernels.max_speed",
+            &["robot.v_max"],
+        );
+        assert_eq!(check("same", "[formation.kernels]\nepsilon = 0.05\nrobot_radius = 1\n"), Ok(()));
+    }
+
+    #[test]
+    fn the_ranges_params_left_open_are_checked() {
+        let at = base_lines() + 2;
+        refused(
+            check("gap", "[formation.kernels.optimiser]\ngap_rel = 2.0\n"),
+            "gap",
+            at,
+            "formation.kernels.optimiser.gap_rel",
+            &["[0, 1]"],
+        );
+        refused(
+            check("slack", "[formation.kernels]\ncell_slack = -1.0\n"),
+            "slack",
+            at,
+            "formation.kernels.cell_slack",
+            &["out of range"],
+        );
+        refused(
+            check("iter", "[formation.kernels]\nmax_iterations = 0\n"),
+            "iter",
+            at,
+            "formation.kernels.max_iterations",
+            &["1..="],
+        );
+    }
+
+    fn with_template(points: &str) -> impl Fn(&str) -> String + '_ {
+        move |t: &str| {
+            t.replace(
+                "template_name = \"C\"\n",
+                &format!("template_name = \"mine\"\ntemplate = {points}\n"),
+            )
+        }
+    }
+
+    fn template_line() -> usize {
+        BASE.lines().position(|l| l.starts_with("template_name")).unwrap() + 2
+    }
+
+    #[test]
+    fn a_template_no_alpha_separates_is_refused_one_a_larger_alpha_separates_is_not() {
+        let line = |step: f64| {
+            let p: Vec<String> = (0..9).map(|k| format!("[{}, 0.0]", step * k as f64)).collect();
+            format!("[{}]", p.join(", "))
+        };
+        // 1.5 apart: closer than 2r at alpha = 1, 3.0 apart at alpha = 2 (literal reading,
+        // theta = 0): feasible, the optimiser scales it up.
+        assert_eq!(check_with("spaced", &with_template(&line(1.5)), ""), Ok(()));
+        // 1.0 apart: at most 2.0 apart at the largest scale, less than 2r + 0.2 = 2.2.
+        refused(
+            check_with("close", &with_template(&line(1.0)), ""),
+            "close",
+            template_line(),
+            "formation.template",
+            &["points 0 and 1", "2.200", "alpha_range", "at least 1.100 apart"],
+        );
+        // ... unless alpha_range reaches further.
+        assert_eq!(
+            check_with(
+                "wide",
+                &with_template(&line(1.0)),
+                "[formation.kernels.optimiser]\nalpha_range = [0.5, 2.5]\n"
+            ),
+            Ok(())
+        );
+        // The built-in letter under a narrow alpha_range names template_name.
+        let e = check(
+            "narrow",
+            "[formation.kernels.optimiser]\nalpha_range = [0.6, 0.8]\ntheta_range = [0.0, 0.0]\n",
+        )
+            .unwrap_err();
+        assert_eq!(e.key, "formation.template_name", "{e}");
+        // Two points on top of each other.
+        refused(
+            check_with(
+                "dup",
+                &with_template("[[0, 0], [0, 0], [0, 4.4], [0, 6.6], [0, 8.8], [2.2, 0], [4.4, 0], [6.6, 0], [8.8, 0]]"),
+                "",
+            ),
+            "dup",
+            template_line(),
+            "formation.template",
+            &["0.000 apart"],
+        );
+        // A point that is not a number.
+        refused(
+            check_with(
+                "nan",
+                &with_template("[[0, 0], [nan, 2.2], [0, 4.4], [0, 6.6], [0, 8.8], [2.2, 0], [4.4, 0], [6.6, 0], [8.8, 0]]"),
+                "",
+            ),
+            "nan",
+            template_line(),
+            "formation.template[1]",
+            &["finite"],
+        );
+    }
+
+    #[test]
+    fn a_template_too_wide_for_the_box_at_its_separating_scale_is_refused() {
+        // 9 points: 8 within 1.2 of each other around the origin, one 40 away. Separating the
+        // close ones needs scale 1.83; then the template is 73 across, the box's diagonal 31.
+        let p = "[[0, 0], [1.2, 0], [2.4, 0], [3.6, 0], [0, 1.2], [1.2, 1.2], [2.4, 1.2], [3.6, 1.2], [40, 0]]";
+        refused(
+            check_with("wide", &with_template(p), ""),
+            "wide",
+            template_line(),
+            "formation.template",
+            &["across", "diagonal", "no pattern is feasible"],
+        );
+    }
+
+    #[test]
+    fn fixed_slots_must_be_apart_inside_the_box_and_off_the_discs() {
+        let fixed = |t: [f64; 4]| {
+            move |text: &str| {
+                text.replace(
+                    "pattern = \"optimise\"\n",
+                    &format!(
+                        "pattern = \"fixed\"\ntransform = [{:?}, {:?}, {:?}, {:?}]\n",
+                        t[0], t[1], t[2], t[3]
+                    ),
+                )
+            }
+        };
+        let at = BASE.lines().position(|l| l.starts_with("pattern =")).unwrap() + 2;
+        // The C (radius 3.7, literal reading at alpha 1: s + d) around (18.5, 18.5), clear of
+        // the discs at (9, 14) and (15, 9); around (6.4, 11.4) its point 0 (at 45 degrees)
+        // lands on OB1's centre.
+        assert_eq!(check_with("ok", &fixed([1.0, 18.5, 18.5, 0.0]), ""), Ok(()));
+        refused(
+            check_with("out", &fixed([1.0, 0.0, 0.0, 0.0]), ""),
+            "out",
+            at,
+            "formation.transform",
+            &["slot 1", "not within"],
+        );
+        refused(
+            check_with("disc", &fixed([1.0, 6.4, 11.4, 0.0]), ""),
+            "disc",
+            at,
+            "formation.transform",
+            &["arena.discs[0]", "OB1"],
+        );
+        refused(
+            check_with("tight", &fixed([0.5, 12.0, 20.0, 0.0]), ""),
+            "tight",
+            at,
+            "formation.transform",
+            &["closer than 2 robot.radius"],
+        );
+        refused(
+            check_with("inf", &fixed([1.0, f64::INFINITY, 0.0, 0.0]), ""),
+            "inf",
+            at,
+            "formation.transform[1]",
+            &["finite"],
+        );
+    }
+
+    #[test]
+    fn the_largest_scale_of_the_literal_reading() {
+        let pi = std::f64::consts::PI;
+        let lit = TransformReading::Literal;
+        // |alpha - 1 + e^(i theta)| is largest at theta = 0: alpha.
+        assert!((max_scale(lit, [0.5, 2.0], [-pi, pi]) - 2.0).abs() < 1e-12);
+        // theta in [pi/2, pi/2]: |1 + i| at alpha = 2.
+        assert!((max_scale(lit, [2.0, 2.0], [pi / 2.0, pi / 2.0]) - 2f64.sqrt()).abs() < 1e-12);
+        // alpha = 0: |-1 + e^(i theta)| is largest at theta = pi: 2.
+        assert!((max_scale(lit, [0.0, 0.0], [-pi, pi]) - 2.0).abs() < 1e-12);
+        assert_eq!(max_scale(TransformReading::Similarity, [-3.0, 2.0], [0.0, 1.0]), 3.0);
+    }
+}
