@@ -507,6 +507,15 @@ mod tests {
             (Some(1.25), Some(-0.5), Some([4.0, 5.0]), Some(3))
         );
         assert_eq!(m.slots[1].map(|s| s.index), Some(1), "parameter reports keep the slot");
+        assert!(m.plans[0].feasible);
+        // A plan that found no feasible pattern says so in the summary.
+        m.observe(0, [REPORT_GAP_INFEASIBLE, 0.0, REPORT_PLAN, 0.0]);
+        assert!(!m.plans[1].feasible);
+        let facts = RunFacts {
+            ticks: 4,
+            distance_travelled: 1.5,
+        };
+        assert!(m.metrics_now(&facts).no_feasible_pattern);
         m.update(4, &[[0.0, 0.0, 0.0], [1.5, 0.0, 0.0]], &[true, false], &mut vec![]);
         assert_eq!(m.progress(), (1, 1));
         assert_eq!(m.overlapping_pairs, 1);
