@@ -666,10 +666,15 @@ fn print_formation(fm: &serde_json::Value, ticks: &serde_json::Value) {
         fm["reassignments"],
         fm["overlapping_pairs"]
     );
+    // A clearance with nothing to measure (one robot, no disc) is infinite, null in JSON.
+    let clearance = |v: &serde_json::Value| {
+        v.as_f64()
+            .map_or_else(|| "none (no pair)".to_string(), |c| format!("{c:.3}"))
+    };
     println!(
-        "    least clearance: robot-robot {:.3}  robot-obstacle {:.3}",
-        fm["min_robot_clearance"].as_f64().unwrap_or(f64::NAN),
-        fm["min_obstacle_clearance"].as_f64().unwrap_or(f64::NAN)
+        "    least clearance: robot-robot {}  robot-obstacle {}",
+        clearance(&fm["min_robot_clearance"]),
+        clearance(&fm["min_obstacle_clearance"])
     );
     // A swarm that re-plans often (a plan a lost member) lists hundreds: the first and last
     // few, and how many between.

@@ -51,10 +51,18 @@ fn bad_formation_inputs_are_refused_naming_file_line_key_and_allowed_values() {
             "template_name = \"dot\"\ntemplate = [[0, 0], [0, 0], [0, 0], [0, 0], [0, 0], [0, 0], [0, 0], [0, 0], [0, 0]]\n",
         ),
     );
-    let o = up(&["--scenario", &dup, "--executor", "inprocess"], &dir.join("dup-run"));
+    let o = up(
+        &["--scenario", &dup, "--executor", "inprocess"],
+        &dir.join("dup-run"),
+    );
     let err = stderr(&o);
     assert_eq!(o.status.code(), Some(2), "{err}");
-    for m in ["dup.toml:", "formation.template", "no pattern is feasible", "alpha_range"] {
+    for m in [
+        "dup.toml:",
+        "formation.template",
+        "no pattern is feasible",
+        "alpha_range",
+    ] {
         assert!(err.contains(m), "{m:?} in {err}");
     }
     let _ = std::fs::remove_dir_all(&dir);
@@ -67,7 +75,10 @@ fn a_disc_that_leaves_no_room_for_the_pattern_says_no_feasible_pattern() {
     // One disc of radius 10 mid-box: its keep-out square (half-side 10 + r + 0.1) covers the
     // whole [r, 24 - r] box the targets may use; the corners still hold the starts.
     let text = base();
-    let (i, j) = (text.find("[[arena.discs]]").unwrap(), text.find("[robot]").unwrap());
+    let (i, j) = (
+        text.find("[[arena.discs]]").unwrap(),
+        text.find("[robot]").unwrap(),
+    );
     let text = format!(
         "{}[[arena.discs]]\nname = \"BIG\"\ncentre = [12.0, 12.0]\nradius = 10.0\n\n{}",
         &text[..i],
@@ -76,7 +87,14 @@ fn a_disc_that_leaves_no_room_for_the_pattern_says_no_feasible_pattern() {
     let sc = write(&dir, "nofit.toml", &text);
     let out = dir.join("run");
     let o = up(
-        &["--scenario", &sc, "--executor", "inprocess", "--max-ticks", "30"],
+        &[
+            "--scenario",
+            &sc,
+            "--executor",
+            "inprocess",
+            "--max-ticks",
+            "30",
+        ],
         &out,
     );
     let text = String::from_utf8_lossy(&o.stdout).into_owned();

@@ -43,6 +43,16 @@ pub fn no_plan_gap(pattern: PatternChoice) -> f64 {
     }
 }
 
+/// What the agent's plan line adds to a plan's gap: the plain words when it is
+/// [`REPORT_GAP_INFEASIBLE`].
+pub fn gap_note(gap: f64) -> &'static str {
+    if gap == REPORT_GAP_INFEASIBLE {
+        " (NO FEASIBLE PATTERN: the optimiser found no placement; fallback formation.transform)"
+    } else {
+        ""
+    }
+}
+
 /// Every check of this file, in the order a user meets them.
 pub fn validate(sc: &Scenario, c: &Check) -> Result<(), ConfigError> {
     let f = params::section(sc);

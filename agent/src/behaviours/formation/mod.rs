@@ -289,7 +289,7 @@ impl Formation {
     ) -> [f64; 4] {
         let (plan, gap, nodes) = solved;
         eprintln!(
-            "formation: robot {} {what} epoch {} at tick {k} for {} robots{extra}: alpha {:.4} d [{:.4}, {:.4}] theta {:.4}, gap {gap:.4}, {nodes} nodes, {seconds:.3} s",
+            "formation: robot {} {what} epoch {} at tick {k} for {} robots{extra}: alpha {:.4} d [{:.4}, {:.4}] theta {:.4}, gap {gap:.4}{}, {nodes} nodes, {seconds:.3} s",
             self.robot,
             plan.epoch,
             plan.points.len(),
@@ -297,6 +297,7 @@ impl Formation {
             plan.transform[1],
             plan.transform[2],
             plan.transform[3],
+            checks::gap_note(gap),
         );
         let t = plan.transform;
         let epoch = plan.epoch as f64;

@@ -422,6 +422,11 @@ fn one_robot_stands_where_it_is_in_few_nodes_with_a_finite_gap() {
     assert!(sol.cost < 1e-3, "cost {}", sol.cost);
     // Started inside a disc's keep-out square (OB1 at (9, 14)): the nearest allowed point.
     let sol = optimise(&[Vec2::new(9.5, 14.0)], &template, &params).unwrap();
-    assert!(sol.gap.is_finite() && sol.nodes < 1000, "{} {}", sol.gap, sol.nodes);
+    assert!(
+        sol.gap.is_finite() && sol.nodes < 1000,
+        "{} {}",
+        sol.gap,
+        sol.nodes
+    );
     check_solution(&sol, &[Vec2::new(9.5, 14.0)], &params);
 }
