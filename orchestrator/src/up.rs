@@ -650,6 +650,14 @@ fn print_formation(fm: &serde_json::Value, ticks: &serde_json::Value) {
     } else {
         format!("not formed: censored at tick {ticks}")
     };
+    if fm["no_feasible_pattern"].as_bool() == Some(true) {
+        println!(
+            "  formation: NO FEASIBLE PATTERN: the optimiser found no placement of the template \
+             inside the box, clear of the discs and 2r + separation_margin apart (within \
+             formation.kernels.optimiser.max_nodes); the plan fell back to formation.transform. \
+             Move or shrink the discs, enlarge the arena, or widen alpha_range / theta_range"
+        );
+    }
     println!(
         "  formation: {formed}  robots in place {}/{}  L {:.1}  reassignments {}  overlapping pairs {}",
         fm["robots_in_place"],
@@ -658,10 +666,15 @@ fn print_formation(fm: &serde_json::Value, ticks: &serde_json::Value) {
         fm["reassignments"],
         fm["overlapping_pairs"]
     );
+    // A clearance with nothing to measure (one robot, no disc) is infinite, null in JSON.
+    let clearance = |v: &serde_json::Value| {
+        v.as_f64()
+            .map_or_else(|| "none (no pair)".to_string(), |c| format!("{c:.3}"))
+    };
     println!(
-        "    least clearance: robot-robot {:.3}  robot-obstacle {:.3}",
-        fm["min_robot_clearance"].as_f64().unwrap_or(f64::NAN),
-        fm["min_obstacle_clearance"].as_f64().unwrap_or(f64::NAN)
+        "    least clearance: robot-robot {}  robot-obstacle {}",
+        clearance(&fm["min_robot_clearance"]),
+        clearance(&fm["min_obstacle_clearance"])
     );
     // A swarm that re-plans often (a plan a lost member) lists hundreds: the first and last
     // few, and how many between.
@@ -683,6 +696,19 @@ fn print_formation(fm: &serde_json::Value, ticks: &serde_json::Value) {
             );
             continue;
         }
+        if p["feasible"].as_bool() == Some(false) {
+            println!(
+                "    plan epoch {} by robot {} at tick {}: NO FEASIBLE PATTERN ({} nodes, {:.2} s): fallback alpha {:.3} theta {:.3}",
+                p["epoch"],
+                p["robot"],
+                p["tick"],
+                p["nodes"],
+                p["seconds"].as_f64().unwrap_or(f64::NAN),
+                p["alpha"].as_f64().unwrap_or(f64::NAN),
+                p["theta"].as_f64().unwrap_or(f64::NAN),
+            );
+            continue;
+        }
         let gap = p["gap"].as_f64().unwrap_or(f64::NAN);
         println!(
             "    plan epoch {} by robot {} at tick {}: alpha {:.3} theta {:.3}  gap {:.3}{}  {:.2} s",
@@ -698,9 +724,10 @@ fn print_formation(fm: &serde_json::Value, ticks: &serde_json::Value) {
     }
 }
 
-/// What a negative plan gap means: the swaps re-plan reports sentinels, not bounds (agent
-/// crate: replan.rs `NO_PLACEMENT` = -1, replan_multihop.rs `SHIFTED` = -2, shift_drop.rs
-/// `SHIFTED_AND_DROPPED` = -3). A gap the optimiser proved is never negative.
+/// What a negative plan gap means: the re-plans report sentinels, not bounds (agent crate:
+/// replan.rs `NO_PLACEMENT` = -1, replan_multihop.rs `SHIFTED` = -2 (also the relayed mode's
+/// shift, relay_place.rs), shift_drop.rs `SHIFTED_AND_DROPPED` = -3). A gap the optimiser
+/// proved is never negative.
 fn gap_sentinel(gap: f64) -> &'static str {
     if gap == -1.0 {
         " (no placement found: old transform)"

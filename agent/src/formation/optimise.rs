@@ -469,6 +469,12 @@ impl Problem {
         sigma: &mut Vec<usize>,
     ) -> (f64, f64) {
         let n = self.n;
+        if self.s2 == 0.0 {
+            // A template of one point (every point at its centroid): the shape is a point,
+            // g = P2 whatever (a, b). Without this, z = (D, X) / S2 = 0 / 0 made the bound NaN,
+            // and one robot spent the whole node budget and reported an infinite gap.
+            return (self.p2, 0.0);
+        }
         let (a0, b0) = (0.5 * (ar[0] + ar[1]), 0.5 * (br[0] + br[1]));
         self.best_alignment(a0, b0, h, sigma);
         let duals = self.interior_duals(a0, b0, sigma);

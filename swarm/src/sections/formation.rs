@@ -99,6 +99,10 @@ pub const REPORT_NO_SLOT: f64 = -1.0;
 /// `report[2]` on the tick the coordinator solved the pattern: the report is then
 /// [gap, optimiser wall seconds, REPORT_PLAN, branch-and-bound nodes].
 pub const REPORT_PLAN: f64 = -2.0;
+/// `report[0]` (the gap) of a plan report when the optimiser found no feasible placement of
+/// the pattern (box, obstacles, separation) and the plan fell back to `formation.transform`:
+/// the summary says "NO FEASIBLE PATTERN" (a proven gap is never negative).
+pub const REPORT_GAP_INFEASIBLE: f64 = -1.0;
 /// `report[2]` on the tick after a plan: [alpha, theta, REPORT_PLAN_SHAPE, plan epoch].
 pub const REPORT_PLAN_SHAPE: f64 = -3.0;
 /// `report[2]` two ticks after a plan: [d_1, d_2, REPORT_PLAN_SHIFT, plan epoch].

@@ -13,8 +13,8 @@ use swarm::frames::Sense;
 use swarm::recording::Event;
 use swarm::scenario::{Check, ConfigError, Scenario};
 use swarm::sections::formation::{
-    FormationSection, REPORT_NO_SLOT, REPORT_PLAN, REPORT_PLAN_SHAPE, REPORT_PLAN_SHIFT,
-    STATE_COORDINATOR, STATE_IN_PLACE,
+    FormationSection, REPORT_GAP_INFEASIBLE, REPORT_NO_SLOT, REPORT_PLAN, REPORT_PLAN_SHAPE,
+    REPORT_PLAN_SHIFT, STATE_COORDINATOR, STATE_IN_PLACE,
 };
 
 pub const ENTRY: MissionEntry = MissionEntry {
@@ -129,8 +129,13 @@ pub struct Slot {
 pub struct PlanReport {
     pub tick: u64,
     pub robot: u32,
-    /// Proven optimality gap (cost - lower bound, squared units).
+    /// Proven optimality gap (cost - lower bound, squared units); -1 when the optimiser found
+    /// no feasible placement (`feasible` false).
     pub gap: f64,
+    /// False: the optimiser found no placement of the pattern satisfying the box, obstacle and
+    /// separation constraints (within its node budget); the plan fell back to
+    /// `formation.transform`, and the summary says "NO FEASIBLE PATTERN".
+    pub feasible: bool,
     /// Wall seconds the branch-and-bound took in the coordinator's process.
     pub seconds: f64,
     pub nodes: u64,
@@ -170,6 +175,8 @@ pub struct FormationMetrics {
     pub obstacle_overlaps: u64,
     /// Each pattern solve (the first, and re-plans after a robot was lost).
     pub plans: Vec<PlanReport>,
+    /// Some plan found no feasible pattern (a plan with `feasible` false).
+    pub no_feasible_pattern: bool,
     /// The final slots, by robot (None: no slot reported).
     pub slots: Vec<Option<Slot>>,
     /// Fig. 9: each robot's distance to its slot at every tick (small swarms only).
@@ -223,6 +230,7 @@ impl FormationMission {
             max_overlapping_pairs_at_one_tick: self.max_overlapping_pairs,
             obstacle_overlaps: self.obstacle_overlaps,
             plans: self.plans.clone(),
+            no_feasible_pattern: self.plans.iter().any(|p| !p.feasible),
             slots: self.slots.clone(),
             distance_to_slot: self.error_series.clone(),
         }
@@ -326,6 +334,7 @@ impl Mission for FormationMission {
                 tick: self.tick,
                 robot,
                 gap: report[0],
+                feasible: report[0] != REPORT_GAP_INFEASIBLE,
                 seconds: report[1],
                 nodes: report[3] as u64,
                 alpha: None,
@@ -521,6 +530,15 @@ mod tests {
             (Some(1.25), Some(-0.5), Some([4.0, 5.0]), Some(3))
         );
         assert_eq!(m.slots[1].map(|s| s.index), Some(1), "parameter reports keep the slot");
+        assert!(m.plans[0].feasible);
+        // A plan that found no feasible pattern says so in the summary.
+        m.observe(0, [REPORT_GAP_INFEASIBLE, 0.0, REPORT_PLAN, 0.0]);
+        assert!(!m.plans[1].feasible);
+        let facts = RunFacts {
+            ticks: 4,
+            distance_travelled: 1.5,
+        };
+        assert!(m.metrics_now(&facts).no_feasible_pattern);
         m.update(4, &[[0.0, 0.0, 0.0], [1.5, 0.0, 0.0]], &[true, false], &mut vec![]);
         assert_eq!(m.progress(), (1, 1));
         assert_eq!(m.overlapping_pairs, 1);

@@ -32,6 +32,7 @@
 //!
 //! Units: robot.v_max is per tick, so V_p = v_max / tau and the command is v tau.
 
+mod checks;
 pub mod compact;
 pub mod detour;
 pub mod gossip;
@@ -86,7 +87,7 @@ pub const NAME: &str = "formation";
 /// Checks the formation behaviour's kernels against the scenario.
 pub fn validate(sc: &Scenario, c: &Check) -> Result<(), ConfigError> {
     crate::behaviours::require_holonomic(sc, c, NAME)?;
-    params::validate(sc, c)?;
+    checks::validate(sc, c).and_then(|()| params::validate(sc, c))?;
     coordinator_plan_fits(sc, c)
 }
 
@@ -303,7 +304,7 @@ impl Formation {
     ) -> [f64; 4] {
         let (plan, gap, nodes) = solved;
         eprintln!(
-            "formation: robot {} {what} epoch {} at tick {k} for {} robots{extra}: alpha {:.4} d [{:.4}, {:.4}] theta {:.4}, gap {gap:.4}, {nodes} nodes, {seconds:.3} s",
+            "formation: robot {} {what} epoch {} at tick {k} for {} robots{extra}: alpha {:.4} d [{:.4}, {:.4}] theta {:.4}, gap {gap:.4}{}, {nodes} nodes, {seconds:.3} s",
             self.robot,
             plan.epoch,
             plan.points.len(),
@@ -311,6 +312,7 @@ impl Formation {
             plan.transform[1],
             plan.transform[2],
             plan.transform[3],
+            checks::gap_note(gap),
         );
         let t = plan.transform;
         let epoch = plan.epoch as f64;
@@ -632,7 +634,7 @@ impl Formation {
                 if assign_targets(&positions, &targets, &mut h, &mut sigma).is_err() {
                     sigma = (0..members.len()).collect();
                 }
-                (self.f.transform, sigma, 0.0, 0)
+                (self.f.transform, sigma, checks::no_plan_gap(self.f.pattern), 0)
             }
         };
         (

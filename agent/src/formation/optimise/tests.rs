@@ -404,3 +404,29 @@ fn similarity_reading_is_solved_as_well() {
         assert!((lambda - sol.transform.alpha).abs() < 1e-12);
     }
 }
+
+/// One robot (a one-point template, run.robots = 1): the pattern is a point, so the optimum is
+/// the start itself when it is clear. It used to spend the whole node budget (400 001 nodes)
+/// and report an infinite gap (a 0 / 0 in the bound), which the world dropped as non-finite.
+#[test]
+fn one_robot_stands_where_it_is_in_few_nodes_with_a_finite_gap() {
+    let params = FormationParams::default();
+    let template = Template {
+        name: "dot".into(),
+        points: vec![[3.7, 0.0]],
+    };
+    let start = [Vec2::new(20.7, 22.9)];
+    let sol = optimise(&start, &template, &params).unwrap();
+    assert!(sol.gap.is_finite() && sol.gap <= 1e-3, "gap {}", sol.gap);
+    assert!(sol.nodes < 1000, "{} nodes", sol.nodes);
+    assert!(sol.cost < 1e-3, "cost {}", sol.cost);
+    // Started inside a disc's keep-out square (OB1 at (9, 14)): the nearest allowed point.
+    let sol = optimise(&[Vec2::new(9.5, 14.0)], &template, &params).unwrap();
+    assert!(
+        sol.gap.is_finite() && sol.nodes < 1000,
+        "{} {}",
+        sol.gap,
+        sol.nodes
+    );
+    check_solution(&sol, &[Vec2::new(9.5, 14.0)], &params);
+}
