@@ -66,11 +66,14 @@ pub fn validate(sc: &Scenario, c: &Check) -> Result<(), ConfigError> {
     template(sc, &f, &p, c)
 }
 
-/// The keys `formation.kernels` may hold: every parameter at its default (the blocked
-/// swap's too, which only the swaps mode resolves).
+/// The keys `formation.kernels` may hold: every parameter at its default (the optional
+/// tables' too: the blocked swap's and the detour's, which only the swaps mode resolves, and
+/// the relayed mode's, present only when the scenario asks for it).
 fn allowed() -> toml::Table {
     let mut p = Params::default();
     p.swaps.blocked.get_or_insert_with(BlockedParams::default);
+    p.detour.get_or_insert_with(Default::default);
+    p.relay.get_or_insert_with(Default::default);
     toml::Table::try_from(&p).expect("the formation parameters serialise")
 }
 
@@ -481,7 +484,15 @@ mod tests {
     #[test]
     fn the_shipped_scenarios_and_a_resolved_one_pass() {
         assert_eq!(check("base", ""), Ok(()));
-        for f in ["formation-n", "formation-r", "formation-100", "formation-500", "formation-swaps-16"] {
+        for f in [
+            "formation-n",
+            "formation-r",
+            "formation-100",
+            "formation-500",
+            "formation-swaps-16",
+            "formation-100-centralised",
+            "formation-500-centralised",
+        ] {
             let path = format!("{}/../configs/{f}.toml", env!("CARGO_MANIFEST_DIR"));
             let text = std::fs::read_to_string(&path).unwrap();
             let sc = Scenario::parse(&text, &path).unwrap();
