@@ -148,20 +148,7 @@ fn a_robot_killed_under_swaps_leaves_fifteen_that_re_form_a_re_planned_pattern()
 #[test]
 fn a_robot_killed_among_100_under_swaps_re_forms_by_a_multi_hop_compact_re_plan() {
     let _g = serial();
-    let sc = config("formation-100.toml");
-    let i = tmp_dir("formation-100-kill-i");
-    let o = up(
-        &[
-            "--scenario",
-            &sc,
-            "--executor",
-            "inprocess",
-            "--chaos-at",
-            "100:37",
-        ],
-        &i,
-    );
-    assert!(o.status.success(), "{}", stderr(&o));
+    let i = swaps_100_killed("formation-100-kill-i", "100:37");
     assert_survivors_re_formed(&i, "inprocess", 100, 37, 100);
     assert_left_nothing(&i);
 }
@@ -174,20 +161,10 @@ fn a_robot_killed_among_100_under_swaps_re_forms_by_a_multi_hop_compact_re_plan(
 #[test]
 fn five_robots_killed_at_once_among_100_under_swaps_re_form_by_shift_and_drop() {
     let _g = serial();
-    let sc = config("formation-100.toml");
-    let i = tmp_dir("formation-100-five-kills-i");
-    let o = up(
-        &[
-            "--scenario",
-            &sc,
-            "--executor",
-            "inprocess",
-            "--chaos-at",
-            "100:37,100:74,100:2,100:83,100:71",
-        ],
-        &i,
+    let i = swaps_100_killed(
+        "formation-100-five-kills-i",
+        "100:37,100:74,100:2,100:83,100:71",
     );
-    assert!(o.status.success(), "{}", stderr(&o));
     let s = summary(&i);
     let f = formation(&i);
     assert_eq!(f["formed"], true, "{f}");
@@ -214,6 +191,25 @@ fn five_robots_killed_at_once_among_100_under_swaps_re_form_by_shift_and_drop() 
     idx.sort_unstable();
     assert_eq!(idx, (0..95).collect::<Vec<u64>>());
     assert_left_nothing(&i);
+}
+
+/// configs/formation-100.toml in-process with the kills `chaos_at`, in a fresh folder `name`.
+fn swaps_100_killed(name: &str, chaos_at: &str) -> PathBuf {
+    let sc = config("formation-100.toml");
+    let dir = tmp_dir(name);
+    let o = up(
+        &[
+            "--scenario",
+            &sc,
+            "--executor",
+            "inprocess",
+            "--chaos-at",
+            chaos_at,
+        ],
+        &dir,
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    dir
 }
 
 /// One kill under swaps, the run in `dir` (executor `exec`) of `robots` robots with robot
