@@ -14,6 +14,7 @@
 
 use super::compact::dead_list;
 use super::relay_place::place;
+use super::shift_drop::CLEARANCE_SLACK;
 use super::gossip::Bitmap;
 use super::relay::{chunks, estimate, member_index, Head, Relay, RelayParams, Sigma, Up};
 use super::replan::NO_PLACEMENT;
@@ -413,13 +414,22 @@ impl Formation {
                 params.obstacle_centres.extend(dead.iter().copied());
                 let c = PatternConstraints::new(&params);
                 let reach = self.p.kernels.robot_radius + self.p.orca_margin;
-                let clear = |q: Vec2| {
-                    c.in_box(q)
-                        && self.discs.iter().all(|d| (q - d.position).norm() >= d.radius + reach)
-                        && dead.iter().all(|w| (q - Vec2::new(w[0], w[1])).norm() >= within)
+                let clear_by = |slack: f64| {
+                    let (c, dead, discs) = (&c, &dead, &self.discs);
+                    move |q: Vec2| {
+                        c.in_box(q)
+                            && discs.iter().all(|d| (q - d.position).norm() >= d.radius + reach)
+                            && dead
+                                .iter()
+                                .all(|w| (q - Vec2::new(w[0], w[1])).norm() >= within + slack)
+                    }
                 };
                 let r = &self.p.replan;
-                match place(&all, &prefer, n, clear, r.shift_step, r.max_shift) {
+                // Slots just clear of a wreck leave their robots short of them under ORCA
+                // (shift_drop.rs CLEARANCE_SLACK): with the slack first, then without.
+                let placed = place(&all, &prefer, n, clear_by(CLEARANCE_SLACK), r.shift_step, r.max_shift)
+                    .or_else(|| place(&all, &prefer, n, clear_by(0.0), r.shift_step, r.max_shift));
+                match placed {
                     Some((delta, points)) if delta == Vec2::zeros() => (t, points, 0.0, 0),
                     Some((delta, points)) => ([t[0], t[1] + delta.x, t[2] + delta.y, t[3]], points, SHIFTED, 0),
                     None => {
