@@ -18,6 +18,20 @@ fn write(dir: &std::path::Path, name: &str, text: &str) -> String {
     p.to_str().unwrap().to_string()
 }
 
+/// configs/formation.toml with its two discs replaced by one of `radius` mid-box.
+fn with_one_disc(radius: f64) -> String {
+    let text = base();
+    let (i, j) = (
+        text.find("[[arena.discs]]").unwrap(),
+        text.find("[robot]").unwrap(),
+    );
+    format!(
+        "{}[[arena.discs]]\nname = \"BIG\"\ncentre = [12.0, 12.0]\nradius = {radius:.1}\n\n{}",
+        &text[..i],
+        &text[j..]
+    )
+}
+
 #[test]
 fn bad_formation_inputs_are_refused_naming_file_line_key_and_allowed_values() {
     let _g = serial();
@@ -74,16 +88,7 @@ fn a_disc_that_leaves_no_room_for_the_pattern_says_no_feasible_pattern() {
     let dir = tmp_dir("formation-nofit");
     // One disc of radius 10 mid-box: its keep-out square (half-side 10 + r + 0.1) covers the
     // whole [r, 24 - r] box the targets may use; the corners still hold the starts.
-    let text = base();
-    let (i, j) = (
-        text.find("[[arena.discs]]").unwrap(),
-        text.find("[robot]").unwrap(),
-    );
-    let text = format!(
-        "{}[[arena.discs]]\nname = \"BIG\"\ncentre = [12.0, 12.0]\nradius = 10.0\n\n{}",
-        &text[..i],
-        &text[j..]
-    );
+    let text = with_one_disc(10.0);
     let sc = write(&dir, "nofit.toml", &text);
     let out = dir.join("run");
     let o = up(
@@ -105,5 +110,53 @@ fn a_disc_that_leaves_no_room_for_the_pattern_says_no_feasible_pattern() {
     assert_eq!(f["plans"][0]["feasible"], false, "{f}");
     assert_eq!(f["formed"], false);
     assert_eq!(f["overlapping_pairs"], 0);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn robots_squeezed_into_a_corner_by_a_big_disc_slide_along_the_walls_to_their_slots() {
+    let _g = serial();
+    let dir = tmp_dir("formation-big-disc");
+    // One disc of radius 6 mid-box: the optimum puts the C in a corner, slots at r from both
+    // walls (C1 allows it). Without the walls' half-planes (walls.rs) ORCA kept steering
+    // robots into a wall, the world refused the step, and seeds 2 and 5 never formed.
+    let on = write(&dir, "big.toml", &with_one_disc(6.0));
+    let off = write(
+        &dir,
+        "big-off.toml",
+        &format!(
+            "{}\n[formation.kernels]\nwall_half_planes = false\n",
+            with_one_disc(6.0)
+        ),
+    );
+    // The shipped cap is 1000 ticks; both seeds formed by K = 200 on the day, and the stall
+    // without the walls' half-planes lasts for good (traced: 3 robots still at tick 1000).
+    let run = |sc: &str, seed: &str, name: &str| {
+        let out = dir.join(name);
+        let o = up(
+            &[
+                "--scenario",
+                sc,
+                "--executor",
+                "inprocess",
+                "--seed",
+                seed,
+                "--max-ticks",
+                "500",
+            ],
+            &out,
+        );
+        assert!(o.status.success(), "{}", stderr(&o));
+        summary(&out)["mission"]["formation"].clone()
+    };
+    for seed in ["2", "5"] {
+        let f = run(&on, seed, &format!("on-{seed}"));
+        assert_eq!(f["formed"], true, "seed {seed}: {f}");
+        assert_eq!(f["overlapping_pairs"], 0, "seed {seed}");
+        assert_eq!(f["obstacle_overlaps"], 0, "seed {seed}");
+    }
+    // The cause, located: the same run without the walls' half-planes stalls in the corner.
+    let f = run(&off, "2", "off-2");
+    assert_eq!(f["formed"], false, "{f}");
     let _ = std::fs::remove_dir_all(&dir);
 }

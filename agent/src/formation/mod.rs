@@ -10,6 +10,7 @@
 //! - [`optimise`]: eqs. (1)-(14), solved to the global optimum by spatial branch-and-bound.
 //! - [`preferred`]: the preferred velocity of eq. (16).
 //! - [`orca`] and [`linear_program`]: eqs. (17)-(26), ORCA (van den Berg et al. 2011).
+//! - [`walls`]: the box's walls as velocity half-planes (beyond the paper).
 //! - [`swaps`]: beyond the paper, a decentralised pairwise-swap reassignment.
 
 pub mod blocked;
@@ -22,6 +23,7 @@ pub mod params;
 pub mod preferred;
 pub mod swaps;
 pub mod template;
+pub mod walls;
 
 #[cfg(test)]
 mod blocked_tests;

@@ -15,12 +15,14 @@
 //! Choices where the paper is silent (spec 6 item 9): v^opt is the current velocity; the
 //! acceleration disc ||v - v_i|| <= a tau of eq. (24) is the regular polygon circumscribing it
 //! (so up to a tau / cos(pi / sides) in its corners); priorities, when the half-planes conflict:
-//! the acceleration polygon always holds, obstacles hold unless they conflict with it, and the
+//! the acceleration polygon always holds, obstacles (and the walls, [`super::walls`]) hold unless
+//! they conflict with it, and the
 //! largest violation of the robots' half-planes is minimised (the 3-D fallback of
 //! [`super::linear_program`]).
 
 use super::linear_program::{select_velocity, HalfPlane, Selected, Selection};
 use super::params::FormationParams;
+use super::walls::wall_half_planes;
 use swarm::geometry::Vec2;
 
 /// A disc agent (or a static obstacle with zero velocity) as the Sense frame reports it.
@@ -198,6 +200,7 @@ fn orca_velocity_within(
         .iter()
         .map(|o| orca_half_plane(me, o, 1.0, params.obstacle_time_horizon, tau))
         .collect();
+    hard.extend(wall_half_planes(me.position, params));
     if params.buffered_cells {
         let margin = (me.radius - params.robot_radius).max(0.0);
         let near: Vec<Disc> = robots

@@ -126,6 +126,13 @@ pub struct FormationParams {
     /// Clearance the buffered cells keep beyond 2r (and r + r_o), against rounding: a gap
     /// smaller than this is treated as closed (the step may not shrink it). Chosen 1e-6.
     pub cell_slack: f64,
+    /// Keep the step inside the box (walls.rs): against each wall within 1.5 steps, the step
+    /// may close at most the gap less `cell_slack`. Not in the paper (its box is only the
+    /// targets' constraint C1). [chosen] true: without it ORCA, blind to the walls, kept
+    /// choosing a step the world refused, and robots sliding along a wall to slots C1 allows
+    /// at r from it stopped for good (docs/formation.md 9, disc-big); false gives the paper's
+    /// ORCA, walls enforced only by the world.
+    pub wall_half_planes: bool,
     /// Neighbours farther than this are left out of ORCA. The paper intersects over all robots;
     /// robots farther than 2r + 2 V_p tau_h = 6 cannot collide within the horizon, so 10 leaves
     /// out nobody who matters.
@@ -162,6 +169,7 @@ impl Default for FormationParams {
             shrink_horizon_when_infeasible: false,
             buffered_cells: true,
             cell_slack: 1e-6,
+            wall_half_planes: true,
             neighbour_dist: 10.0,
             k_a: 1.0,
             epsilon: 0.05,

@@ -645,7 +645,7 @@ mod tests {
         // ... unless alpha_range reaches further.
         assert_eq!(
             check_with(
-                "wide",
+                "wide-range",
                 &with_template(&line(1.0)),
                 "[formation.kernels.optimiser]\nalpha_range = [0.5, 2.5]\n"
             ),

@@ -5,6 +5,15 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use std::borrow::Cow;
 
+/// The kernels' defaults without the box's walls: these scenes sit around the origin, a corner
+/// of the default box, and test ORCA itself (walls.rs tests the walls).
+fn open_plane() -> FormationParams {
+    FormationParams {
+        wall_half_planes: false,
+        ..FormationParams::default()
+    }
+}
+
 fn disc(x: f64, y: f64, vx: f64, vy: f64, radius: f64) -> Disc {
     Disc {
         position: Vec2::new(x, y),
@@ -96,7 +105,7 @@ fn random_scene_in(
 
 #[test]
 fn new_velocity_satisfies_every_half_plane_when_feasible() {
-    let params = FormationParams::default();
+    let params = open_plane();
     let mut rng = ChaCha8Rng::seed_from_u64(40);
     let mut feasible = 0;
     for case in 0..1000 {
@@ -132,7 +141,7 @@ fn new_velocity_satisfies_every_half_plane_when_feasible() {
 
 #[test]
 fn two_robots_head_on_never_overlap_and_both_arrive() {
-    let params = FormationParams::default();
+    let params = open_plane();
     let tau = params.time_step;
     let targets = [Vec2::new(16.0, 12.05), Vec2::new(8.0, 12.0)];
     // Exactly symmetric head-on starts deadlock ORCA (a known property: every half-plane is
@@ -298,7 +307,7 @@ fn a_squeezed_robot_finds_a_one_step_safe_velocity_by_shrinking_the_horizon() {
         disc(0.0, 2.5, 0.0, -1.0, 1.0),
         disc(0.0, -2.5, 0.0, 1.0, 1.0),
     ];
-    let mut params = FormationParams::default();
+    let mut params = open_plane();
     let plain = orca_velocity(&me, Vec2::new(1.0, 0.0), &others, &[], &params);
     assert_ne!(plain.selection, Selection::Feasible);
     params.shrink_horizon_when_infeasible = true;
@@ -312,13 +321,7 @@ fn a_squeezed_robot_finds_a_one_step_safe_velocity_by_shrinking_the_horizon() {
     let far = [disc(8.0, 0.0, 0.0, 0.0, 1.0)];
     assert_eq!(
         orca_velocity(&me, Vec2::new(1.0, 0.0), &far, &[], &params),
-        orca_velocity(
-            &me,
-            Vec2::new(1.0, 0.0),
-            &far,
-            &[],
-            &FormationParams::default()
-        )
+        orca_velocity(&me, Vec2::new(1.0, 0.0), &far, &[], &open_plane())
     );
 }
 
@@ -327,7 +330,7 @@ fn buffered_cells_give_the_hand_computed_half_gap_bound() {
     // A neighbour 2.2 to the right (true radii 1, ORCA radii 1.05): gap 0.2, this robot may
     // close half of it in one 0.25 s step: v_x <= (0.2 - 1e-6) / 2 / 0.25 = 0.399998. A disc
     // obstacle (radius 2) 3.1 above: gap 0.1, all of it: v_y <= (0.1 - 1e-6) / 0.25.
-    let params = FormationParams::default();
+    let params = open_plane();
     let me = disc(0.0, 0.0, 0.0, 0.0, 1.05);
     let robots = [
         disc(2.2, 0.0, 0.0, 0.0, 1.05),
@@ -369,7 +372,7 @@ fn in_a_crowd_with_buffered_cells_no_step_makes_an_overlap_even_when_orca_is_inf
         for cells in [true, false] {
             let params = FormationParams {
                 buffered_cells: cells,
-                ..FormationParams::default()
+                ..open_plane()
             };
             let mut pos = start.clone();
             let mut vel = vec![Vec2::zeros(); pos.len()];
