@@ -23,3 +23,13 @@ for s in 1 2 3; do
   run 100 $s 100:37,104:52 gather4
 done
 [ -n "$WITH500" ] && run 500 1 150:37,150:200,152:411 five00
+# MASS=1: the mass-kill schedules (results/deaths-schedules.md, added 2026-12-04).
+ids() { seq -s, -f "$1:%g" "${@:2}"; }
+if [ -n "$MASS" ]; then
+  for s in 1 2 3; do
+    run 100 $s "$(ids 100 40 47)" eight
+    run 100 $s "$(ids 100 10 23)" fourteen
+    run 100 $s "$(ids 100 0 10 90)" tenth
+  done
+  [ -n "$WITH500" ] && run 500 1 "$(ids 150 100 119)" twenty00
+fi

@@ -5,7 +5,7 @@
 //! - it keeps its template point when the point is kept;
 //! - the robot whose point was dropped (a wreck blocks it) takes the kept point its move
 //!   names: a point no live robot held (the dead robot's), matched nearest first;
-//! - a robot with neither (no slot, or more drops than `max_moves`) takes the nearest slot in
+//! - a robot with neither (no slot, or more drops than a message carries) takes the nearest slot in
 //!   `adopt_for_swaps` (it may then share it: the limit docs/formation.md 9 reports).
 //!
 //! Since the kept points held by live robots stay theirs and every move goes to a point no
@@ -45,6 +45,38 @@ pub fn full_plan_len(robots: usize, max_dead: usize) -> usize {
 /// The encoded size of a compact plan message.
 pub fn compact_len(c: &CompactPlan) -> usize {
     encoded_len(&Msg::CompactPlan(c.clone()))
+}
+
+/// How many moves a compact plan for `robots` robots can carry within `max_message_bytes`,
+/// at its worst case: every template and spare point kept (the bitmap at its longest), `max_dead`
+/// wrecks, every id and point index at its largest. 0 when not even the plan without moves fits.
+pub fn moves_that_fit(robots: usize, max_dead: usize, max_message_bytes: u32) -> usize {
+    let points = robots + super::shift_drop::MAX_SPARE;
+    let top = (points.saturating_sub(1)).min(u16::MAX as usize) as u16;
+    let mut kept = Bitmap::with_len(points);
+    for p in 0..points {
+        kept.insert(p);
+    }
+    let plan = |moves: usize| CompactPlan {
+        epoch: u32::MAX,
+        coordinator: robots.saturating_sub(1) as u32,
+        transform: [0.0; 4],
+        kept: kept.clone(),
+        moves: vec![(top, top); moves],
+        dead: vec![[0.0; 2]; max_dead],
+    };
+    let bytes = max_message_bytes as usize;
+    let empty = compact_len(&plan(0));
+    if empty > bytes {
+        return 0;
+    }
+    let per = compact_len(&plan(1)) - empty;
+    // Linear in the moves but for the length's varint (one byte more past 250): step back.
+    let mut k = (bytes - empty) / per.max(1);
+    while k > 0 && compact_len(&plan(k)) > bytes {
+        k -= 1;
+    }
+    k
 }
 
 /// The pattern a compact plan describes, as the behaviour holds it (no members, no sigma).
@@ -211,6 +243,32 @@ mod tests {
             }
         }
         assert!(nearest_clear_shift(&slots, |_| false, 0.25, 6.0).is_none());
+    }
+
+    #[test]
+    fn the_moves_that_fit_are_the_most_a_worst_case_plan_carries_within_the_message() {
+        for (robots, dead, bytes) in [(500, 12, 512), (100, 12, 512), (500, 0, 512), (100, 3, 300)] {
+            let k = moves_that_fit(robots, dead, bytes);
+            assert!(k > 12, "{robots} robots, {dead} wrecks, {bytes} bytes: {k}");
+            let points = robots + super::super::shift_drop::MAX_SPARE;
+            let mut kept = Bitmap::with_len(points);
+            for p in 0..points {
+                kept.insert(p);
+            }
+            let top = (points - 1) as u16;
+            let plan = |moves: usize| CompactPlan {
+                epoch: u32::MAX,
+                coordinator: (robots - 1) as u32,
+                transform: [1.05, 65.0, 65.0, -3.1],
+                kept: kept.clone(),
+                moves: vec![(top, top); moves],
+                dead: vec![[129.0, 129.0]; dead],
+            };
+            assert!(compact_len(&plan(k)) <= bytes as usize);
+            assert!(compact_len(&plan(k + 1)) > bytes as usize);
+        }
+        // A message too small for the plan without moves carries none.
+        assert_eq!(moves_that_fit(500, 12, 200), 0);
     }
 
     #[test]

@@ -193,6 +193,9 @@ pub struct Formation {
     /// Whether the swaps re-plan's full plan fits one message (else the multi-hop compact
     /// re-plan of replan_multihop.rs).
     full_plan_fits: bool,
+    /// The most moves a compact plan carries within `radio.max_message_bytes` (worst case,
+    /// compact.rs `moves_that_fit`).
+    moves_fit: usize,
     /// The multi-hop re-plan's timeout (ticks from the need's start).
     replan_timeout: u64,
     /// The multi-hop re-plan's gossip for the current need.
@@ -214,6 +217,11 @@ impl Formation {
         let hops = (diagonal / sc.radio.comm_radius.max(1e-9)).ceil() as u64;
         let replan_timeout = p.gather_ticks as u64 + p.replan.ticks_per_hop * hops;
         let full_plan_fits = compact::full_plan_fits(
+            sc.run.robots as usize,
+            p.replan.max_dead,
+            sc.radio.max_message_bytes,
+        );
+        let moves_fit = compact::moves_that_fit(
             sc.run.robots as usize,
             p.replan.max_dead,
             sc.radio.max_message_bytes,
@@ -260,6 +268,7 @@ impl Formation {
             trace: std::env::var_os("FORMATION_TRACE").is_some(),
             robots: sc.run.robots as usize,
             full_plan_fits,
+            moves_fit,
             replan_timeout,
             gathering: None,
             compact: None,

@@ -77,8 +77,10 @@ pub struct ReplanParams {
     /// robots (the unbounded 99-robot solve took 12 721 nodes, 55 s on the loaded machine),
     /// 4 at 500.
     pub max_work: f64,
-    /// Large swarms: at most this many moves in a compact plan (the robots whose point a
-    /// wreck blocks). [chosen] 12 (6 bytes each at 500 robots).
+    /// Large swarms: the moves (robots whose point a wreck blocks) a compact plan's
+    /// shift-and-drop tries first; when no placement needs so few it tries again with as many
+    /// as one message carries (compact.rs `moves_that_fit`: 30 at 500 robots, 512 bytes, 12
+    /// wrecks). [chosen] 12 (6 bytes each at 500 robots): fewer robots change slot.
     pub max_moves: usize,
     /// Large swarms: at most this many wrecks in a compact plan, the nearest the pattern
     /// first. [chosen] 12 (16 bytes each; with the 63-byte bitmap and 12 moves a 500-robot
