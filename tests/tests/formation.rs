@@ -193,6 +193,70 @@ fn five_robots_killed_at_once_among_100_under_swaps_re_form_by_shift_and_drop() 
     assert_left_nothing(&i);
 }
 
+/// Fourteen robots of consecutive ids (10-23) killed on one tick among 100 under swaps
+/// (docs/formation.md 9, "Mass kills and the moves budget", seed 1): the re-plan moves more
+/// robots than `max_moves` = 12 (as many as one message carries), and robot 96, boxed in by
+/// three wrecks whose widest exit (4.17 between centres) passes a robot at the true radii but
+/// not at ORCA's margin, squeezes out (squeeze.rs). Without the squeeze it stays there: the
+/// same run with `squeeze_after_ticks = 0` is not formed at tick 600. In-process.
+#[test]
+fn a_robot_boxed_in_by_fourteen_wrecks_squeezes_out_and_the_86_form() {
+    let _g = serial();
+    let chaos: Vec<String> = (10..=23).map(|r| format!("100:{r}")).collect();
+    let chaos = chaos.join(",");
+    let run = |name: &str, sc: &str| {
+        let dir = tmp_dir(name);
+        let o = up(
+            &[
+                "--scenario",
+                sc,
+                "--executor",
+                "inprocess",
+                "--chaos-at",
+                &chaos,
+                "--max-ticks",
+                "600",
+            ],
+            &dir,
+        );
+        assert!(o.status.success(), "{}", stderr(&o));
+        (
+            dir,
+            format!("{}{}", String::from_utf8_lossy(&o.stdout), stderr(&o)),
+        )
+    };
+    let (dir, log) = run("formation-100-fourteen", &config("formation-100.toml"));
+    let f = formation(&dir);
+    assert_eq!(f["formed"], true, "{f}");
+    assert_eq!(f["overlapping_pairs"], 0, "{f}");
+    assert_eq!(summary(&dir)["alive_at_end"], 86);
+    let moves: usize = log
+        .split(" moves,")
+        .next()
+        .and_then(|head| head.rsplit(' ').next())
+        .and_then(|n| n.parse().ok())
+        .unwrap_or_else(|| panic!("no re-plan line in {log}"));
+    assert!(moves > 12, "{moves} moves: {log}");
+    assert_left_nothing(&dir);
+    let text = std::fs::read_to_string(config("formation-100.toml")).unwrap();
+    assert!(text.contains("\n[formation.kernels]\n"));
+    let off = text.replacen(
+        "\n[formation.kernels]\n",
+        "\n[formation.kernels]\nsqueeze_after_ticks = 0\n",
+        1,
+    );
+    let off_dir = tmp_dir("formation-100-fourteen-off");
+    std::fs::create_dir_all(&off_dir).unwrap();
+    let sc = off_dir.join("no-squeeze.toml");
+    std::fs::write(&sc, off).unwrap();
+    let (dir_off, _) = run("formation-100-fourteen-off-run", sc.to_str().unwrap());
+    let f = formation(&dir_off);
+    assert_eq!(f["formed"], false, "{f}");
+    assert_eq!(f["overlapping_pairs"], 0, "{f}");
+    assert_left_nothing(&dir_off);
+    let _ = std::fs::remove_dir_all(&off_dir);
+}
+
 /// configs/formation-100.toml in-process with the kills `chaos_at`, in a fresh folder `name`.
 fn swaps_100_killed(name: &str, chaos_at: &str) -> PathBuf {
     let sc = config("formation-100.toml");

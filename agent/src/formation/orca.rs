@@ -167,8 +167,33 @@ pub fn orca_velocity(
     obstacles: &[Disc],
     params: &FormationParams,
 ) -> Selected {
+    orca_velocity_squeezing(me, preferred, robots, obstacles, &[], params)
+}
+
+/// [`orca_velocity`] with `cell_only` static discs that keep no ORCA half-plane, only their
+/// buffered-cell one (the step never overlaps them at the true radii, but the robot may pass
+/// them closer than ORCA's margin: a robot boxed in by wrecks, behaviours/formation/
+/// squeeze.rs). Without buffered cells they are ordinary obstacles.
+pub fn orca_velocity_squeezing(
+    me: &Disc,
+    preferred: Vec2,
+    robots: &[Disc],
+    obstacles: &[Disc],
+    cell_only: &[Disc],
+    params: &FormationParams,
+) -> Selected {
+    let joined: Vec<Disc>;
+    let (obstacles, cell_only) = if params.buffered_cells || cell_only.is_empty() {
+        (obstacles, cell_only)
+    } else {
+        joined = obstacles.iter().chain(cell_only).copied().collect();
+        (&joined[..], &[][..])
+    };
+    let within = |horizon: f64| {
+        orca_velocity_within(me, preferred, robots, obstacles, cell_only, params, horizon)
+    };
     let mut horizon = params.time_horizon;
-    let mut selected = orca_velocity_within(me, preferred, robots, obstacles, params, horizon);
+    let mut selected = within(horizon);
     // Infeasible: the half-planes of a shorter horizon are wider (the truncated cone's cut-off
     // disc p / T grows), so they conflict less; one step is the least that still forbids an
     // overlap at the next step.
@@ -177,7 +202,7 @@ pub fn orca_velocity(
         && horizon > params.time_step
     {
         horizon = (0.5 * horizon).max(params.time_step);
-        selected = orca_velocity_within(me, preferred, robots, obstacles, params, horizon);
+        selected = within(horizon);
     }
     selected
 }
@@ -188,6 +213,7 @@ fn orca_velocity_within(
     preferred: Vec2,
     robots: &[Disc],
     obstacles: &[Disc],
+    cell_only: &[Disc],
     params: &FormationParams,
     horizon: f64,
 ) -> Selected {
@@ -208,8 +234,15 @@ fn orca_velocity_within(
             .filter(|o| (o.position - me.position).norm() <= params.neighbour_dist)
             .copied()
             .collect();
+        let statics: Vec<Disc>;
+        let statics = if cell_only.is_empty() {
+            obstacles
+        } else {
+            statics = obstacles.iter().chain(cell_only).copied().collect();
+            &statics[..]
+        };
         hard.extend(buffered_cell_half_planes(
-            me, &near, obstacles, margin, params,
+            me, &near, statics, margin, params,
         ));
     }
     let soft: Vec<HalfPlane> = robots

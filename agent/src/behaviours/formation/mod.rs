@@ -44,6 +44,7 @@ mod relay_step;
 mod replan;
 mod replan_multihop;
 mod shift_drop;
+mod squeeze;
 #[cfg(test)]
 mod tests;
 pub mod wrecks;
@@ -54,7 +55,7 @@ pub use params::{parse_params, Params};
 use crate::formation::hungarian::{assign_targets, Hungarian};
 use crate::formation::linear_program::{Selected, Selection};
 use crate::formation::optimise::{optimise, optimise_without_rotation};
-use crate::formation::orca::{orca_velocity, Disc};
+use crate::formation::orca::{orca_velocity_squeezing, Disc};
 use crate::formation::swaps::{Message as SwapMessage, NeighbourView, SwapAgent};
 use crate::formation::{Template, Transform};
 use std::collections::BTreeMap;
@@ -185,6 +186,8 @@ pub struct Formation {
     /// Reports queued for the next ticks: a plan's (alpha, theta) and d follow its report.
     queued_reports: std::collections::VecDeque<[f64; 4]>,
     sensing_radius: f64,
+    /// `robot.sensing_radius`: how far the Sense frame lists obstacle points and wrecks.
+    obstacle_sensing_radius: f64,
     v_max_tick: f64,
     /// `FORMATION_TRACE` is set: print the measurement lines of [`Formation::trace_line`].
     trace: bool,
@@ -204,6 +207,8 @@ pub struct Formation {
     compact: Option<CompactPlan>,
     /// The relayed centralised mode's state (`formation.kernels.relay` present).
     relay: Option<relay_step::RelayState>,
+    /// Squeezing past wrecks (squeeze.rs).
+    squeeze: squeeze::Squeeze,
 }
 
 impl Formation {
@@ -264,6 +269,7 @@ impl Formation {
             first_tick: None,
             queued_reports: Default::default(),
             sensing_radius: sc.robot.neighbour_sensing_radius,
+            obstacle_sensing_radius: sc.robot.sensing_radius,
             v_max_tick: sc.robot.v_max,
             trace: std::env::var_os("FORMATION_TRACE").is_some(),
             robots: sc.run.robots as usize,
@@ -272,6 +278,7 @@ impl Formation {
             replan_timeout,
             gathering: None,
             compact: None,
+            squeeze: Default::default(),
             relay: relay_params.map(|r| relay_step::RelayState::new(robot, r, diagonal, sc.radio.comm_radius)),
         }
     }
@@ -798,8 +805,9 @@ impl Formation {
         report
     }
 
-    /// Step 3: eq. (16) then ORCA; the velocity in units per second.
-    fn motion(&self, sense: &Sense, me: Vec2) -> Vec2 {
+    /// Step 3: eq. (16) then ORCA; the velocity in units per second, and the distance to
+    /// the nearest wreck ORCA saw.
+    fn motion(&self, sense: &Sense, me: Vec2) -> (Vec2, f64) {
         let k = &self.p.kernels;
         let tau = k.time_step;
         let r = k.robot_radius + self.p.orca_margin;
@@ -830,21 +838,32 @@ impl Formation {
         // robot taken for lost while alive, e.g. a coordinator out of its radio range), and
         // as a static disc over a live one it would leave ORCA no feasible velocity.
         let remembered: Vec<Vec2> = dead.into_iter().chain(self.ghosts.values().copied()).collect();
-        let wrecks = real_wrecks(remembered, me, &robots, k.robot_radius);
-        for pos in &wrecks {
-            obstacles.push(Disc {
-                position: *pos,
-                velocity: Vec2::zeros(),
-                radius: r,
-            });
+        let mut wrecks = real_wrecks(remembered, me, &robots, k.robot_radius);
+        if self.squeeze.on() {
+            let listed = sense.obstacle_points();
+            let full = listed.len() >= swarm::frames::MAX_OBSTACLE_POINTS;
+            let complete = squeeze::complete_radius(me, listed, full, self.obstacle_sensing_radius);
+            wrecks = squeeze::trusted_wrecks(me, &wrecks, &self.statics.wrecks_in(sense), complete);
         }
+        let wreck_discs = wrecks.iter().map(|pos| Disc {
+            position: *pos,
+            velocity: Vec2::zeros(),
+            radius: r,
+        });
+        // Boxed in beside wrecks (squeeze.rs): they keep only their buffered cells.
+        let cell_only: Vec<Disc> = if self.squeeze.on() {
+            wreck_discs.collect()
+        } else {
+            obstacles.extend(wreck_discs);
+            Vec::new()
+        };
         // Eq. (16), steered round walls of wrecks in the swaps mode (detour.rs).
         let preferred = self.preferred_with_detour(me, &wrecks);
-        let sel = orca_velocity(&mine, preferred, &robots, &obstacles, k);
+        let sel = orca_velocity_squeezing(&mine, preferred, &robots, &obstacles, &cell_only, k);
         if self.trace {
             self.trace_line(sense.tick, me, robots.len(), preferred, &sel);
         }
-        sel.velocity
+        (sel.velocity, squeeze::nearest(me, &wrecks))
     }
 }
 
@@ -863,8 +882,9 @@ impl Formation {
         };
         let busy = self.swap.as_ref().is_some_and(|a| a.is_busy());
         eprintln!(
-            "TRACE {tick} {} {:.3} {:.3} {s} {sx:.3} {sy:.3} {:?} {neighbours} {busy} {:.3} {:.3} {:.3} {:.3}",
-            self.robot, me.x, me.y, sel.selection, preferred.x, preferred.y, sel.velocity.x, sel.velocity.y
+            "TRACE {tick} {} {:.3} {:.3} {s} {sx:.3} {sy:.3} {:?} {neighbours} {busy} {:.3} {:.3} {:.3} {:.3} squeeze={}",
+            self.robot, me.x, me.y, sel.selection, preferred.x, preferred.y, sel.velocity.x, sel.velocity.y,
+            self.squeeze.on()
         );
     }
 }
@@ -907,8 +927,19 @@ impl Behaviour for Formation {
             self.coordinate(k, me, sense.alive_robots, out)
         };
         let coordinator = self.plan.as_ref().is_some_and(|p| p.coordinator == self.robot);
-        let v = self.motion(sense, me);
+        let (v, nearest_wreck) = self.motion(sense, me);
         let tau = self.tau();
+        let kp = &self.p.kernels;
+        let seen = squeeze::Seen {
+            speed: v.norm(),
+            max_speed: kp.max_speed,
+            to_slot: self.slot.map(|s| (self.targets[s] - me).norm()),
+            epsilon: kp.epsilon,
+            nearest_wreck,
+            contact: 2.0 * (kp.robot_radius + self.p.orca_margin),
+            reach: kp.max_speed * tau,
+        };
+        self.squeeze.update(&seen, self.p.squeeze_after_ticks);
         let mut cmd = v * tau;
         // The world refuses commands above v_max: keep rounding from crossing it.
         if cmd.norm() > self.v_max_tick {

@@ -30,6 +30,12 @@ pub struct Params {
     /// lock-step ORCA does not model (neighbours sensed one step old, the LP's fallback in a
     /// crowd). [chosen] 0.05: without it 100 robots under swaps overlapped by up to 0.07.
     pub orca_margin: f64,
+    /// A robot ORCA holds still beside a wreck, away from its slot, this many ticks in a row
+    /// squeezes past the wrecks: they keep only their buffered cells (true radii) until it
+    /// is 2 (r + orca_margin) and 1.5 steps clear of every wreck (squeeze.rs). [chosen] 10 (2.5 s at tau =
+    /// 0.25): robots boxed in by exits of 4.14-4.17 between wrecks, passable at 2r = 2 from
+    /// each but not at 2.1, stood still for thousands of ticks (docs/formation.md 9). 0: never.
+    pub squeeze_after_ticks: u32,
     /// The re-plan after a robot is killed under `reassignment = "swaps"`
     /// (`formation.kernels.replan`).
     pub replan: ReplanParams,
@@ -120,6 +126,7 @@ impl Default for Params {
             gather_ticks: 20,
             swaps: SwapParams::default(),
             orca_margin: 0.05,
+            squeeze_after_ticks: 10,
             replan: ReplanParams::default(),
             relay: None,
             detour: None,
@@ -205,6 +212,7 @@ pub fn validate(sc: &Scenario, c: &Check) -> Result<(), ConfigError> {
         c.range_u(&key("max_swaps"), b.max_swaps as u64, 0, 1_000_000)?;
     }
     c.range_f("formation.kernels.orca_margin", p.orca_margin, 0.0, 1e6, false)?;
+    c.range_u("formation.kernels.squeeze_after_ticks", p.squeeze_after_ticks as u64, 0, 1_000_000)?;
     if let Some(d) = &p.detour {
         c.range_f("formation.kernels.detour.window", d.window, 0.0, 1e4, true)?;
         // At most 1000 cells across (a search of a million cells at worst, every tick).
