@@ -601,7 +601,7 @@ fn print_summary(v: &serde_json::Value, dir: &Path) {
         print_hunt(h, &g("/ticks"));
     }
     if let Some(fm) = v.pointer("/mission/formation") {
-        print_formation(fm, &g("/ticks"));
+        print_formation(fm, &g("/ticks"), &g("/faults"));
     }
     println!(
         "  mission: coverage {:.1} %  spread {:.1}  mean nearest neighbour {:.1}",
@@ -644,13 +644,42 @@ fn print_hunt(h: &serde_json::Value, ticks: &serde_json::Value) {
 }
 
 /// The formation mission's line of the run summary: formed or not, K, L, clearances, plans.
-fn print_formation(fm: &serde_json::Value, ticks: &serde_json::Value) {
+/// Whether a plan made at `tick` came after a robot's death (`faults` of the summary): a
+/// re-plan, whose "no placement" keeps the previous pattern's slots round the wrecks.
+fn after_a_death(faults: &serde_json::Value, tick: &serde_json::Value) -> bool {
+    let tick = tick.as_u64().unwrap_or(0);
+    faults
+        .as_array()
+        .into_iter()
+        .flatten()
+        .any(|f| f["tick"].as_u64().is_some_and(|t| t <= tick))
+}
+
+fn print_formation(fm: &serde_json::Value, ticks: &serde_json::Value, faults: &serde_json::Value) {
     let formed = if fm["formed"].as_bool() == Some(true) {
         format!("formed at K = {}", fm["iterations"])
     } else {
         format!("not formed: censored at tick {ticks}")
     };
-    if fm["no_feasible_pattern"].as_bool() == Some(true) {
+    let plans: Vec<&serde_json::Value> = fm["plans"].as_array().into_iter().flatten().collect();
+    let infeasible: Vec<&&serde_json::Value> = plans
+        .iter()
+        .filter(|p| p["feasible"].as_bool() == Some(false))
+        .collect();
+    for p in infeasible
+        .iter()
+        .filter(|p| after_a_death(faults, &p["tick"]))
+    {
+        println!(
+            "  formation: the re-plan of epoch {} (robot {}, tick {}) after a death found no \
+             placement: the robots kept the previous pattern's slots round the wrecks",
+            p["epoch"], p["robot"], p["tick"]
+        );
+    }
+    if infeasible
+        .iter()
+        .any(|p| !after_a_death(faults, &p["tick"]))
+    {
         println!(
             "  formation: NO FEASIBLE PATTERN: the optimiser found no placement of the template \
              inside the box, clear of the discs and 2r + separation_margin apart (within \
@@ -678,7 +707,6 @@ fn print_formation(fm: &serde_json::Value, ticks: &serde_json::Value) {
     );
     // A swarm that re-plans often (a plan a lost member) lists hundreds: the first and last
     // few, and how many between.
-    let plans: Vec<&serde_json::Value> = fm["plans"].as_array().into_iter().flatten().collect();
     const SHOWN: usize = 3;
     for (i, p) in plans.iter().enumerate() {
         if plans.len() > 2 * SHOWN && i == SHOWN {
@@ -693,6 +721,17 @@ fn print_formation(fm: &serde_json::Value, ticks: &serde_json::Value) {
             println!(
                 "    plan by robot {} at tick {}: superseded before its parameters were reported",
                 p["robot"], p["tick"]
+            );
+            continue;
+        }
+        if p["feasible"].as_bool() == Some(false) && after_a_death(faults, &p["tick"]) {
+            println!(
+                "    plan epoch {} by robot {} at tick {}: no placement ({} nodes, {:.2} s): the previous pattern kept",
+                p["epoch"],
+                p["robot"],
+                p["tick"],
+                p["nodes"],
+                p["seconds"].as_f64().unwrap_or(f64::NAN),
             );
             continue;
         }
@@ -766,5 +805,18 @@ mod tests {
         assert_eq!(swarm::chaos::schedule(&sc), all);
         let back = Scenario::parse(&sc.to_toml(), "resolved").unwrap();
         assert_eq!(swarm::chaos::schedule(&back), all);
+    }
+
+    #[test]
+    fn a_plan_made_after_a_death_is_a_re_plan_and_one_before_is_not() {
+        let faults = serde_json::json!([{"robot": 3, "tick": 150}, {"robot": 4, "tick": 152}]);
+        assert!(!after_a_death(&faults, &serde_json::json!(1)));
+        assert!(!after_a_death(&faults, &serde_json::json!(149)));
+        assert!(after_a_death(&faults, &serde_json::json!(150)));
+        assert!(after_a_death(&faults, &serde_json::json!(164)));
+        assert!(!after_a_death(
+            &serde_json::json!([]),
+            &serde_json::json!(164)
+        ));
     }
 }

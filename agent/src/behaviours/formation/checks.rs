@@ -44,12 +44,15 @@ pub fn no_plan_gap(pattern: PatternChoice) -> f64 {
 }
 
 /// What the agent's plan line adds to a plan's gap: the plain words when it is
-/// [`REPORT_GAP_INFEASIBLE`].
-pub fn gap_note(gap: f64) -> &'static str {
-    if gap == REPORT_GAP_INFEASIBLE {
-        " (NO FEASIBLE PATTERN: the optimiser found no placement; fallback formation.transform)"
-    } else {
-        ""
+/// [`REPORT_GAP_INFEASIBLE`]. A re-plan (`replan`: an old pattern existed) with no placement
+/// keeps the previous pattern, not `formation.transform`.
+pub fn gap_note(gap: f64, replan: bool) -> &'static str {
+    match (gap == REPORT_GAP_INFEASIBLE, replan) {
+        (false, _) => "",
+        (true, false) => {
+            " (NO FEASIBLE PATTERN: the optimiser found no placement; fallback formation.transform)"
+        }
+        (true, true) => " (no placement for the re-plan: the previous pattern kept)",
     }
 }
 

@@ -328,7 +328,7 @@ impl Formation {
             plan.transform[1],
             plan.transform[2],
             plan.transform[3],
-            checks::gap_note(gap),
+            checks::gap_note(gap, what.starts_with("re-plans")),
         );
         let t = plan.transform;
         let epoch = plan.epoch as f64;

@@ -492,7 +492,8 @@ impl Formation {
         let seconds = started.elapsed().as_secs_f64();
         let fresh = members.len();
         let extra = format!(", relayed ({fresh} of {} gathered, {} wrecks)", st.alive, dead.len());
-        let report = self.adopt_solved(k, (plan, gap, nodes), seconds, "plans", extra);
+        let what = if old_transform.is_some() { "re-plans (relayed)" } else { "plans" };
+        let report = self.adopt_solved(k, (plan, gap, nodes), seconds, what, extra);
         st.head = Some(Head {
             epoch,
             coordinator: self.robot,
