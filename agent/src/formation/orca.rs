@@ -15,10 +15,9 @@
 //! Choices where the paper is silent (spec 6 item 9): v^opt is the current velocity; the
 //! acceleration disc ||v - v_i|| <= a tau of eq. (24) is the regular polygon circumscribing it
 //! (so up to a tau / cos(pi / sides) in its corners); priorities, when the half-planes conflict:
-//! the acceleration polygon always holds, obstacles (and the walls, [`super::walls`]) hold unless
-//! they conflict with it, and the
-//! largest violation of the robots' half-planes is minimised (the 3-D fallback of
-//! [`super::linear_program`]).
+//! the acceleration polygon always holds, obstacles (and the walls, [`super::walls`]) hold
+//! unless they conflict with it, and the largest violation of the robots' half-planes is
+//! minimised (the 3-D fallback of [`super::linear_program`]).
 
 use super::linear_program::{select_velocity, HalfPlane, Selected, Selection};
 use super::params::FormationParams;

@@ -51,20 +51,7 @@ pub fn compact_len(c: &CompactPlan) -> usize {
 /// at its worst case: every template and spare point kept (the bitmap at its longest), `max_dead`
 /// wrecks, every id and point index at its largest. 0 when not even the plan without moves fits.
 pub fn moves_that_fit(robots: usize, max_dead: usize, max_message_bytes: u32) -> usize {
-    let points = robots + super::shift_drop::MAX_SPARE;
-    let top = (points.saturating_sub(1)).min(u16::MAX as usize) as u16;
-    let mut kept = Bitmap::with_len(points);
-    for p in 0..points {
-        kept.insert(p);
-    }
-    let plan = |moves: usize| CompactPlan {
-        epoch: u32::MAX,
-        coordinator: robots.saturating_sub(1) as u32,
-        transform: [0.0; 4],
-        kept: kept.clone(),
-        moves: vec![(top, top); moves],
-        dead: vec![[0.0; 2]; max_dead],
-    };
+    let plan = |moves: usize| worst_case_plan(robots, moves, max_dead);
     let bytes = max_message_bytes as usize;
     let empty = compact_len(&plan(0));
     if empty > bytes {
@@ -77,6 +64,26 @@ pub fn moves_that_fit(robots: usize, max_dead: usize, max_message_bytes: u32) ->
         k -= 1;
     }
     k
+}
+
+/// The largest compact plan for `robots` robots with `moves` moves and `dead` wrecks: every
+/// template and spare point kept, every id and point index at its largest (an f64 always
+/// takes 8 bytes, so the transform's and wrecks' values do not matter).
+fn worst_case_plan(robots: usize, moves: usize, dead: usize) -> CompactPlan {
+    let points = robots + super::shift_drop::MAX_SPARE;
+    let top = (points.saturating_sub(1)).min(u16::MAX as usize) as u16;
+    let mut kept = Bitmap::with_len(points);
+    for p in 0..points {
+        kept.insert(p);
+    }
+    CompactPlan {
+        epoch: u32::MAX,
+        coordinator: robots.saturating_sub(1) as u32,
+        transform: [0.0; 4],
+        kept,
+        moves: vec![(top, top); moves],
+        dead: vec![[0.0; 2]; dead],
+    }
 }
 
 /// The pattern a compact plan describes, as the behaviour holds it (no members, no sigma).
@@ -250,19 +257,11 @@ mod tests {
         for (robots, dead, bytes) in [(500, 12, 512), (100, 12, 512), (500, 0, 512), (100, 3, 300)] {
             let k = moves_that_fit(robots, dead, bytes);
             assert!(k > 12, "{robots} robots, {dead} wrecks, {bytes} bytes: {k}");
-            let points = robots + super::super::shift_drop::MAX_SPARE;
-            let mut kept = Bitmap::with_len(points);
-            for p in 0..points {
-                kept.insert(p);
-            }
-            let top = (points - 1) as u16;
+            // Other values in the f64 fields: the same length.
             let plan = |moves: usize| CompactPlan {
-                epoch: u32::MAX,
-                coordinator: (robots - 1) as u32,
                 transform: [1.05, 65.0, 65.0, -3.1],
-                kept: kept.clone(),
-                moves: vec![(top, top); moves],
                 dead: vec![[129.0, 129.0]; dead],
+                ..worst_case_plan(robots, moves, dead)
             };
             assert!(compact_len(&plan(k)) <= bytes as usize);
             assert!(compact_len(&plan(k + 1)) > bytes as usize);
