@@ -260,7 +260,7 @@
       (count && !f ? `; loading tick ${cur}...` : "");
     const state = {
       cur, tick: f ? f.tick : null, count, chunk: CHUNK, frames_held: frames.size,
-      chunks_held: used.size, requests, marks: drawn, selected, heard: null,
+      chunks_held: used.size, requests, pending: pending.size, marks: drawn, selected, heard: null,
       heap: performance.memory ? performance.memory.usedJSHeapSize : null,
     };
     if (!f) { $("info").textContent = ""; $("state").textContent = JSON.stringify(state); return; }
