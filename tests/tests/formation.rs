@@ -257,6 +257,58 @@ fn a_robot_boxed_in_by_fourteen_wrecks_squeezes_out_and_the_86_form() {
     let _ = std::fs::remove_dir_all(&off_dir);
 }
 
+/// The relayed centralised mode with the fixed C (configs/formation-100-centralised.toml with
+/// `pattern = "fixed"`), seed 2, five robots of one cluster killed on one tick
+/// (docs/formation.md 9, "The centralised mode relayed"): robot 0 stands in a notch between
+/// wrecks 2.70 apart with its slot beyond them; the squeeze alone does not free it (it must
+/// back out first). With the escape (escape.rs: a path round the wrecks at the true radii) the
+/// 95 form; with `escape.after_ticks = 0` the same run is not formed at tick 600. In-process.
+#[test]
+fn a_robot_in_a_notch_of_wrecks_backs_out_along_a_planned_path_and_the_95_form() {
+    let _g = serial();
+    let text = std::fs::read_to_string(config("formation-100-centralised.toml")).unwrap();
+    assert!(text.contains("\npattern = \"optimise\"\n"));
+    let fixed = text.replacen("\npattern = \"optimise\"\n", "\npattern = \"fixed\"\n", 1);
+    let inputs = tmp_dir("formation-notch-inputs");
+    std::fs::create_dir_all(&inputs).unwrap();
+    let run = |name: &str, toml: &str| {
+        let sc = inputs.join(format!("{name}.toml"));
+        std::fs::write(&sc, toml).unwrap();
+        let dir = tmp_dir(name);
+        let o = up(
+            &[
+                "--scenario",
+                sc.to_str().unwrap(),
+                "--executor",
+                "inprocess",
+                "--seed",
+                "2",
+                "--chaos-at",
+                "100:37,100:74,100:2,100:83,100:71",
+                "--max-ticks",
+                "600",
+            ],
+            &dir,
+        );
+        assert!(o.status.success(), "{}", stderr(&o));
+        dir
+    };
+    let dir = run("formation-notch", &fixed);
+    let f = formation(&dir);
+    assert_eq!(f["formed"], true, "{f}");
+    assert_eq!(f["overlapping_pairs"], 0, "{f}");
+    assert_eq!(summary(&dir)["alive_at_end"], 95);
+    assert_left_nothing(&dir);
+    let off = format!("{fixed}\n[formation.kernels.escape]\nafter_ticks = 0\n");
+    let dir_off = run("formation-notch-off", &off);
+    let f = formation(&dir_off);
+    assert_eq!(f["formed"], false, "{f}");
+    assert_eq!(f["robots_in_place"], 94, "{f}");
+    assert_eq!(f["overlapping_pairs"], 0, "{f}");
+    assert_left_nothing(&dir_off);
+    let _ = std::fs::remove_dir_all(&inputs);
+}
+
 /// configs/formation-100.toml in-process with the kills `chaos_at`, in a fresh folder `name`.
 fn swaps_100_killed(name: &str, chaos_at: &str) -> PathBuf {
     let sc = config("formation-100.toml");

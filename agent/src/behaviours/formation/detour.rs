@@ -55,7 +55,7 @@ pub struct Keepout {
 }
 
 /// The distance from `w` to the segment a-b.
-fn segment_distance(a: Vec2, b: Vec2, w: Vec2) -> f64 {
+pub fn segment_distance(a: Vec2, b: Vec2, w: Vec2) -> f64 {
     let ab = b - a;
     let len2 = ab.norm_squared();
     let t = if len2 > 0.0 {
@@ -68,7 +68,7 @@ fn segment_distance(a: Vec2, b: Vec2, w: Vec2) -> f64 {
 
 /// Whether the straight segment a-b stays out of every keep-out disc (a disc that already
 /// holds `a`, the robot squeezing past it, does not count).
-fn sees(a: Vec2, b: Vec2, keepouts: &[Keepout]) -> bool {
+pub fn sees(a: Vec2, b: Vec2, keepouts: &[Keepout]) -> bool {
     keepouts
         .iter()
         .filter(|k| (a - k.centre).norm() >= k.radius)
@@ -100,12 +100,36 @@ pub fn aim(me: Vec2, slot: Vec2, wrecks: &[Keepout], others: &[Keepout], p: &Det
         return slot;
     }
     let keepouts: Vec<Keepout> = wrecks.iter().chain(others).filter(|k| in_window(k)).copied().collect();
-    let half = (p.window / p.cell).round() as i32;
-    let at = |i: i32, j: i32| me + Vec2::new(i as f64, j as f64) * p.cell;
-    let free = |i: i32, j: i32| {
-        (i, j) == (0, 0) || keepouts.iter().all(|k| (at(i, j) - k.centre).norm() >= k.radius)
+    waypoint(me, slot, &keepouts, None, p.cell, p.window).unwrap_or(slot)
+}
+
+/// The rectangle a robot's centre must stay in (the box less the robot's radius): (min, max).
+pub type Bounds = (Vec2, Vec2);
+
+/// The next waypoint from `me` towards `slot` round `keepouts`: A* on the 8-connected grid of
+/// side `cell` over the window of half-width `window` around `me` (cells whose centre lies in
+/// a keep-out disc, or outside `bounds`, are not free), to the slot's cell when the slot lies
+/// in the window, else to a free border cell, paying the straight distance from it to the
+/// slot; then the farthest point of the path `me` sees in a straight line clear of every
+/// keep-out (the slot itself when that is the whole path). None: no path in the window.
+pub fn waypoint(
+    me: Vec2,
+    slot: Vec2,
+    keepouts: &[Keepout],
+    bounds: Option<Bounds>,
+    cell: f64,
+    window: f64,
+) -> Option<Vec2> {
+    let half = (window / cell).round() as i32;
+    let at = |i: i32, j: i32| me + Vec2::new(i as f64, j as f64) * cell;
+    let inside = |q: Vec2| {
+        bounds.is_none_or(|(lo, hi)| q.x >= lo.x && q.y >= lo.y && q.x <= hi.x && q.y <= hi.y)
     };
-    let rel = (slot - me) / p.cell;
+    let free = |i: i32, j: i32| {
+        (i, j) == (0, 0)
+            || (inside(at(i, j)) && keepouts.iter().all(|k| (at(i, j) - k.centre).norm() >= k.radius))
+    };
+    let rel = (slot - me) / cell;
     let slot_cell = (rel.x.round() as i32, rel.y.round() as i32);
     let slot_inside = slot_cell.0.abs() <= half && slot_cell.1.abs() <= half;
     let to_goal = |i: i32, j: i32| {
@@ -124,7 +148,7 @@ pub fn aim(me: Vec2, slot: Vec2, wrecks: &[Keepout], others: &[Keepout], p: &Det
         for (di, dj) in [(1, 0), (-1, 0), (0, 1), (0, -1), (1, 1), (1, -1), (-1, 1), (-1, -1)] {
             let (a, b) = (i + di, j + dj);
             if a.abs() <= half && b.abs() <= half && free(a, b) {
-                let step = p.cell * ((di * di + dj * dj) as f64).sqrt();
+                let step = cell * ((di * di + dj * dj) as f64).sqrt();
                 out.push((Node::Cell(a, b), cost(step)));
             }
         }
@@ -138,9 +162,7 @@ pub fn aim(me: Vec2, slot: Vec2, wrecks: &[Keepout], others: &[Keepout], p: &Det
         Node::Cell(i, j) => ((at(i, j) - slot).norm() * 1e6).floor() as u64,
         Node::Goal => 0,
     };
-    let Some((path, _)) = astar(&Node::Cell(0, 0), successors, heuristic, |n| *n == Node::Goal) else {
-        return slot;
-    };
+    let (path, _) = astar(&Node::Cell(0, 0), successors, heuristic, |n| *n == Node::Goal)?;
     let points: Vec<Vec2> = path
         .iter()
         .map(|n| match *n {
@@ -149,13 +171,15 @@ pub fn aim(me: Vec2, slot: Vec2, wrecks: &[Keepout], others: &[Keepout], p: &Det
         })
         .collect();
     // The farthest point of the path in sight (the slot when the goal is).
-    points
-        .iter()
-        .skip(1)
-        .rev()
-        .find(|q| sees(me, **q, &keepouts))
-        .copied()
-        .unwrap_or(points.get(1).copied().unwrap_or(slot))
+    Some(
+        points
+            .iter()
+            .skip(1)
+            .rev()
+            .find(|q| sees(me, **q, keepouts))
+            .copied()
+            .unwrap_or(points.get(1).copied().unwrap_or(slot)),
+    )
 }
 
 /// Eq. (16)'s preferred velocity for the slot at `slot`, turned towards `aim`: the speed of
@@ -188,16 +212,20 @@ impl super::Formation {
                 radius: 2.0 * reach,
             })
             .collect();
-        let discs: Vec<Keepout> = self
-            .discs
+        let a = aim(me, slot, &wrecks, &self.disc_keepouts(), p);
+        steer(me, slot, a, k.max_speed, k.k_a)
+    }
+
+    /// The arena's discs as keep-outs for a robot's centre: each grown by r + orca_margin.
+    pub(super) fn disc_keepouts(&self) -> Vec<Keepout> {
+        let reach = self.p.kernels.robot_radius + self.p.orca_margin;
+        self.discs
             .iter()
             .map(|d| Keepout {
                 centre: d.position,
                 radius: d.radius + reach,
             })
-            .collect();
-        let a = aim(me, slot, &wrecks, &discs, p);
-        steer(me, slot, a, k.max_speed, k.k_a)
+            .collect()
     }
 }
 

@@ -45,6 +45,7 @@ mod replan;
 mod replan_multihop;
 mod shift_drop;
 mod squeeze;
+mod escape;
 #[cfg(test)]
 mod tests;
 pub mod wrecks;
@@ -209,6 +210,8 @@ pub struct Formation {
     relay: Option<relay_step::RelayState>,
     /// Squeezing past wrecks (squeeze.rs).
     squeeze: squeeze::Squeeze,
+    /// Backing out of a notch of wrecks (escape.rs).
+    escape: escape::Escape,
 }
 
 impl Formation {
@@ -279,6 +282,7 @@ impl Formation {
             gathering: None,
             compact: None,
             squeeze: Default::default(),
+            escape: Default::default(),
             relay: relay_params.map(|r| relay_step::RelayState::new(robot, r, diagonal, sc.radio.comm_radius)),
         }
     }
@@ -839,7 +843,8 @@ impl Formation {
         // as a static disc over a live one it would leave ORCA no feasible velocity.
         let remembered: Vec<Vec2> = dead.into_iter().chain(self.ghosts.values().copied()).collect();
         let mut wrecks = real_wrecks(remembered, me, &robots, k.robot_radius);
-        if self.squeeze.on() {
+        let squeezing = self.squeeze.on() || self.escape.on();
+        if squeezing {
             let listed = sense.obstacle_points();
             let full = listed.len() >= swarm::frames::MAX_OBSTACLE_POINTS;
             let complete = squeeze::complete_radius(me, listed, full, self.obstacle_sensing_radius);
@@ -851,14 +856,19 @@ impl Formation {
             radius: r,
         });
         // Boxed in beside wrecks (squeeze.rs): they keep only their buffered cells.
-        let cell_only: Vec<Disc> = if self.squeeze.on() {
+        let cell_only: Vec<Disc> = if squeezing {
             wreck_discs.collect()
         } else {
             obstacles.extend(wreck_discs);
             Vec::new()
         };
-        // Eq. (16), steered round walls of wrecks in the swaps mode (detour.rs).
-        let preferred = self.preferred_with_detour(me, &wrecks);
+        // Eq. (16), steered round walls of wrecks in the swaps mode (detour.rs), or out of a
+        // notch of wrecks (escape.rs).
+        let preferred = if self.escape.on() {
+            self.preferred_escaping(me, &wrecks)
+        } else {
+            self.preferred_with_detour(me, &wrecks)
+        };
         let sel = orca_velocity_squeezing(&mine, preferred, &robots, &obstacles, &cell_only, k);
         if self.trace {
             self.trace_line(sense.tick, me, robots.len(), preferred, &sel);
@@ -882,9 +892,9 @@ impl Formation {
         };
         let busy = self.swap.as_ref().is_some_and(|a| a.is_busy());
         eprintln!(
-            "TRACE {tick} {} {:.3} {:.3} {s} {sx:.3} {sy:.3} {:?} {neighbours} {busy} {:.3} {:.3} {:.3} {:.3} squeeze={}",
+            "TRACE {tick} {} {:.3} {:.3} {s} {sx:.3} {sy:.3} {:?} {neighbours} {busy} {:.3} {:.3} {:.3} {:.3} squeeze={} escape={}",
             self.robot, me.x, me.y, sel.selection, preferred.x, preferred.y, sel.velocity.x, sel.velocity.y,
-            self.squeeze.on()
+            self.squeeze.on(), self.escape.on()
         );
     }
 }
@@ -940,6 +950,9 @@ impl Behaviour for Formation {
             reach: kp.max_speed * tau,
         };
         self.squeeze.update(&seen, self.p.squeeze_after_ticks);
+        let held = seen.speed <= squeeze::HELD_SPEED * seen.max_speed;
+        let away = seen.to_slot.is_some_and(|d| d > seen.epsilon);
+        self.escape.update(self.squeeze.on(), held, away, self.p.escape.after_ticks);
         let mut cmd = v * tau;
         // The world refuses commands above v_max: keep rounding from crossing it.
         if cmd.norm() > self.v_max_tick {

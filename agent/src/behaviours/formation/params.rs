@@ -5,6 +5,7 @@
 
 use super::relay::RelayParams;
 use super::detour::DetourParams;
+use super::escape::EscapeParams;
 use crate::formation::blocked::BlockedParams;
 use crate::formation::swaps::SwapParams;
 use crate::formation::FormationParams;
@@ -36,6 +37,9 @@ pub struct Params {
     /// 0.25): robots boxed in by exits of 4.14-4.17 between wrecks, passable at 2r = 2 from
     /// each but not at 2.1, stood still for thousands of ticks (docs/formation.md 9). 0: never.
     pub squeeze_after_ticks: u32,
+    /// Backing out of a notch of wrecks (escape.rs, `formation.kernels.escape`): a robot
+    /// still held still while it squeezes plans a path round the wrecks at the true radii.
+    pub escape: EscapeParams,
     /// The re-plan after a robot is killed under `reassignment = "swaps"`
     /// (`formation.kernels.replan`).
     pub replan: ReplanParams,
@@ -127,6 +131,7 @@ impl Default for Params {
             swaps: SwapParams::default(),
             orca_margin: 0.05,
             squeeze_after_ticks: 10,
+            escape: EscapeParams::default(),
             replan: ReplanParams::default(),
             relay: None,
             detour: None,
@@ -213,6 +218,18 @@ pub fn validate(sc: &Scenario, c: &Check) -> Result<(), ConfigError> {
     }
     c.range_f("formation.kernels.orca_margin", p.orca_margin, 0.0, 1e6, false)?;
     c.range_u("formation.kernels.squeeze_after_ticks", p.squeeze_after_ticks as u64, 0, 1_000_000)?;
+    let e = &p.escape;
+    c.range_u("formation.kernels.escape.after_ticks", e.after_ticks as u64, 0, 1_000_000)?;
+    c.range_f("formation.kernels.escape.window", e.window, 0.0, 1e4, true)?;
+    // At most 1000 cells across, as the detour's.
+    c.range_f("formation.kernels.escape.cell", e.cell, e.window / 500.0, e.window, false)?;
+    c.range_f(
+        "formation.kernels.escape.cell_tolerance",
+        e.cell_tolerance,
+        0.0,
+        sc.robot.radius,
+        false,
+    )?;
     if let Some(d) = &p.detour {
         c.range_f("formation.kernels.detour.window", d.window, 0.0, 1e4, true)?;
         // At most 1000 cells across (a search of a million cells at worst, every tick).

@@ -17,7 +17,7 @@ use swarm::geometry::Vec2;
 /// A robot moving slower than this fraction of V_p is held still. [chosen] 1e-3: the boxed-in
 /// robots of the measured runs had exactly 0; robots easing into their slots move at
 /// V_p d / K_a, far above it until within epsilon.
-const HELD_SPEED: f64 = 1e-3;
+pub const HELD_SPEED: f64 = 1e-3;
 
 /// The squeeze state of one robot.
 #[derive(Debug, Clone, Default)]

@@ -1,0 +1,56 @@
+#!/bin/bash
+# The escape (agent/src/behaviours/formation/escape.rs) on and off, side by side, one binary:
+# usage: escape-compare.sh BIN OUTROOT. Every run twice, once as shipped and once with
+# `formation.kernels.escape.after_ticks = 0` appended to a copy of its scenario; one line a run.
+BIN=$1; ROOT=$2; mkdir -p $ROOT
+list=$ROOT/runs.txt; : > $list
+add() { echo "$*" >> $list; } # name scenario seed schedule max_ticks
+sed 's/^pattern = "optimise"/pattern = "fixed"/' configs/formation-100-centralised.toml > $ROOT/fixedC.toml
+grid="none 100:37 100:0 30:0 100:37,100:52 100:0,105:1 100:37,100:74,100:2,100:83,100:71 20:37,20:0 60:37,62:38,64:39 100:37,110:52 50:5,50:6,50:7"
+for s in 1 2 3; do
+  for k in $grid; do
+    add fixedC $ROOT/fixedC.toml $s $k 3000
+    add optC configs/formation-100-centralised.toml $s $k 3000
+  done
+  for k in 100:37,100:52 100:0,105:1 60:37,62:38,64:39 100:37,100:74,100:2,100:83,100:71 100:37,110:52 100:37,104:52 \
+      $(seq -s, -f "100:%g" 40 47) $(seq -s, -f "100:%g" 10 23) $(seq -s, -f "100:%g" 0 10 90); do
+    add swaps100 configs/formation-100.toml $s $k 3000
+  done
+  for sc in formation formation-n formation-r; do
+    for k in none 0:0 15:0 5:0,10:1,15:2 10:1,10:2,10:3,10:4,10:5,10:6,10:7; do
+      add $sc configs/$sc.toml $s $k 1000
+    done
+  done
+  add swaps16 configs/formation-swaps-16.toml $s 30:3,30:4 1000
+done
+one() { # name scenario seed schedule max_ticks mode
+  name=$1; sc=$2; s=$3; k=$4; mt=$5; mode=$6
+  out=$ROOT/$name-s$s-$(echo $k | md5sum | cut -c1-8)-$mode
+  if [ $mode = off ]; then cp $sc $out.toml; printf '\n[formation.kernels.escape]\nafter_ticks = 0\n' >> $out.toml; sc=$out.toml; fi
+  chaos=(); [ $k != none ] && chaos=(--chaos-at $k)
+  nice -n 10 $BIN up --scenario $sc --executor inprocess --seed $s "${chaos[@]}" --max-ticks $mt --out $out --quiet > $out.log 2>&1
+  python3 - $out $name $s $k $mode <<'PY'
+import json,sys
+o,n,s,k,m=sys.argv[1:]
+try:
+    j=json.load(open(o+'/summary.json')); f=j['mission']['formation']
+    print(f"{n} s{s} {k} {m}: formed={f.get('formed')} in_place={f.get('robots_in_place')} K={f.get('iterations')} L={f.get('path_length'):.3f} overlaps={f.get('overlapping_pairs')}")
+except Exception as e:
+    print(f"{n} s{s} {k} {m}: ERROR {e}")
+PY
+}
+export -f one; export BIN ROOT
+while read -r line; do for m in on off; do echo "$line $m"; done; done < $list | xargs -P 2 -L 1 bash -c 'one "$@"' _ > $ROOT/results.txt
+sort $ROOT/results.txt > $ROOT/sorted.txt
+python3 - $ROOT/sorted.txt <<'PY'
+import sys,collections
+rows=collections.defaultdict(dict)
+for l in open(sys.argv[1]):
+    key,rest=l.split(': ',1); *k,m=key.split(' '); rows[' '.join(k)][m]=rest.strip()
+same=diff=0
+for k,v in sorted(rows.items()):
+    if v.get('on')==v.get('off'): same+=1
+    else:
+        diff+=1; print(f"DIFF {k}\n  on:  {v.get('on')}\n  off: {v.get('off')}")
+print(f"{same} runs identical, {diff} differ")
+PY
