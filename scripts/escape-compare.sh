@@ -2,6 +2,9 @@
 # The escape (agent/src/behaviours/formation/escape.rs) on and off, side by side, one binary:
 # usage: escape-compare.sh BIN OUTROOT. Every run twice, once as shipped and once with
 # `formation.kernels.escape.after_ticks = 0` appended to a copy of its scenario; one line a run.
+# With BIN_OFF=<other binary> set, the "off" runs are that binary's on the unchanged scenario
+# (two builds side by side). RANDOM_KILLS=1 adds the 20 random schedules of
+# results/deaths-schedules.md ("Random schedules") under swaps and relayed at 100 robots.
 BIN=$1; ROOT=$2; mkdir -p $ROOT
 list=$ROOT/runs.txt; : > $list
 add() { echo "$*" >> $list; } # name scenario seed schedule max_ticks
@@ -23,12 +26,41 @@ for s in 1 2 3; do
   done
   add swaps16 configs/formation-swaps-16.toml $s 30:3,30:4 1000
 done
+if [ -n "$RANDOM_KILLS" ]; then
+  while read -r name seed k; do
+    add random-swaps-$name configs/formation-100.toml $seed $k 3000
+    add random-relay-$name configs/formation-100-centralised.toml $seed $k 3000
+  done <<'LIST'
+r0 17 135:1,133:45,146:10,147:26
+r1 27 60:70,50:82
+r2 36 36:75,42:47,24:23,38:88
+r3 35 116:25,115:0,112:72
+r4 20 56:10
+r5 4 70:49,60:25,57:77
+r6 35 37:6,42:57,30:30,41:29
+r7 26 12:95
+r8 19 140:42
+r9 7 47:4,56:87,55:75,40:12
+r10 36 104:94,101:74
+r11 17 18:35
+r12 21 81:71,87:73
+r13 30 48:23
+r14 23 145:49
+r15 10 140:83,123:96
+r16 32 123:48,118:92,123:45
+r17 4 132:92,123:44,126:9,132:63
+r18 14 30:18,28:83
+r19 39 16:66,25:97
+LIST
+fi
 one() { # name scenario seed schedule max_ticks mode
   name=$1; sc=$2; s=$3; k=$4; mt=$5; mode=$6
   out=$ROOT/$name-s$s-$(echo $k | md5sum | cut -c1-8)-$mode
-  if [ $mode = off ]; then cp $sc $out.toml; printf '\n[formation.kernels.escape]\nafter_ticks = 0\n' >> $out.toml; sc=$out.toml; fi
+  bin=$BIN
+  if [ $mode = off ] && [ -n "$BIN_OFF" ]; then bin=$BIN_OFF
+  elif [ $mode = off ]; then cp $sc $out.toml; printf '\n[formation.kernels.escape]\nafter_ticks = 0\n' >> $out.toml; sc=$out.toml; fi
   chaos=(); [ $k != none ] && chaos=(--chaos-at $k)
-  nice -n 10 $BIN up --scenario $sc --executor inprocess --seed $s "${chaos[@]}" --max-ticks $mt --out $out --quiet > $out.log 2>&1
+  nice -n 10 $bin up --scenario $sc --executor inprocess --seed $s "${chaos[@]}" --max-ticks $mt --out $out --quiet > $out.log 2>&1
   python3 - $out $name $s $k $mode <<'PY'
 import json,sys
 o,n,s,k,m=sys.argv[1:]
@@ -39,7 +71,7 @@ except Exception as e:
     print(f"{n} s{s} {k} {m}: ERROR {e}")
 PY
 }
-export -f one; export BIN ROOT
+export -f one; export BIN ROOT BIN_OFF
 while read -r line; do for m in on off; do echo "$line $m"; done; done < $list | xargs -P 2 -L 1 bash -c 'one "$@"' _ > $ROOT/results.txt
 sort $ROOT/results.txt > $ROOT/sorted.txt
 python3 - $ROOT/sorted.txt <<'PY'

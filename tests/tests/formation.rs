@@ -309,6 +309,39 @@ fn a_robot_in_a_notch_of_wrecks_backs_out_along_a_planned_path_and_the_95_form()
     let _ = std::fs::remove_dir_all(&inputs);
 }
 
+/// A random kill schedule drawn before it ran (results/deaths-schedules.md, r2: seed 36,
+/// 36:75,42:47,24:23,38:88; 100 robots under swaps): robot 18 ends up wedged between wreck 47
+/// (2.0 from it) and the arena's disc at (40, 30) (3.10: its radius and r, each with ORCA's
+/// margin), which stand 5.05 apart: room at the true radii (5.0), none with the disc's margin.
+/// Squeezing now drops the arena discs' margins too (their buffered cells at the true radii):
+/// formed (K = 234 when measured); before, 95 of 96 at tick 3000. In-process.
+#[test]
+fn a_robot_wedged_between_a_wreck_and_an_arena_disc_squeezes_through_and_the_96_form() {
+    let _g = serial();
+    let dir = tmp_dir("formation-100-wedged");
+    let o = up(
+        &[
+            "--scenario",
+            &config("formation-100.toml"),
+            "--executor",
+            "inprocess",
+            "--seed",
+            "36",
+            "--chaos-at",
+            "36:75,42:47,24:23,38:88",
+            "--max-ticks",
+            "1000",
+        ],
+        &dir,
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let f = formation(&dir);
+    assert_eq!(f["formed"], true, "{f}");
+    assert_eq!(f["overlapping_pairs"], 0, "{f}");
+    assert_eq!(summary(&dir)["alive_at_end"], 96);
+    assert_left_nothing(&dir);
+}
+
 /// configs/formation-100.toml in-process with the kills `chaos_at`, in a fresh folder `name`.
 fn swaps_100_killed(name: &str, chaos_at: &str) -> PathBuf {
     let sc = config("formation-100.toml");

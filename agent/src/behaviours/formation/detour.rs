@@ -212,18 +212,17 @@ impl super::Formation {
                 radius: 2.0 * reach,
             })
             .collect();
-        let a = aim(me, slot, &wrecks, &self.disc_keepouts(), p);
+        let a = aim(me, slot, &wrecks, &self.disc_keepouts(reach), p);
         steer(me, slot, a, k.max_speed, k.k_a)
     }
 
-    /// The arena's discs as keep-outs for a robot's centre: each grown by r + orca_margin.
-    pub(super) fn disc_keepouts(&self) -> Vec<Keepout> {
-        let reach = self.p.kernels.robot_radius + self.p.orca_margin;
+    /// The arena's discs as keep-outs for a robot's centre: each grown by `grow`.
+    pub(super) fn disc_keepouts(&self, grow: f64) -> Vec<Keepout> {
         self.discs
             .iter()
             .map(|d| Keepout {
                 centre: d.position,
-                radius: d.radius + reach,
+                radius: d.radius + grow,
             })
             .collect()
     }

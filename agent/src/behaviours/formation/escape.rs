@@ -89,10 +89,10 @@ impl Escape {
     }
 }
 
-/// What the plan goes round: the wrecks, the arena's discs (already grown by r and ORCA's
-/// margin) and the box.
+/// What the plan goes round: the wrecks, the arena's discs and the box.
 pub struct Obstacles<'a> {
     pub wrecks: &'a [Vec2],
+    /// The arena's discs grown by r (the true contact distance of a robot's centre).
     pub discs: &'a [Keepout],
     pub bounds: Bounds,
     /// The true radius r.
@@ -100,8 +100,9 @@ pub struct Obstacles<'a> {
 }
 
 /// Eq. (16)'s preferred velocity (V_p, K_a) for the slot at `slot`, turned at the plan's next
-/// waypoint when a wreck stands within 2 r of the straight line (or a disc within its
-/// keep-out); eq. (16) itself when no path exists in the window.
+/// waypoint when a wreck or a disc stands within the true contact distance of the straight
+/// line; eq. (16) itself when no path exists in the window. The cells keep `cell_tolerance`
+/// less from every disc, wreck or arena's (ORCA, squeezing, holds both at the true radii).
 pub fn preferred(me: Vec2, slot: Vec2, o: &Obstacles, max_speed: f64, k_a: f64, p: &EscapeParams) -> Vec2 {
     let contact = 2.0 * o.robot_radius;
     let near = |c: Vec2, radius: f64| (c - me).norm() <= p.window + radius;
@@ -122,7 +123,10 @@ pub fn preferred(me: Vec2, slot: Vec2, o: &Obstacles, max_speed: f64, k_a: f64, 
                 centre: *w,
                 radius: cells,
             })
-            .chain(o.discs.iter().filter(|k| near(k.centre, k.radius)).copied())
+            .chain(o.discs.iter().filter(|k| near(k.centre, k.radius)).map(|k| Keepout {
+                centre: k.centre,
+                radius: k.radius - p.cell_tolerance,
+            }))
             .collect();
         waypoint(me, slot, &keepouts, Some(o.bounds), p.cell, p.window).unwrap_or(slot)
     } else {
@@ -139,8 +143,8 @@ impl super::Formation {
         let Some(slot) = self.slot.map(|s| self.targets[s]) else {
             return Vec2::zeros();
         };
-        let discs = self.disc_keepouts();
         let r = k.robot_radius;
+        let discs = self.disc_keepouts(r);
         let o = Obstacles {
             wrecks,
             discs: &discs,

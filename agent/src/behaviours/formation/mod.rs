@@ -855,9 +855,12 @@ impl Formation {
             velocity: Vec2::zeros(),
             radius: r,
         });
-        // Boxed in beside wrecks (squeeze.rs): they keep only their buffered cells.
+        // Boxed in beside wrecks (squeeze.rs): they keep only their buffered cells, and so do
+        // the arena's discs (static too: a cell at the true radii is exact for them; a robot
+        // wedged between a wreck and a disc 5.05 apart, which it passes at the true radii
+        // (5.0) but not with the disc's margin, stood still for good: docs/formation.md 9).
         let cell_only: Vec<Disc> = if squeezing {
-            wreck_discs.collect()
+            wreck_discs.chain(std::mem::take(&mut obstacles)).collect()
         } else {
             obstacles.extend(wreck_discs);
             Vec::new()

@@ -8,9 +8,10 @@
 //! 2 (r + margin) = 2.1. Robots were measured boxed in by such gaps for good (100 robots, 14
 //! ids killed at once; the fixed C with five kills: exits of 4.14-4.17, docs/formation.md 9).
 //! While squeezing, the wrecks stay in the robot's buffered cell at the true radii (a step
-//! never overlaps them, cell_slack kept), and only their ORCA half-planes go. Robots and the
-//! arena's discs keep their margins. A run in which no robot is held beside a wreck is
-//! unchanged.
+//! never overlaps them, cell_slack kept), and only their ORCA half-planes go; so do the
+//! arena's discs' (static too; a robot wedged between a wreck and a disc with 0.05 to spare
+//! at the true radii was measured still for good with the disc's margin). Robots keep their
+//! margins. A run in which no robot is held beside a wreck is unchanged.
 
 use swarm::geometry::Vec2;
 
