@@ -114,7 +114,8 @@ pub fn preferred(me: Vec2, slot: Vec2, o: &Obstacles, max_speed: f64, k_a: f64, 
             .iter()
             .any(|k| near(k.centre, k.radius) && segment_distance(me, slot, k.centre) < k.radius);
     let aim = if blocked {
-        let cells = contact - p.cell_tolerance;
+        // Never below 0 (point robots, r = 0: no tolerance to take).
+        let cells = (contact - p.cell_tolerance).max(0.0);
         let keepouts: Vec<Keepout> = o
             .wrecks
             .iter()
@@ -125,7 +126,7 @@ pub fn preferred(me: Vec2, slot: Vec2, o: &Obstacles, max_speed: f64, k_a: f64, 
             })
             .chain(o.discs.iter().filter(|k| near(k.centre, k.radius)).map(|k| Keepout {
                 centre: k.centre,
-                radius: k.radius - p.cell_tolerance,
+                radius: (k.radius - p.cell_tolerance).max(0.0),
             }))
             .collect();
         waypoint(me, slot, &keepouts, Some(o.bounds), p.cell, p.window).unwrap_or(slot)

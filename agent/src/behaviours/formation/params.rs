@@ -223,13 +223,7 @@ pub fn validate(sc: &Scenario, c: &Check) -> Result<(), ConfigError> {
     c.range_f("formation.kernels.escape.window", e.window, 0.0, 1e4, true)?;
     // At most 1000 cells across, as the detour's.
     c.range_f("formation.kernels.escape.cell", e.cell, e.window / 500.0, e.window, false)?;
-    c.range_f(
-        "formation.kernels.escape.cell_tolerance",
-        e.cell_tolerance,
-        0.0,
-        sc.robot.radius,
-        false,
-    )?;
+    c.range_f("formation.kernels.escape.cell_tolerance", e.cell_tolerance, 0.0, 1e6, false)?;
     if let Some(d) = &p.detour {
         c.range_f("formation.kernels.detour.window", d.window, 0.0, 1e4, true)?;
         // At most 1000 cells across (a search of a million cells at worst, every tick).
