@@ -15,6 +15,14 @@
 //! would gain exactly the price by swapping back). The handshake is the one of swaps.rs, so
 //! slots stay unique under loss the same way.
 //!
+//! Making way (2026-12-04): once its blocked swap stands, the blocked robot backs away from
+//! its partner at half of V_p until it is two steps clear of ORCA's contact with it, then holds
+//! still, until the partner is within `in_place` of the slot it took or `hold_ticks` pass
+//! (swaps.rs `making_way`; the behaviour turns the preferred velocity). Without it a head-on
+//! pair in a packed pattern (slots 2.15 apart, ORCA's contact 2.1) could not pass each other:
+//! neither moved, and after `hold_ticks` a pairwise swap undid the blocked one (500 robots,
+//! seed 4, docs/formation.md 9).
+//!
 //! A blocked robot is farther than `min_distance` from its slot and a receiver within
 //! `in_place` of its own, and `min_distance >= in_place` (checked at load), so no robot is
 //! both: blocked proposals never form a chain among themselves.

@@ -176,6 +176,9 @@ pub struct SwapAgent {
     /// of the last one.
     blocked_swaps: u32,
     blocked_partner: Option<usize>,
+    /// After its blocked swap stands, the blocked robot makes way for the partner stepping
+    /// into its vacated slot: (partner, the slot the partner took, until this tick).
+    make_way: Option<(usize, usize, u64)>,
 }
 
 /// How much robots i, j at `pi`, `pj` holding `a`, `b` gain by swapping (eq. 4 costs).
@@ -199,6 +202,7 @@ impl SwapAgent {
             watch: None,
             blocked_swaps: 0,
             blocked_partner: None,
+            make_way: None,
         }
     }
 
@@ -294,6 +298,7 @@ impl SwapAgent {
                             self.target = pd.to_target;
                             if let Some(b) = p.blocked.as_ref().filter(|_| pd.blocked) {
                                 self.blocked_swap_stands(now, pd.to, b);
+                                self.make_way = Some((pd.to, pd.from_target, now + b.hold_ticks));
                             }
                         }
                         self.pending = None;
@@ -446,6 +451,23 @@ impl SwapAgent {
         out
     }
 
+    /// Where the partner of this robot's blocked swap stands while this robot makes way for
+    /// it (blocked.rs): within `hold_ticks` of the swap, until the partner is in place in the
+    /// slot this robot left (`in_place` of it). None: no way to make.
+    pub fn making_way(
+        &self,
+        now: u64,
+        targets: &[Vec2],
+        neighbours: &[NeighbourView],
+        p: &SwapParams,
+    ) -> Option<Vec2> {
+        let (partner, slot, until) = self.make_way?;
+        let b = p.blocked.as_ref()?;
+        let n = neighbours.iter().find(|n| n.id == partner)?;
+        let q = targets.get(slot)?;
+        (now < until && (n.position - q).norm() > b.in_place).then_some(n.position)
+    }
+
     /// A blocked swap with `partner` stands (either side): hold still for `hold_ticks`,
     /// count it, and remember the partner (no second one in a row with it).
     fn blocked_swap_stands(&mut self, now: u64, partner: usize, b: &BlockedParams) {
@@ -495,6 +517,39 @@ mod tests {
     use crate::formation::hungarian::{assign_targets, Hungarian};
     use rand::{Rng, SeedableRng};
     use rand_chacha::ChaCha8Rng;
+
+    #[test]
+    fn the_blocked_robot_makes_way_until_its_partner_is_in_place_or_the_hold_ends() {
+        let p = SwapParams {
+            blocked: Some(BlockedParams::default()),
+            ..SwapParams::default()
+        };
+        let hold = p.blocked.as_ref().unwrap().hold_ticks;
+        // Robot 0 gave slot 0 (at the origin) to robot 1 in a blocked swap at tick 100.
+        let targets = [Vec2::zeros(), Vec2::new(2.2, 0.0)];
+        let mut a = SwapAgent::new(0, 1);
+        a.make_way = Some((1, 0, 100 + hold));
+        let at = |x: f64| NeighbourView {
+            id: 1,
+            position: Vec2::new(x, 0.0),
+            target: 0,
+            tick: 100,
+        };
+        // Partner 1.55 from the slot: make way (its position given).
+        assert_eq!(
+            a.making_way(101, &targets, &[at(1.55)], &p),
+            Some(Vec2::new(1.55, 0.0))
+        );
+        // In place (within in_place of the slot): done.
+        assert_eq!(a.making_way(102, &targets, &[at(0.5)], &p), None);
+        // Not heard: nothing to make way for.
+        assert_eq!(a.making_way(102, &targets, &[], &p), None);
+        // The hold over: done.
+        assert_eq!(a.making_way(100 + hold, &targets, &[at(1.55)], &p), None);
+        // No blocked swap: never.
+        let b = SwapAgent::new(0, 1);
+        assert_eq!(b.making_way(101, &targets, &[at(1.55)], &p), None);
+    }
 
     #[test]
     fn hand_computed_gain() {

@@ -212,6 +212,9 @@ pub struct Formation {
     squeeze: squeeze::Squeeze,
     /// Backing out of a notch of wrecks (escape.rs).
     escape: escape::Escape,
+    /// Where the partner of this robot's blocked swap stands while this robot makes way for
+    /// it (swaps.rs `making_way`).
+    make_way_from: Option<Vec2>,
 }
 
 impl Formation {
@@ -283,6 +286,7 @@ impl Formation {
             compact: None,
             squeeze: Default::default(),
             escape: Default::default(),
+            make_way_from: None,
             relay: relay_params.map(|r| relay_step::RelayState::new(robot, r, diagonal, sc.radio.comm_radius)),
         }
     }
@@ -769,6 +773,7 @@ impl Formation {
         };
         let msgs = agent.step(k, me, &self.targets, &neighbours, inbox, swap_params);
         self.slot = Some(agent.target);
+        self.make_way_from = agent.making_way(k, &self.targets, &neighbours, swap_params);
         for m in msgs {
             let _ = match m {
                 SwapMessage::Propose {
@@ -867,7 +872,18 @@ impl Formation {
         };
         // Eq. (16), steered round walls of wrecks in the swaps mode (detour.rs), or out of a
         // notch of wrecks (escape.rs).
-        let preferred = if self.escape.on() {
+        // Making way after a blocked swap, so that the partner can step into the slot this
+        // robot left (a head-on pair in a packed pattern stood still for good:
+        // docs/formation.md 9): away from the partner at half of V_p until two steps clear of
+        // ORCA's contact with it, then still.
+        let contact = 2.0 * r + 2.0 * k.max_speed * tau;
+        let preferred = if let Some(from) = self.make_way_from.filter(|f| (me - f).norm() > 1e-9) {
+            if (me - from).norm() < contact {
+                (me - from).normalize() * (0.5 * k.max_speed)
+            } else {
+                Vec2::zeros()
+            }
+        } else if self.escape.on() {
             self.preferred_escaping(me, &wrecks)
         } else {
             self.preferred_with_detour(me, &wrecks)
