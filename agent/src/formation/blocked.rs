@@ -16,8 +16,8 @@
 //! slots stay unique under loss the same way.
 //!
 //! Making way (2026-12-04): once its blocked swap stands, the blocked robot backs away from
-//! its partner at half of V_p until it is two steps clear of ORCA's contact with it, then holds
-//! still, until the partner is within `in_place` of the slot it took or `hold_ticks` pass
+//! its partner at `make_way_speed` V_p until it is `make_way_steps` steps clear of ORCA's
+//! contact with it, then holds still, until the partner is within `in_place` of the slot it took or `hold_ticks` pass
 //! (swaps.rs `making_way`; the behaviour turns the preferred velocity). Without it a head-on
 //! pair in a packed pattern (slots 2.15 apart, ORCA's contact 2.1) could not pass each other:
 //! neither moved, and after `hold_ticks` a pairwise swap undid the blocked one (500 robots,
@@ -72,6 +72,16 @@ pub struct BlockedParams {
     /// blocked role back and forth (measured before this guard: 500 robots, seed 8, kill
     /// 150:37, robots 398 and 451 swapped four times in 280 ticks). [chosen] 4.
     pub max_swaps: u32,
+    /// Making way: the blocked robot backs away from its partner at this fraction of V_p
+    /// after its blocked swap stands. [chosen] 0.5: half a step a tick is enough to open the
+    /// 0.05-0.1 a packed lattice lacks within a few ticks, and keeps it from running into the
+    /// robots behind it. 0: no making way.
+    pub make_way_speed: f64,
+    /// ... until it is this many steps (V_p tau) clear of ORCA's contact 2 (r + orca_margin)
+    /// with the partner, then it holds still. [chosen] 2.0: room for the partner's step in;
+    /// backing away for the whole hold (up to 5 units) took a 100-robot run from K 534 to
+    /// 1212 (docs/formation.md 9).
+    pub make_way_steps: f64,
 }
 
 impl Default for BlockedParams {
@@ -86,6 +96,8 @@ impl Default for BlockedParams {
             max_price: 10.0,
             hold_ticks: 40,
             max_swaps: 4,
+            make_way_speed: 0.5,
+            make_way_steps: 2.0,
         }
     }
 }

@@ -462,7 +462,7 @@ impl SwapAgent {
         p: &SwapParams,
     ) -> Option<Vec2> {
         let (partner, slot, until) = self.make_way?;
-        let b = p.blocked.as_ref()?;
+        let b = p.blocked.as_ref().filter(|b| b.make_way_speed > 0.0)?;
         let n = neighbours.iter().find(|n| n.id == partner)?;
         let q = targets.get(slot)?;
         (now < until && (n.position - q).norm() > b.in_place).then_some(n.position)

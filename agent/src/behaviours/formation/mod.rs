@@ -870,24 +870,7 @@ impl Formation {
             obstacles.extend(wreck_discs);
             Vec::new()
         };
-        // Eq. (16), steered round walls of wrecks in the swaps mode (detour.rs), or out of a
-        // notch of wrecks (escape.rs).
-        // Making way after a blocked swap, so that the partner can step into the slot this
-        // robot left (a head-on pair in a packed pattern stood still for good:
-        // docs/formation.md 9): away from the partner at half of V_p until two steps clear of
-        // ORCA's contact with it, then still.
-        let contact = 2.0 * r + 2.0 * k.max_speed * tau;
-        let preferred = if let Some(from) = self.make_way_from.filter(|f| (me - f).norm() > 1e-9) {
-            if (me - from).norm() < contact {
-                (me - from).normalize() * (0.5 * k.max_speed)
-            } else {
-                Vec2::zeros()
-            }
-        } else if self.escape.on() {
-            self.preferred_escaping(me, &wrecks)
-        } else {
-            self.preferred_with_detour(me, &wrecks)
-        };
+        let preferred = self.preferred(me, &wrecks);
         let sel = orca_velocity_squeezing(&mine, preferred, &robots, &obstacles, &cell_only, k);
         if self.trace {
             self.trace_line(sense.tick, me, robots.len(), preferred, &sel);
@@ -897,6 +880,31 @@ impl Formation {
 }
 
 impl Formation {
+    /// The preferred velocity: making way after a blocked swap (swaps.rs `making_way`), else
+    /// out of a notch of wrecks (escape.rs), else eq. (16), steered round walls of wrecks in
+    /// the swaps mode (detour.rs).
+    fn preferred(&self, me: Vec2, wrecks: &[Vec2]) -> Vec2 {
+        let k = &self.p.kernels;
+        let making_way = self.make_way_from.filter(|f| (me - f).norm() > 1e-9);
+        let blocked = self.p.swaps.blocked.as_ref();
+        if let (Some(from), Some(b)) = (making_way, blocked) {
+            // Away from the partner, so that it can step into the slot this robot left (a
+            // head-on pair in a packed pattern stood still for good: docs/formation.md 9),
+            // until `make_way_steps` steps clear of ORCA's contact with it; then still.
+            let reach = k.robot_radius + self.p.orca_margin;
+            let clear = 2.0 * reach + b.make_way_steps * k.max_speed * k.time_step;
+            return if (me - from).norm() < clear {
+                (me - from).normalize() * (b.make_way_speed * k.max_speed)
+            } else {
+                Vec2::zeros()
+            };
+        }
+        if self.escape.on() {
+            return self.preferred_escaping(me, wrecks);
+        }
+        self.preferred_with_detour(me, wrecks)
+    }
+
     /// The measurement of docs/formation.md 9 (environment variable `FORMATION_TRACE` set):
     /// one stderr line per robot every 10 ticks and at every tick ORCA had no feasible
     /// velocity: `TRACE tick robot x y slot slot_x slot_y selection neighbours busy

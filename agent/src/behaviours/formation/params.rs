@@ -215,6 +215,8 @@ pub fn validate(sc: &Scenario, c: &Check) -> Result<(), ConfigError> {
         c.range_f(&key("max_price"), b.max_price, 0.0, 1e9, false)?;
         c.range_u(&key("hold_ticks"), b.hold_ticks, 0, 1_000_000)?;
         c.range_u(&key("max_swaps"), b.max_swaps as u64, 0, 1_000_000)?;
+        c.range_f(&key("make_way_speed"), b.make_way_speed, 0.0, 1.0, false)?;
+        c.range_f(&key("make_way_steps"), b.make_way_steps, 0.0, 1e6, false)?;
     }
     c.range_f("formation.kernels.orca_margin", p.orca_margin, 0.0, 1e6, false)?;
     c.range_u("formation.kernels.squeeze_after_ticks", p.squeeze_after_ticks as u64, 0, 1_000_000)?;
