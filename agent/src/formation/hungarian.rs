@@ -24,12 +24,21 @@ pub struct Hungarian {
     used: Vec<bool>,
     /// The cost matrix buffer of [`Hungarian::solve_with`].
     scratch: Vec<f64>,
+    /// Solves made by this solver.
+    solves: usize,
+    /// Rows the last solve augmented.
+    augmented: usize,
 }
 
 impl Hungarian {
     /// A solver with empty buffers.
     pub fn new() -> Self {
         Self::default()
+    }
+
+    /// Solves made by this solver.
+    pub fn solves(&self) -> usize {
+        self.solves
     }
 
     /// The column potential v_j of the last solve: the dual solution satisfies
@@ -58,9 +67,51 @@ impl Hungarian {
 
     /// [`Self::solve_with`] on a row-major n x n matrix.
     pub fn solve_matrix(&mut self, n: usize, cost: &[f64], assignment: &mut Vec<usize>) -> f64 {
+        self.solve_matrix_from(n, cost, None, assignment)
+    }
+
+    /// [`Self::solve_with`], warm-started from a nearby problem's optimal assignment and column
+    /// potentials (`warm = (assignment, potentials)`, e.g. the same instance at a nearby
+    /// direction): with the columns' potentials kept, u_i = min_j (c_ij - v_j) is dual
+    /// feasible, every row whose old column attains its minimum stays matched (tight), and
+    /// only the others are augmented, O(k n^2) for k of them instead of O(n^3). The answer is
+    /// an optimal assignment like a cold solve's (ties may break differently).
+    pub fn solve_warm_with(
+        &mut self,
+        n: usize,
+        cost: impl Fn(usize, usize) -> f64,
+        warm: (&[usize], &[f64]),
+        assignment: &mut Vec<usize>,
+    ) -> f64 {
+        let mut matrix = std::mem::take(&mut self.scratch);
+        matrix.clear();
+        matrix.extend((0..n * n).map(|k| cost(k / n, k % n)));
+        let total = self.solve_matrix_from(n, &matrix, Some(warm), assignment);
+        self.scratch = matrix;
+        total
+    }
+
+    /// The column potentials v_1..v_n of the last solve (to warm-start a later one).
+    pub fn column_potentials(&self) -> &[f64] {
+        &self.v[1..]
+    }
+
+    /// Rows the last solve augmented (n for a cold solve).
+    pub fn augmented_rows(&self) -> usize {
+        self.augmented
+    }
+
+    fn solve_matrix_from(
+        &mut self,
+        n: usize,
+        cost: &[f64],
+        warm: Option<(&[usize], &[f64])>,
+        assignment: &mut Vec<usize>,
+    ) -> f64 {
         assert_eq!(cost.len(), n * n, "the cost matrix must be n x n");
         assignment.clear();
         assignment.resize(n, 0);
+        self.solves += 1;
         if n == 0 {
             return 0.0;
         }
@@ -73,7 +124,31 @@ impl Hungarian {
         self.p.resize(n + 1, 0);
         self.way.clear();
         self.way.resize(n + 1, 0);
-        for row in 1..=n {
+        let mut free = Vec::new();
+        match warm {
+            Some((sigma, v)) if sigma.len() == n && v.len() == n => {
+                self.v[1..].copy_from_slice(v);
+                for (i, &k) in sigma.iter().enumerate() {
+                    let row = &cost[i * n..(i + 1) * n];
+                    let least = row
+                        .iter()
+                        .zip(v)
+                        .map(|(c, vj)| c - vj)
+                        .fold(f64::INFINITY, f64::min);
+                    let own = row[k] - v[k];
+                    if own <= least && self.p[k + 1] == 0 {
+                        self.u[i + 1] = own;
+                        self.p[k + 1] = i + 1;
+                    } else {
+                        self.u[i + 1] = least;
+                        free.push(i + 1);
+                    }
+                }
+            }
+            _ => free.extend(1..=n),
+        }
+        self.augmented = free.len();
+        for row in free {
             self.p[0] = row;
             let mut j0 = 0;
             self.minv.clear();
@@ -193,28 +268,12 @@ mod tests {
     use rand::{Rng, SeedableRng};
     use rand_chacha::ChaCha8Rng;
 
-    /// The minimum over all n! permutations (Heap's algorithm).
+    /// The minimum over all n! permutations.
     fn brute_force(cost: &[f64], n: usize) -> f64 {
-        let mut perm: Vec<usize> = (0..n).collect();
-        let eval = |p: &[usize]| (0..n).map(|i| cost[i * n + p[i]]).sum::<f64>();
-        let mut best = eval(&perm);
-        let mut c = vec![0usize; n];
-        let mut i = 0;
-        while i < n {
-            if c[i] < i {
-                if i % 2 == 0 {
-                    perm.swap(0, i);
-                } else {
-                    perm.swap(c[i], i);
-                }
-                best = best.min(eval(&perm));
-                c[i] += 1;
-                i = 0;
-            } else {
-                c[i] = 0;
-                i += 1;
-            }
-        }
+        let mut best = f64::INFINITY;
+        crate::formation::test_support::for_each_permutation(n, |p| {
+            best = best.min((0..n).map(|i| cost[i * n + p[i]]).sum::<f64>());
+        });
         best
     }
 

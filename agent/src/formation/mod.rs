@@ -8,11 +8,14 @@
 //! - [`hungarian`]: the minimum-cost assignment (Kuhn 1955, the paper's ref. \[20\]).
 //! - [`constraints`]: the pattern constraints of eqs. (9)-(13).
 //! - [`optimise`]: eqs. (1)-(14), solved to the global optimum by spatial branch-and-bound.
+//! - [`alignment`]: the polygon of achievable alignments, which gives the branch-and-bound its
+//!   assignment bound without a Hungarian solve a node.
 //! - [`preferred`]: the preferred velocity of eq. (16).
 //! - [`orca`] and [`linear_program`]: eqs. (17)-(26), ORCA (van den Berg et al. 2011).
 //! - [`walls`]: the box's walls as velocity half-planes (beyond the paper).
 //! - [`swaps`]: beyond the paper, a decentralised pairwise-swap reassignment.
 
+pub mod alignment;
 pub mod blocked;
 pub mod constraints;
 pub mod hungarian;
@@ -32,7 +35,9 @@ mod sim_tests;
 #[cfg(test)]
 mod test_support;
 
-pub use params::{FormationParams, ObstacleConstraint, OptimiserParams, TransformReading};
+pub use params::{
+    FormationParams, ObstacleConstraint, OptimiserBound, OptimiserParams, TransformReading,
+};
 pub use template::{Template, Transform};
 
 use thiserror::Error;

@@ -51,8 +51,19 @@
 //!    sigma0 wins throughout a small rectangle, E = 0 and this is exact (bounds 1-2 are then
 //!    skipped: they cannot be higher).
 //!
-//! So LB = max(bound 1-2, bound 4) + n dist^2(p_bar, \[c\]) <= f at every feasible point of the
-//! node (not clipped at 0, so that best-first order still ranks nodes whose bound is negative).
+//! 5. The alignment polygon (`OptimiserBound::Polygon`, the default; alignment.rs): the
+//!    optimal sigma depends only on the direction of A = (a, b), so the max over sigma of
+//!    a D + b X is the support function h(A) of the convex polygon H of all (D, X), traced by
+//!    Hungarian solves at a few hundred directions for the whole search (warm-started from the
+//!    neighbouring direction). Then min over the rectangle of S2 |A|^2 - 2 h(A) is exact (up
+//!    to the |A| >= lambda_sep relaxation) from H's vertices whose arcs of directions meet the
+//!    rectangle's, and a node makes no solve of its own; while an arc of directions is not yet
+//!    traced, the apex where its two supporting lines meet stands in for it (still a valid
+//!    bound). Bounds 1-2 and 4 are then not computed (`OptimiserBound::Corners` keeps them).
+//!
+//! So LB = max(bound 1-2, bound 4) (or bound 5) + n dist^2(p_bar, \[c\]) <= f at every feasible
+//! point of the node (not clipped at 0, so that best-first order still ranks nodes whose bound
+//! is negative).
 //! The constraints prune too: a node is dropped when lambda_max < lambda_sep, or when the
 //! interval box of some target q_j = \[a\] s~_j - \[b\] s~_j^perp + \[c\] misses the area or lies
 //! wholly inside an obstacle's forbidden region; and before the bound, the c box is narrowed to
@@ -61,8 +72,9 @@
 //! c term to the exact one, so LB tends to f and the search converges.
 //!
 //! # Upper bound (incumbent)
-//! Every node evaluates its (alpha, theta) midpoint: sigma by Hungarian (for fixed A and c the
-//! constraints do not depend on sigma, so this sigma is optimal there), and two centroids, the
+//! Every node evaluates its (alpha, theta) midpoint: sigma by Hungarian (with bound 5, the
+//! vertex of H optimal in A's direction; for fixed A and c the constraints do not depend on
+//! sigma, so this sigma is optimal there), and two centroids, the
 //! unconstrained best c = p_bar clamped to the node, and the node's centre; a candidate meeting
 //! every constraint becomes the incumbent if it is better.
 //!
@@ -73,7 +85,8 @@
 //! solves and the dual computation; only the centroid narrowing, the c term and the incumbent's
 //! centroid candidates are evaluated anew. Every number is the one the child would have
 //! computed itself, so the search, its order and its answer are unchanged (tested bit for bit
-//! against `Reuse::Off`).
+//! against `Reuse::Off` with the corner bound; with the polygon a child's own bound could be
+//! tighter when arcs were traced meanwhile, so the reused one is valid but may differ).
 //!
 //! # Stopping rule and certificate
 //! Best-first order: the node popped has the least LB of all open nodes, so when its LB is
@@ -81,9 +94,10 @@
 //! that. The reported lower bound is the minimum over the open nodes and the nodes pruned by
 //! bound, so `cost - lower_bound = gap` is a certificate even when the node budget runs out.
 
+use super::alignment::{AlignmentPolygon, MatrixOracle};
 use super::constraints::{PatternConstraints, SLACK};
 use super::hungarian::Hungarian;
-use super::params::{FormationParams, TransformReading};
+use super::params::{FormationParams, OptimiserBound, TransformReading};
 use super::template::{matrix, Template, Transform};
 use super::FormationError;
 use std::cmp::Ordering;
@@ -110,6 +124,8 @@ pub struct Solution {
     pub proven: bool,
     /// Branch-and-bound nodes bounded.
     pub nodes: usize,
+    /// Hungarian solves made (the alignment polygon's, or the corner bound's).
+    pub solves: usize,
 }
 
 /// Solve eq. (14) over the scenario's domain (`params.optimiser`).
@@ -335,6 +351,7 @@ impl Problem {
         sigma: &mut Vec<usize>,
         shapes: &mut Vec<ShapeEval>,
         reuse: Reuse,
+        polygon: &mut Option<AlignmentPolygon>,
     ) -> Option<f64> {
         let (ar, br) = self.ab_box(node.alpha, node.theta);
         let lam2_max = sq_max(ar) + sq_max(br);
@@ -347,9 +364,14 @@ impl Problem {
         let g_lb = match (reuse, node.shape) {
             (Reuse::On, i) if i != NO_SHAPE => shapes[i as usize].g_lb,
             _ => {
-                let g_lb = self.g_bound(ar, br, h, sigma);
+                let g_lb = match polygon {
+                    Some(poly) => self.polygon_bound(ar, br, h, poly),
+                    None => self.g_bound(ar, br, h, sigma),
+                };
                 if reuse == Reuse::On {
-                    let mid = self.midpoint(node, h, sigma).map(|g| (g, sigma.clone()));
+                    let mid = self
+                        .midpoint(node, h, sigma, polygon)
+                        .map(|g| (g, sigma.clone()));
                     node.shape = shapes.len() as u32;
                     shapes.push(ShapeEval { g_lb, mid });
                 }
@@ -391,16 +413,61 @@ impl Problem {
         b1.max(b2)
     }
 
+    /// The lower bound on g over the (a, b) rectangle from the alignment polygon: exact in
+    /// the assignment (alignment.rs), relaxed only in |A| >= lambda_sep.
+    fn polygon_bound(
+        &self,
+        ar: [f64; 2],
+        br: [f64; 2],
+        h: &mut Hungarian,
+        poly: &mut AlignmentPolygon,
+    ) -> f64 {
+        if self.s2 == 0.0 {
+            // A one-point template: g = P2 whatever (a, b) (see `dual_bound`).
+            return self.p2;
+        }
+        let lambda_min = (self.lambda_sep2 - SLACK).max(0.0).sqrt();
+        let mut oracle = self.oracle(h);
+        self.p2 + poly.quad_bound(ar, br, self.s2, lambda_min, &mut oracle)
+    }
+
+    /// The Hungarian method on this instance's alignment costs, as the polygon's oracle.
+    fn oracle<'a>(&'a self, h: &'a mut Hungarian) -> MatrixOracle<'a> {
+        MatrixOracle {
+            n: self.n,
+            dot: &self.dot,
+            cross: &self.cross,
+            hungarian: h,
+            work: 0.0,
+        }
+    }
+
     /// g and (in `sigma`) the best assignment at the node's (alpha, theta) midpoint; None when
     /// the midpoint's scale breaks C3.
-    fn midpoint(&self, node: &Node, h: &mut Hungarian, sigma: &mut Vec<usize>) -> Option<f64> {
+    fn midpoint(
+        &self,
+        node: &Node,
+        h: &mut Hungarian,
+        sigma: &mut Vec<usize>,
+        polygon: &mut Option<AlignmentPolygon>,
+    ) -> Option<f64> {
         let alpha = 0.5 * (node.alpha[0] + node.alpha[1]);
         let theta = 0.5 * (node.theta[0] + node.theta[1]);
         let (a, b) = matrix(alpha, theta, self.reading);
         if a * a + b * b < self.lambda_sep2 - SLACK {
             return None;
         }
-        Some(self.p2 + (a * a + b * b) * self.s2 - 2.0 * self.best_alignment(a, b, h, sigma))
+        let alignment = match polygon {
+            Some(poly) => {
+                let mut oracle = self.oracle(h);
+                let (z, best) = poly.assignment_at(a, b, &mut oracle);
+                sigma.clear();
+                sigma.extend_from_slice(best);
+                a * z.x + b * z.y
+            }
+            None => self.best_alignment(a, b, h, sigma),
+        };
+        Some(self.p2 + (a * a + b * b) * self.s2 - 2.0 * alignment)
     }
 
     /// Constraint propagation on the centroid box: target j is q_j = o_j + c with o_j in the
@@ -413,18 +480,22 @@ impl Problem {
     /// target box is wholly forbidden.
     fn narrow_centroid(&self, node: &mut Node, ar: [f64; 2], br: [f64; 2]) -> bool {
         let cons = &self.constraints;
+        // The exact constraints (no SLACK): narrowing removes only points that break them, and
+        // a target it leaves on a boundary then passes `feasible`'s SLACK-tolerant test even
+        // after rounding (with SLACK here, a centroid narrowed onto keep_out - SLACK failed it
+        // by 1e-15: a point node neither feasible nor prunable was split 400 000 times).
         let half = match cons.obstacle_form {
             super::params::ObstacleConstraint::Square => cons.keep_out,
             super::params::ObstacleConstraint::Circle => cons.keep_out / std::f64::consts::SQRT_2,
-        } - SLACK;
+        };
         let mut c = node.c;
         for s in &self.s_tilde {
             let ox = sub(scale(ar, s.x), scale(br, s.y));
             let oy = add(scale(br, s.x), scale(ar, s.y));
-            c[0][0] = c[0][0].max(cons.x_range[0] - SLACK - ox[1]);
-            c[0][1] = c[0][1].min(cons.x_range[1] + SLACK - ox[0]);
-            c[1][0] = c[1][0].max(cons.y_range[0] - SLACK - oy[1]);
-            c[1][1] = c[1][1].min(cons.y_range[1] + SLACK - oy[0]);
+            c[0][0] = c[0][0].max(cons.x_range[0] - ox[1]);
+            c[0][1] = c[0][1].min(cons.x_range[1] - ox[0]);
+            c[1][0] = c[1][0].max(cons.y_range[0] - oy[1]);
+            c[1][1] = c[1][1].min(cons.y_range[1] - oy[0]);
             if c[0][0] > c[0][1] || c[1][0] > c[1][1] {
                 return false;
             }
@@ -572,6 +643,7 @@ impl Problem {
         sigma: &mut Vec<usize>,
         best: &mut Option<Incumbent>,
         shapes: &[ShapeEval],
+        polygon: &mut Option<AlignmentPolygon>,
     ) {
         let alpha = 0.5 * (node.alpha[0] + node.alpha[1]);
         let theta = 0.5 * (node.theta[0] + node.theta[1]);
@@ -582,7 +654,7 @@ impl Problem {
                 None => return,
             }
         } else {
-            match self.midpoint(node, h, sigma) {
+            match self.midpoint(node, h, sigma, polygon) {
                 Some(g) => (g, sigma),
                 None => return,
             }
@@ -613,14 +685,25 @@ impl Problem {
         }
     }
 
-    /// Split a node in two along its widest dimension, measured by how far it moves targets.
-    fn split(&self, node: &Node) -> [Node; 2] {
-        let widths = [
+    /// How far each of the node's four dimensions moves the targets.
+    fn widths(&self, node: &Node) -> [f64; 4] {
+        [
             (node.alpha[1] - node.alpha[0]) * self.s_max,
             (node.theta[1] - node.theta[0]) * self.s_max * node.alpha[1].abs().max(1.0),
             node.c[0][1] - node.c[0][0],
             node.c[1][1] - node.c[1][0],
-        ];
+        ]
+    }
+
+    /// Whether the node is too small to split further (every width at rounding level).
+    fn degenerate(&self, node: &Node) -> bool {
+        let scale = 1.0 + self.s_max + self.p_bar.norm();
+        self.widths(node).iter().all(|w| *w <= 1e-12 * scale)
+    }
+
+    /// Split a node in two along its widest dimension, measured by how far it moves targets.
+    fn split(&self, node: &Node) -> [Node; 2] {
+        let widths = self.widths(node);
         let mut k = 0;
         for i in 1..4 {
             if widths[i] > widths[k] {
@@ -674,13 +757,28 @@ impl Problem {
             lb: 0.0,
             shape: NO_SHAPE,
         };
+        let mut polygon = match opts.bound {
+            OptimiserBound::Polygon => {
+                let scale = (self.p2 * self.s2).sqrt();
+                let mut oracle = self.oracle(&mut h);
+                let most = (opts.max_solves, opts.max_work);
+                Some(AlignmentPolygon::new(
+                    &mut oracle,
+                    scale,
+                    most,
+                    opts.warm_start,
+                ))
+            }
+            OptimiserBound::Corners => None,
+        };
         let mut heap = BinaryHeap::new();
         let mut nodes = 1;
         // The least lower bound among nodes discarded by bound (not by infeasibility).
         let mut pruned_lb = f64::INFINITY;
-        if let Some(lb) = self.bound(&mut root, &mut h, &mut sigma, &mut shapes, reuse) {
+        let poly = &mut polygon;
+        if let Some(lb) = self.bound(&mut root, &mut h, &mut sigma, &mut shapes, reuse, poly) {
             root.lb = lb;
-            self.try_incumbent(&root, &mut h, &mut sigma, &mut best, &shapes);
+            self.try_incumbent(&root, &mut h, &mut sigma, &mut best, &shapes, poly);
             heap.push(root);
         }
         // Without an incumbent (ub infinite) nothing is pruned by bound.
@@ -703,14 +801,20 @@ impl Problem {
                 heap.push(node);
                 break;
             }
+            if self.degenerate(&node) {
+                // Nothing left to split (a box at rounding size that the midpoint test still
+                // rejects): its bound stays in the reported lower bound, so the gap says so.
+                pruned_lb = pruned_lb.min(node.lb);
+                continue;
+            }
             for mut child in self.split(&node) {
                 nodes += 1;
-                let Some(lb) = self.bound(&mut child, &mut h, &mut sigma, &mut shapes, reuse)
+                let Some(lb) = self.bound(&mut child, &mut h, &mut sigma, &mut shapes, reuse, poly)
                 else {
                     continue;
                 };
                 child.lb = lb.max(node.lb);
-                self.try_incumbent(&child, &mut h, &mut sigma, &mut best, &shapes);
+                self.try_incumbent(&child, &mut h, &mut sigma, &mut best, &shapes, poly);
                 let ub = best.as_ref().map_or(f64::INFINITY, |b| b.cost);
                 if child.lb < ub - tolerance(ub) {
                     heap.push(child);
@@ -737,6 +841,7 @@ impl Problem {
         let cost = (0..self.n)
             .map(|i| (self.starts[i] - targets[best.assignment[i]]).norm_squared())
             .sum::<f64>();
+        let proven = proven && cost - lower_bound <= tolerance(cost) + 1e-9;
         Ok(Solution {
             transform,
             targets,
@@ -746,6 +851,10 @@ impl Problem {
             gap: (cost - lower_bound).max(0.0),
             proven,
             nodes,
+            solves: match polygon {
+                Some(p) => p.solves(),
+                None => h.solves(),
+            },
         })
     }
 }

@@ -32,6 +32,26 @@ pub enum TransformReading {
     Similarity,
 }
 
+/// Hungarian solves a node of the corner bound makes: its 4 corners, the centre (bound 4) and
+/// the incumbent's midpoint.
+pub const CORNER_SOLVES_PER_NODE: f64 = 6.0;
+
+/// How the optimiser bounds the assignment's part of the objective over a node.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum OptimiserBound {
+    /// The alignment polygon (alignment.rs): the optimal assignment depends only on the
+    /// direction of the transform matrix, so H's vertices, traced once by the Hungarian method,
+    /// give every node an exact assignment bound without a solve of its own. [chosen] the
+    /// default: the same optimum, far fewer solves (docs/formation.md 9, "The alignment
+    /// polygon").
+    #[default]
+    Polygon,
+    /// Interval corners and centre duals (optimise.rs bounds 1-2 and 4): five to six Hungarian
+    /// solves a node. Kept to measure against.
+    Corners,
+}
+
 /// The pattern optimiser's search domain and stopping rule (the paper gives none of them).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
@@ -50,6 +70,39 @@ pub struct OptimiserParams {
     pub gap_rel: f64,
     /// Node budget: when it is spent the solver stops and reports the gap it has proved.
     pub max_nodes: usize,
+    /// The assignment bound.
+    pub bound: OptimiserBound,
+    /// Hungarian solves the alignment polygon may make (`bound = "polygon"`); past them its
+    /// open arcs stay open, which keeps every bound valid but looser. [chosen] 100 000: the
+    /// 9-robot H has a few dozen vertices, 100 random starts a few thousand.
+    pub max_solves: usize,
+    /// Operations the polygon's solves may spend (a cold n x n solve counts n^3, a warm one
+    /// n^2 for the cost matrix and for each row it augments). [chosen] 1e18: unlimited;
+    /// the relayed plans of 100 and 500 robots set it from `replan.max_work`.
+    pub max_work: f64,
+    /// Warm-start the polygon's Hungarian solves from the neighbouring direction's assignment
+    /// and column potentials (hungarian.rs `solve_warm_with`): the same vertices, fewer rows
+    /// augmented. [chosen] true; false for the cold solves to measure against.
+    pub warm_start: bool,
+}
+
+impl OptimiserParams {
+    /// Spend at most `work` operations, counting n^3 for one cold n x n Hungarian solve: the
+    /// corner bound makes [`CORNER_SOLVES_PER_NODE`] cold solves a node, so its node budget is
+    /// work / (6 n^3); the polygon counts its solves' actual work (warm ones augment few rows)
+    /// and its nodes, a few O(n) passes each, are bounded by `max_nodes` only.
+    pub fn set_work_budget(&mut self, work: f64, n: usize, max_nodes: usize) {
+        match self.bound {
+            OptimiserBound::Corners => {
+                let node = CORNER_SOLVES_PER_NODE * (n.max(1) as f64).powi(3);
+                self.max_nodes = ((work / node) as usize).clamp(1, max_nodes);
+            }
+            OptimiserBound::Polygon => {
+                self.max_work = work;
+                self.max_nodes = max_nodes;
+            }
+        }
+    }
 }
 
 impl Default for OptimiserParams {
@@ -60,6 +113,10 @@ impl Default for OptimiserParams {
             gap_abs: 1e-3,
             gap_rel: 1e-3,
             max_nodes: 400_000,
+            bound: OptimiserBound::Polygon,
+            max_solves: 100_000,
+            max_work: 1e18,
+            warm_start: true,
         }
     }
 }

@@ -1,4 +1,4 @@
-//! Shared helpers of the formation tests: seeded random starts.
+//! Shared helpers of the formation tests: seeded random starts, every permutation.
 
 use super::params::FormationParams;
 use rand::{Rng, SeedableRng};
@@ -30,4 +30,27 @@ pub fn random_starts(seed: u64, n: usize, params: &FormationParams, gap: f64) ->
         }
     }
     starts
+}
+
+/// Calls `f` on each of the n! permutations of 0..n (Heap's algorithm).
+pub fn for_each_permutation(n: usize, mut f: impl FnMut(&[usize])) {
+    let mut perm: Vec<usize> = (0..n).collect();
+    f(&perm);
+    let mut c = vec![0usize; n];
+    let mut i = 0;
+    while i < n {
+        if c[i] < i {
+            if i % 2 == 0 {
+                perm.swap(0, i);
+            } else {
+                perm.swap(c[i], i);
+            }
+            f(&perm);
+            c[i] += 1;
+            i = 0;
+        } else {
+            c[i] = 0;
+            i += 1;
+        }
+    }
 }

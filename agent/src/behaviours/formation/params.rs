@@ -82,10 +82,13 @@ pub struct ReplanParams {
     /// [chosen] 4: at loss 0.3 a hop fails 0.3 per tick, but every robot re-sends its gossip
     /// every tick, so 4 ticks a hop miss with 0.3^4 = 0.008 per link.
     pub ticks_per_hop: u64,
-    /// Large swarms: the optimiser's node budget is max_work / n^3 (a node solves an n x n
-    /// assignment, O(n^3)), at most `max_nodes`, at least 1. [chosen] 5e8: 500 nodes at 100
-    /// robots (the unbounded 99-robot solve took 12 721 nodes, 55 s on the loaded machine),
-    /// 4 at 500.
+    /// Large swarms: the operations the plan's optimiser may spend (params.rs
+    /// `OptimiserParams::set_work_budget`: a cold n x n Hungarian solve counts n^3, a warm one
+    /// n^2 per row it augments; the corner bound's node 6 n^3), nodes at most `max_nodes`.
+    /// [chosen] 3e10: the polygon bound certifies the first plan within it at 100 robots
+    /// (0.02 s) and at 500 (2.3 s; at 3e9 its arcs stayed open and 400 000 nodes left a gap of
+    /// 3.4 %); the corner bound gets 5 000 nodes at 100 robots and 40 at 500 from it
+    /// (docs/formation.md 9, "The alignment polygon").
     pub max_work: f64,
     /// Large swarms: the moves (robots whose point a wreck blocks) a compact plan's
     /// shift-and-drop tries first; when no placement needs so few it tries again with as many
@@ -114,7 +117,7 @@ impl Default for ReplanParams {
             max_nodes: 20_000,
             relay_ticks: 20,
             ticks_per_hop: 4,
-            max_work: 5e8,
+            max_work: 3e10,
             max_moves: 12,
             max_dead: 12,
             shift_step: 0.25,

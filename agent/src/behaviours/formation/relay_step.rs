@@ -45,6 +45,10 @@ pub struct RelayState {
     /// The root's last sigma sent, and when.
     sent: Vec<u16>,
     sent_at: u64,
+    /// When the root's sigma last changed, and how long it waits before the next change
+    /// (`RelayParams::reassign_ticks_per_hop` x hops).
+    changed_at: u64,
+    reassign_period: u64,
     /// The live count and the tick it last changed.
     alive: u32,
     alive_since: u64,
@@ -54,6 +58,7 @@ pub struct RelayState {
 impl RelayState {
     pub fn new(me: u32, params: RelayParams, diagonal: f64, comm_radius: f64) -> RelayState {
         let timeout = params.timeout(diagonal, comm_radius);
+        let reassign_period = params.reassign_ticks_per_hop * params.hops(diagonal, comm_radius);
         RelayState {
             relay: Relay::new(me, timeout),
             params,
@@ -65,6 +70,8 @@ impl RelayState {
             seq: 0,
             sent: Vec::new(),
             sent_at: 0,
+            changed_at: 0,
+            reassign_period,
             alive: 0,
             alive_since: 0,
             planned_at: None,
@@ -291,15 +298,21 @@ impl Formation {
         }
         // Eq. (15) on the gathered positions (per-step); one-shot keeps sigma.
         let mut sigma = st.sent.clone();
-        if self.f.reassignment == Reassignment::PerStep {
+        if self.f.reassignment == Reassignment::PerStep && k >= st.changed_at + st.reassign_period {
             let positions = self.member_positions(k, me, &plan.members, &st.sent, &st.relay);
             let mut s = Vec::new();
             if assign_targets(&positions, &self.targets, &mut self.hungarian, &mut s).is_ok() {
-                sigma = s.iter().map(|j| *j as u16).collect();
+                let fresh: Vec<u16> = s.iter().map(|j| *j as u16).collect();
+                if worth_reassigning(&positions, &self.targets, &st.sent, &fresh, st.params.reassign_min_gain) {
+                    sigma = fresh;
+                }
             }
         }
         let refresh = k >= st.sent_at + st.params.refresh_ticks;
         if sigma != st.sent || refresh {
+            if sigma != st.sent {
+                st.changed_at = k;
+            }
             self.send_sigma(k, sigma, refresh, st);
         }
         None
@@ -401,7 +414,7 @@ impl Formation {
         };
         let reading = self.p.kernels.transform_reading;
         let mut params = self.p.kernels.clone();
-        let budget = (self.p.replan.max_work / (n as f64).powi(3)) as usize;
+        let max_work = self.p.replan.max_work;
         let whole = self.sub_template(&(0..self.template.len() as u16).collect::<Vec<_>>());
         // A re-plan: the old transform's points clear of the wrecks, else its least
         // translation with enough clear points (relay_place.rs), else the budgeted optimiser
@@ -436,7 +449,7 @@ impl Formation {
                         let mut points = prefer.clone();
                         fill_points(&mut points, n, self.template.len());
                         let sub = self.sub_template(&points);
-                        params.optimiser.max_nodes = budget.clamp(1, r.max_nodes);
+                        params.optimiser.set_work_budget(max_work, n, r.max_nodes);
                         match optimise_in(&positions, &sub, &params, r.alpha_range, r.theta_range) {
                             Ok(s) => (
                                 [s.transform.alpha, s.transform.d[0], s.transform.d[1], s.transform.theta],
@@ -453,7 +466,8 @@ impl Formation {
                 let mut points = Vec::new();
                 fill_points(&mut points, n, self.template.len());
                 let sub = self.sub_template(&points);
-                params.optimiser.max_nodes = budget.clamp(1, params.optimiser.max_nodes);
+                let most = params.optimiser.max_nodes;
+                params.optimiser.set_work_budget(max_work, n, most);
                 let solved = match self.f.pattern {
                     PatternChoice::Optimise => {
                         let o = &params.optimiser;
@@ -491,7 +505,13 @@ impl Formation {
         };
         let seconds = started.elapsed().as_secs_f64();
         let fresh = members.len();
-        let extra = format!(", relayed ({fresh} of {} gathered, {} wrecks)", st.alive, dead.len());
+        // Eq. (1)'s objective of the plan on the gathered positions, beside its gap.
+        let cost: f64 = sigma.iter().enumerate().map(|(i, &j)| (positions[i] - targets[j]).norm_squared()).sum();
+        let extra = format!(
+            ", relayed ({fresh} of {} gathered, {} wrecks), cost {cost:.1}",
+            st.alive,
+            dead.len()
+        );
         let what = if old_transform.is_some() { "re-plans (relayed)" } else { "plans" };
         let report = self.adopt_solved(k, (plan, gap, nodes), seconds, what, extra);
         st.head = Some(Head {
@@ -505,9 +525,50 @@ impl Formation {
         st.head_at = k;
         st.head_sent = k;
         st.planned_at = Some(k);
+        st.changed_at = k;
         st.sent = Vec::new();
         let sigma: Vec<u16> = sigma.iter().map(|s| *s as u16).collect();
         self.send_sigma(k, sigma, true, st);
         report
+    }
+}
+
+/// Whether the root takes the new assignment `fresh` over the one it sent (`RelayParams::
+/// reassign_min_gain`): eq. (1)'s cost on the same positions must fall by more than `min_gain`
+/// per robot whose slot changes. An old assignment that does not fit the positions is replaced.
+fn worth_reassigning(positions: &[Vec2], targets: &[Vec2], old: &[u16], fresh: &[u16], min_gain: f64) -> bool {
+    let fits = |s: &[u16]| s.len() == positions.len() && s.iter().all(|&j| (j as usize) < targets.len());
+    if !fits(old) || !fits(fresh) {
+        return true;
+    }
+    let cost = |s: &[u16]| -> f64 {
+        s.iter().enumerate().map(|(i, &j)| (positions[i] - targets[j as usize]).norm_squared()).sum()
+    };
+    let changed = old.iter().zip(fresh).filter(|(a, b)| a != b).count();
+    changed > 0 && cost(old) - cost(fresh) > min_gain * changed as f64
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_reassignment_must_gain_more_than_the_least_gain_per_changed_robot() {
+        let targets = [Vec2::new(0.0, 0.0), Vec2::new(10.0, 0.0)];
+        // Two robots nearly equidistant from both slots: swapping gains 0.4 in total.
+        let near_tie = [Vec2::new(5.01, 0.0), Vec2::new(4.99, 0.0)];
+        let (old, fresh) = ([0u16, 1], [1u16, 0]);
+        let gain = |p: &[Vec2], s: &[u16]| -> f64 {
+            s.iter().enumerate().map(|(i, &j)| (p[i] - targets[j as usize]).norm_squared()).sum()
+        };
+        assert!(gain(&near_tie, &old) - gain(&near_tie, &fresh) > 0.0);
+        assert!(!worth_reassigning(&near_tie, &targets, &old, &fresh, 0.5));
+        assert!(worth_reassigning(&near_tie, &targets, &old, &fresh, 0.0));
+        // Robots each on the other's slot: a large gain is taken.
+        let crossed = [Vec2::new(9.0, 0.0), Vec2::new(1.0, 0.0)];
+        assert!(worth_reassigning(&crossed, &targets, &old, &fresh, 0.5));
+        // Nothing changes: nothing to send; an old sigma of another size: replaced.
+        assert!(!worth_reassigning(&crossed, &targets, &old, &old, 0.5));
+        assert!(worth_reassigning(&crossed, &targets, &[0], &fresh, 0.5));
     }
 }

@@ -242,8 +242,7 @@ impl Formation {
             };
             return (plan, SHIFTED_AND_DROPPED, 0);
         }
-        let work = (positions.len() as f64).powi(3);
-        params.optimiser.max_nodes = ((r.max_work / work) as usize).clamp(1, r.max_nodes);
+        params.optimiser.set_work_budget(r.max_work, positions.len(), r.max_nodes);
         let (transform, gap, nodes) =
             match optimise_in(&positions, &sub, &params, r.alpha_range, r.theta_range) {
                 Ok(s) => (
