@@ -7,6 +7,7 @@
 use agent::formation::hungarian::{assign_targets, Hungarian};
 use agent::formation::optimise::{optimise, optimise_without_rotation};
 use agent::formation::orca::{orca_velocity, Disc};
+use agent::formation::OptimiserBound;
 use agent::formation::{FormationParams, Template};
 use criterion::{black_box, criterion_group, criterion_main, BenchmarkId, Criterion};
 use rand::{Rng, SeedableRng};
@@ -124,6 +125,13 @@ fn bench_optimiser(c: &mut Criterion) {
     });
     g.bench_function("without-rotation-9", |b| {
         b.iter(|| optimise_without_rotation(black_box(&starts), &template, &params).unwrap())
+    });
+    // The same solve with the interval-corner bound (params.rs `OptimiserBound`), beside the
+    // alignment polygon (the default) in one run.
+    let mut corners = params.clone();
+    corners.optimiser.bound = OptimiserBound::Corners;
+    g.bench_function("with-rotation-9-corners", |b| {
+        b.iter(|| optimise(black_box(&starts), &template, &corners).unwrap())
     });
     g.finish();
 }

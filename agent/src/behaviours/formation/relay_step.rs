@@ -298,12 +298,13 @@ impl Formation {
         }
         // Eq. (15) on the gathered positions (per-step); one-shot keeps sigma.
         let mut sigma = st.sent.clone();
-        if self.f.reassignment == Reassignment::PerStep && k >= st.changed_at + st.reassign_period {
+        if self.f.reassignment == Reassignment::PerStep {
             let positions = self.member_positions(k, me, &plan.members, &st.sent, &st.relay);
             let mut s = Vec::new();
             if assign_targets(&positions, &self.targets, &mut self.hungarian, &mut s).is_ok() {
                 let fresh: Vec<u16> = s.iter().map(|j| *j as u16).collect();
-                if worth_reassigning(&positions, &self.targets, &st.sent, &fresh, st.params.reassign_min_gain) {
+                let due = k >= st.changed_at + st.reassign_period;
+                if takes(&st.sent, &fresh, due, st.params.reassign_small) {
                     sigma = fresh;
                 }
             }
@@ -533,42 +534,28 @@ impl Formation {
     }
 }
 
-/// Whether the root takes the new assignment `fresh` over the one it sent (`RelayParams::
-/// reassign_min_gain`): eq. (1)'s cost on the same positions must fall by more than `min_gain`
-/// per robot whose slot changes. An old assignment that does not fit the positions is replaced.
-fn worth_reassigning(positions: &[Vec2], targets: &[Vec2], old: &[u16], fresh: &[u16], min_gain: f64) -> bool {
-    let fits = |s: &[u16]| s.len() == positions.len() && s.iter().all(|&j| (j as usize) < targets.len());
-    if !fits(old) || !fits(fresh) {
-        return true;
-    }
-    let cost = |s: &[u16]| -> f64 {
-        s.iter().enumerate().map(|(i, &j)| (positions[i] - targets[j as usize]).norm_squared()).sum()
-    };
-    let changed = old.iter().zip(fresh).filter(|(a, b)| a != b).count();
-    changed > 0 && cost(old) - cost(fresh) > min_gain * changed as f64
+/// Whether the root takes the new assignment `fresh` over the one it sent: a change of at most
+/// `small` slots at once, a larger one only when the reassignment period is `due`
+/// (`RelayParams::reassign_ticks_per_hop`, `reassign_small`).
+fn takes(sent: &[u16], fresh: &[u16], due: bool, small: usize) -> bool {
+    let changed = fresh.iter().zip(sent).filter(|(a, b)| a != b).count();
+    due || (fresh.len() == sent.len() && changed <= small)
 }
 
 #[cfg(test)]
 mod tests {
-    use super::*;
+    use super::takes;
 
     #[test]
-    fn a_reassignment_must_gain_more_than_the_least_gain_per_changed_robot() {
-        let targets = [Vec2::new(0.0, 0.0), Vec2::new(10.0, 0.0)];
-        // Two robots nearly equidistant from both slots: swapping gains 0.4 in total.
-        let near_tie = [Vec2::new(5.01, 0.0), Vec2::new(4.99, 0.0)];
-        let (old, fresh) = ([0u16, 1], [1u16, 0]);
-        let gain = |p: &[Vec2], s: &[u16]| -> f64 {
-            s.iter().enumerate().map(|(i, &j)| (p[i] - targets[j as usize]).norm_squared()).sum()
-        };
-        assert!(gain(&near_tie, &old) - gain(&near_tie, &fresh) > 0.0);
-        assert!(!worth_reassigning(&near_tie, &targets, &old, &fresh, 0.5));
-        assert!(worth_reassigning(&near_tie, &targets, &old, &fresh, 0.0));
-        // Robots each on the other's slot: a large gain is taken.
-        let crossed = [Vec2::new(9.0, 0.0), Vec2::new(1.0, 0.0)];
-        assert!(worth_reassigning(&crossed, &targets, &old, &fresh, 0.5));
-        // Nothing changes: nothing to send; an old sigma of another size: replaced.
-        assert!(!worth_reassigning(&crossed, &targets, &old, &old, 0.5));
-        assert!(worth_reassigning(&crossed, &targets, &[0], &fresh, 0.5));
+    fn a_large_reassignment_waits_for_its_period_and_a_small_one_does_not() {
+        let sent = [0u16, 1, 2, 3, 4, 5];
+        let swap = [1u16, 0, 2, 3, 4, 5];
+        let shuffle = [5u16, 4, 3, 2, 1, 0];
+        assert!(takes(&sent, &swap, false, 4));
+        assert!(!takes(&sent, &shuffle, false, 4));
+        assert!(takes(&sent, &shuffle, true, 4));
+        // With small = 0 every change waits; a sigma of another size is never "small".
+        assert!(!takes(&sent, &swap, false, 0));
+        assert!(!takes(&sent[..2], &swap, false, 4));
     }
 }
