@@ -56,11 +56,22 @@ impl Hungarian {
         cost: impl Fn(usize, usize) -> f64,
         assignment: &mut Vec<usize>,
     ) -> f64 {
-        // Row-major costs, computed once (the solver reads each O(n) times).
+        self.solve_fn(n, cost, None, assignment)
+    }
+
+    /// A cold or warm solve of a cost given as a function: its row-major matrix is computed
+    /// once into the scratch buffer (the solver reads each entry O(n) times).
+    fn solve_fn(
+        &mut self,
+        n: usize,
+        cost: impl Fn(usize, usize) -> f64,
+        warm: Option<(&[usize], &[f64])>,
+        assignment: &mut Vec<usize>,
+    ) -> f64 {
         let mut matrix = std::mem::take(&mut self.scratch);
         matrix.clear();
         matrix.extend((0..n * n).map(|k| cost(k / n, k % n)));
-        let total = self.solve_matrix(n, &matrix, assignment);
+        let total = self.solve_matrix_from(n, &matrix, warm, assignment);
         self.scratch = matrix;
         total
     }
@@ -83,12 +94,7 @@ impl Hungarian {
         warm: (&[usize], &[f64]),
         assignment: &mut Vec<usize>,
     ) -> f64 {
-        let mut matrix = std::mem::take(&mut self.scratch);
-        matrix.clear();
-        matrix.extend((0..n * n).map(|k| cost(k / n, k % n)));
-        let total = self.solve_matrix_from(n, &matrix, Some(warm), assignment);
-        self.scratch = matrix;
-        total
+        self.solve_fn(n, cost, Some(warm), assignment)
     }
 
     /// The column potentials v_1..v_n of the last solve (to warm-start a later one).
