@@ -92,6 +92,21 @@ impl AlignmentOracle for MatrixOracle<'_> {
     }
 }
 
+/// The oracle's matrices of centred starts p~ and template s~: dot\[i n + j\] = p~_i . s~_j
+/// and cross\[i n + j\] = s~_j x p~_i (2-D cross product).
+pub fn alignment_matrices(p_tilde: &[Vec2], s_tilde: &[Vec2]) -> (Vec<f64>, Vec<f64>) {
+    let n = p_tilde.len();
+    let mut dot = vec![0.0; n * n];
+    let mut cross = vec![0.0; n * n];
+    for (i, p) in p_tilde.iter().enumerate() {
+        for (j, s) in s_tilde.iter().enumerate() {
+            dot[i * n + j] = p.dot(s);
+            cross[i * n + j] = s.x * p.y - s.y * p.x;
+        }
+    }
+    (dot, cross)
+}
+
 /// A direction solved exactly: the vertex z of H that is optimal there, and its sigma.
 #[derive(Debug, Clone)]
 struct Sample {

@@ -94,7 +94,7 @@
 //! that. The reported lower bound is the minimum over the open nodes and the nodes pruned by
 //! bound, so `cost - lower_bound = gap` is a certificate even when the node budget runs out.
 
-use super::alignment::{AlignmentPolygon, MatrixOracle};
+use super::alignment::{alignment_matrices, AlignmentPolygon, MatrixOracle};
 use super::constraints::{PatternConstraints, SLACK};
 use super::hungarian::Hungarian;
 use super::params::{FormationParams, OptimiserBound, TransformReading};
@@ -289,14 +289,7 @@ impl Problem {
         let p_bar = starts.iter().sum::<Vec2>() / n as f64;
         let s_tilde: Vec<Vec2> = s.iter().map(|x| x - s_bar).collect();
         let p_tilde: Vec<Vec2> = starts.iter().map(|x| x - p_bar).collect();
-        let mut dot = vec![0.0; n * n];
-        let mut cross = vec![0.0; n * n];
-        for i in 0..n {
-            for j in 0..n {
-                dot[i * n + j] = p_tilde[i].dot(&s_tilde[j]);
-                cross[i * n + j] = s_tilde[j].x * p_tilde[i].y - s_tilde[j].y * p_tilde[i].x;
-            }
-        }
+        let (dot, cross) = alignment_matrices(&p_tilde, &s_tilde);
         let constraints = PatternConstraints::new(params);
         let spacing = template.min_spacing();
         let lambda_sep = if spacing.is_finite() {

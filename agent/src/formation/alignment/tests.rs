@@ -19,14 +19,7 @@ impl Instance {
             v.into_iter().map(|x| x - m).collect::<Vec<_>>()
         };
         let (p, s) = (centred(rng), centred(rng));
-        let mut dot = vec![0.0; n * n];
-        let mut cross = vec![0.0; n * n];
-        for i in 0..n {
-            for j in 0..n {
-                dot[i * n + j] = p[i].dot(&s[j]);
-                cross[i * n + j] = s[j].x * p[i].y - s[j].y * p[i].x;
-            }
-        }
+        let (dot, cross) = alignment_matrices(&p, &s);
         Self { n, dot, cross }
     }
 
