@@ -3,7 +3,7 @@
 # usage: escape-compare.sh BIN OUTROOT. Every run twice, once as shipped and once with
 # `formation.kernels.escape.after_ticks = 0` appended to a copy of its scenario; one line a run.
 # With BIN_OFF=<other binary> set, the "off" runs are that binary's on the unchanged scenario
-# (two builds side by side). RANDOM_KILLS=1 adds the 20 random schedules of
+# (two builds side by side). RANDOM_KILLS=1 (or 2) adds the 20 random schedules of
 # results/deaths-schedules.md ("Random schedules") under swaps and relayed at 100 robots.
 BIN=$1; ROOT=$2; mkdir -p $ROOT
 list=$ROOT/runs.txt; : > $list
@@ -51,6 +51,38 @@ r16 32 123:48,118:92,123:45
 r17 4 132:92,123:44,126:9,132:63
 r18 14 30:18,28:83
 r19 39 16:66,25:97
+LIST
+fi
+# RANDOM_KILLS=2 adds the 24 heavier schedules drawn 2026-12-06 (1-12 kills, in transit too).
+if [ "$RANDOM_KILLS" = 2 ]; then
+  while read -r name seed k; do
+    add random-swaps-$name configs/formation-100.toml $seed $k 3000
+    add random-relay-$name configs/formation-100-centralised.toml $seed $k 3000
+  done <<'LIST'
+t0 79 85:40,86:41
+t1 88 20:39,14:7,22:59,19:63
+t2 66 59:21,65:22,61:23,69:24
+t3 84 145:2,148:93,141:81,145:29,154:23,141:75,141:34,142:65
+t4 68 86:56,81:48
+t5 42 153:96,165:35,160:25
+t6 70 97:7,99:18
+t7 79 11:80,20:97,14:29
+t8 65 144:23,142:63,143:30,143:47,137:69,134:24,133:1,131:27
+t9 77 103:0,114:1,102:2,116:3
+t10 78 116:89,117:40,105:47,106:42,115:38,103:71,117:68,115:64,108:96,105:97,104:45,104:61
+t11 64 42:17,39:21
+t12 79 92:7,91:8,98:9,103:10
+t13 53 129:37,136:38,122:39,122:40,127:41,137:42,123:43,127:44,133:45,130:46,131:47,126:48
+t14 88 84:87,85:88
+t15 48 94:15,94:16
+t16 60 145:9,144:10,145:11,147:12
+t17 43 92:94,90:95
+t18 46 153:78,153:66,146:28,152:36,156:45,157:83
+t19 83 19:93,19:94,21:95,25:96
+t20 45 92:52,83:67,80:64
+t21 49 110:32,114:33
+t22 59 154:32,161:67,155:14,150:45
+t23 81 142:18,140:19,137:20,140:21
 LIST
 fi
 one() { # name scenario seed schedule max_ticks mode

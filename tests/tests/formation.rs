@@ -450,3 +450,40 @@ fn the_relayed_coordinator_of_100_killed_is_replaced_and_the_99_form_its_re_plan
     assert!(rec(&p) == rec(&i), "the executors differ");
     assert_left_nothing(&p);
 }
+
+/// Eight robots killed at once while the relayed swarm is still moving (seed 4, ids 40-47 at
+/// tick 50): the root stands a left member's last position in for its wreck until the wreck
+/// is known, then the wreck replaces it. Before, both stayed (16 obstacles for 8 deaths), the
+/// list was cut to the head's 12, a wreck left out blocked a slot, and the root re-planned the
+/// same pattern every timeout until the step cap (100 plans, 88 of 92 in place).
+#[test]
+fn eight_deaths_in_transit_under_the_relay_re_plan_once_round_eight_wrecks_and_form() {
+    let _g = serial();
+    let sc = config("formation-100-centralised.toml");
+    let dir = tmp_dir("formation-relay-eight");
+    let kills: Vec<String> = (40..48).map(|r| format!("50:{r}")).collect();
+    let kills = kills.join(",");
+    let args = [
+        "--scenario",
+        &sc,
+        "--executor",
+        "inprocess",
+        "--seed",
+        "4",
+        "--chaos-at",
+        &kills,
+    ];
+    let o = up(&args, &dir);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let f = formation(&dir);
+    assert_eq!(f["formed"], true, "{f}");
+    assert_eq!(f["overlapping_pairs"], 0, "{f}");
+    let plans = f["plans"].as_array().unwrap();
+    assert_eq!(plans.len(), 2, "one plan and one re-plan: {f}");
+    assert!(plans[1]["tick"].as_u64().unwrap() > 50, "{f}");
+    assert!(
+        stderr(&o).contains("re-plans (relayed) epoch 2") && stderr(&o).contains("8 wrecks)"),
+        "{}",
+        stderr(&o)
+    );
+}

@@ -236,6 +236,28 @@ impl Formation {
             .collect()
     }
 
+    /// Whether a wreck this robot knows lies within a robot radius of `at` (two robots'
+    /// centres are at least 2r apart, so it is the wreck of the robot estimated there).
+    fn wreck_known_near(&self, at: Vec2) -> bool {
+        let r = self.p.kernels.robot_radius;
+        self.wrecks.iter().any(|w| (w - at).norm() < r)
+    }
+
+    /// `dead` less the estimates a known wreck has since replaced (an entry that is not
+    /// itself a known wreck, with one within a robot radius); an entry that is a known wreck
+    /// (a head's is rounded to f32) takes the wreck's own position.
+    fn superseded_estimates_dropped(&self, dead: &[[f64; 2]]) -> Vec<[f64; 2]> {
+        dead.iter()
+            .filter_map(|d| {
+                let at = Vec2::new(d[0], d[1]);
+                match self.wrecks.iter().find(|w| (*w - at).norm() < SAME_WRECK) {
+                    Some(w) => Some([w.x, w.y]),
+                    None => (!self.wreck_known_near(at)).then_some(*d),
+                }
+            })
+            .collect()
+    }
+
     /// Whether a known wreck the plan was not made around blocks one of its slots.
     fn wreck_blocks_a_slot(&self) -> bool {
         let Some(plan) = &self.plan else { return false };
@@ -396,14 +418,19 @@ impl Formation {
             None => (Vec::new(), None, 1),
             Some(old) => {
                 let mut left_points = Vec::new();
-                let mut dead = old.dead.clone();
+                // A left member's last position advanced one step stands for its wreck until
+                // the wreck itself is known (sensed or relayed: exact); then the wreck
+                // replaces it, so one death is one obstacle, not two.
+                let mut dead = self.superseded_estimates_dropped(&old.dead);
                 for (i, m) in old.members.iter().enumerate() {
                     if members.contains(m) {
                         continue;
                     }
                     if let Some(e) = st.relay.entry(*m) {
                         let at = estimate(e, e.tick as u64 + 1, tau);
-                        dead.push([at.x, at.y]);
+                        if !self.wreck_known_near(at) {
+                            dead.push([at.x, at.y]);
+                        }
                     }
                     if let Some(Some(s)) = old_sigma.get(i) {
                         left_points.extend(old.points.get(*s as usize));
@@ -424,7 +451,11 @@ impl Formation {
         let (transform, points, gap, nodes) = match old_transform {
             Some(t) => {
                 let all = transform_of(t).targets(reading, &whole);
-                dead = dead_list(&dead, &self.wrecks, &all, st.params.max_dead);
+                // Every known wreck, the nearest the pattern first: the root places the
+                // pattern round all of them and judges `wreck_blocks_a_slot` against all of
+                // them; only the head is cut to `max_dead` (a plan round fewer than the
+                // known wrecks re-planned every timeout when a wreck left out blocked a slot).
+                dead = dead_list(&dead, &self.wrecks, &all, usize::MAX);
                 params.obstacle_centres.extend(dead.iter().copied());
                 let c = PatternConstraints::new(&params);
                 let reach = self.p.kernels.robot_radius + self.p.orca_margin;
@@ -521,7 +552,7 @@ impl Formation {
             transform,
             kept: bitmap_of(points.iter().map(|p| *p as usize), self.template.len()),
             members: bitmap_of(members.iter().map(|m| *m as usize), self.robots),
-            dead: dead.iter().map(|d| [d[0] as f32, d[1] as f32]).collect(),
+            dead: dead.iter().take(st.params.max_dead).map(|d| [d[0] as f32, d[1] as f32]).collect(),
         });
         st.head_at = k;
         st.head_sent = k;

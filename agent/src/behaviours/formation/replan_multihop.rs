@@ -122,7 +122,13 @@ impl Formation {
             .filter(|j| kept.contains(old.points[*j] as usize))
             .collect();
         let positions: Vec<Vec2> = slots.iter().map(|j| self.targets[*j]).collect();
-        let dead = dead_list(&old.dead, &self.wrecks, &positions, r.max_dead);
+        // Every known wreck, the nearest the old slots first: the pattern is placed round all
+        // of them; the plan carries the first `max_dead` (the message's room). With a
+        // placement no known wreck blocks a new slot, so one left out of the message cannot
+        // fire the re-plan trigger again; cutting the list before placing (14 deaths against
+        // 12) let the optimiser put a slot on a wreck left out.
+        let dead = dead_list(&old.dead, &self.wrecks, &positions, usize::MAX);
+        let carried = || dead.iter().take(r.max_dead).copied().collect::<Vec<[f64; 2]>>();
         let points: Vec<u16> = kept.iter().map(|p| p as u16).collect();
         let sub = self.sub_template(&points);
         let mut params = self.p.kernels.clone();
@@ -147,7 +153,7 @@ impl Formation {
                 transform: old.transform,
                 kept,
                 moves,
-                dead,
+                dead: carried(),
             };
             return (plan, 0.0, 0);
         }
@@ -167,7 +173,7 @@ impl Formation {
                 transform: [t[0], t[1] + delta.x, t[2] + delta.y, t[3]],
                 kept,
                 moves,
-                dead,
+                dead: carried(),
             };
             return (plan, SHIFTED, 0);
         }
@@ -238,7 +244,7 @@ impl Formation {
                 transform: [t[0], t[1] + s.delta.x, t[2] + s.delta.y, t[3]],
                 kept: s.kept,
                 moves: s.moves,
-                dead,
+                dead: carried(),
             };
             return (plan, SHIFTED_AND_DROPPED, 0);
         }
@@ -262,7 +268,7 @@ impl Formation {
                 transform,
                 kept,
                 moves,
-                dead,
+                dead: carried(),
             },
             gap,
             nodes,
