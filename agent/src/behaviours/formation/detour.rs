@@ -75,6 +75,20 @@ pub fn sees(a: Vec2, b: Vec2, keepouts: &[Keepout]) -> bool {
         .all(|k| segment_distance(a, b, k.centre) >= k.radius)
 }
 
+/// A neck too narrow for a robot: the segment from one keep-out's centre to another's (or to
+/// the foot of its perpendicular on the box's edge) where their true contact discs overlap.
+/// A grid whose cells may lie inside the true contact distance (escape.rs `cell_tolerance`)
+/// would otherwise pass through it.
+pub type Neck = (Vec2, Vec2);
+
+/// Whether the segments a-b and c-d cross (touching counts).
+pub fn segments_cross(a: Vec2, b: Vec2, c: Vec2, d: Vec2) -> bool {
+    let cross = |o: Vec2, p: Vec2, q: Vec2| (p - o).perp(&(q - o));
+    let (d1, d2) = (cross(c, d, a), cross(c, d, b));
+    let (d3, d4) = (cross(a, b, c), cross(a, b, d));
+    d1 * d2 <= 0.0 && d3 * d4 <= 0.0 && !(d1 == 0.0 && d2 == 0.0)
+}
+
 /// A node of the search: a cell (offsets from the robot's cell) or the goal.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 enum Node {
@@ -100,7 +114,7 @@ pub fn aim(me: Vec2, slot: Vec2, wrecks: &[Keepout], others: &[Keepout], p: &Det
         return slot;
     }
     let keepouts: Vec<Keepout> = wrecks.iter().chain(others).filter(|k| in_window(k)).copied().collect();
-    waypoint(me, slot, &keepouts, None, p.cell, p.window).unwrap_or(slot)
+    waypoint(me, slot, &keepouts, &[], None, p.cell, p.window).unwrap_or(slot)
 }
 
 /// The rectangle a robot's centre must stay in (the box less the robot's radius): (min, max).
@@ -108,14 +122,16 @@ pub type Bounds = (Vec2, Vec2);
 
 /// The next waypoint from `me` towards `slot` round `keepouts`: A* on the 8-connected grid of
 /// side `cell` over the window of half-width `window` around `me` (cells whose centre lies in
-/// a keep-out disc, or outside `bounds`, are not free), to the slot's cell when the slot lies
-/// in the window, else to a free border cell, paying the straight distance from it to the
-/// slot; then the farthest point of the path `me` sees in a straight line clear of every
-/// keep-out (the slot itself when that is the whole path). None: no path in the window.
+/// a keep-out disc, within a cell's side of a closed neck, or outside `bounds`, are not
+/// free), to the slot's cell when the slot lies in the window, else to a free border cell,
+/// paying the straight distance from it to the slot; then the farthest point of the path `me`
+/// sees in a straight line clear of every keep-out and crossing no neck (the slot itself when
+/// that is the whole path). None: no path in the window.
 pub fn waypoint(
     me: Vec2,
     slot: Vec2,
     keepouts: &[Keepout],
+    necks: &[Neck],
     bounds: Option<Bounds>,
     cell: f64,
     window: f64,
@@ -127,7 +143,9 @@ pub fn waypoint(
     };
     let free = |i: i32, j: i32| {
         (i, j) == (0, 0)
-            || (inside(at(i, j)) && keepouts.iter().all(|k| (at(i, j) - k.centre).norm() >= k.radius))
+            || (inside(at(i, j))
+                && keepouts.iter().all(|k| (at(i, j) - k.centre).norm() >= k.radius)
+                && necks.iter().all(|n| segment_distance(n.0, n.1, at(i, j)) >= cell))
     };
     let rel = (slot - me) / cell;
     let slot_cell = (rel.x.round() as i32, rel.y.round() as i32);
@@ -176,7 +194,7 @@ pub fn waypoint(
             .iter()
             .skip(1)
             .rev()
-            .find(|q| sees(me, **q, keepouts))
+            .find(|q| sees(me, **q, keepouts) && !necks.iter().any(|n| segments_cross(me, **q, n.0, n.1)))
             .copied()
             .unwrap_or(points.get(1).copied().unwrap_or(slot)),
     )
