@@ -487,3 +487,34 @@ fn eight_deaths_in_transit_under_the_relay_re_plan_once_round_eight_wrecks_and_f
         stderr(&o)
     );
 }
+
+/// configs/formation.toml seed 3, the coordinator killed at tick 15: robot 1 re-plans for the 8
+/// left. The polygon bound's search found no feasible point in 400 000 nodes (the optimum of
+/// the unconstrained problem lies in the dead robot's obstacle) and the robots were sent to
+/// the fallback `formation.transform`: not formed at 1000. With the centroid repair
+/// (agent/src/formation/centroid_repair.rs) the re-plan has a placement and the 8 form.
+#[test]
+fn the_re_plan_after_the_coordinator_s_death_finds_a_placement_where_the_optimum_is_blocked() {
+    let _g = serial();
+    let dir = tmp_dir("formation-repair");
+    let args = [
+        "--scenario",
+        &scenario(),
+        "--executor",
+        "inprocess",
+        "--seed",
+        "3",
+        "--chaos-at",
+        "15:0",
+    ];
+    let o = up(&args, &dir);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let f = formation(&dir);
+    assert_eq!(f["formed"], true, "{f}");
+    assert_eq!(f["overlapping_pairs"], 0, "{f}");
+    let plans = f["plans"].as_array().unwrap();
+    assert_eq!(plans.len(), 2, "{f}");
+    assert_eq!(plans[1]["robot"], 1, "{f}");
+    assert_eq!(plans[1]["feasible"], true, "{f}");
+    assert!(plans[1]["gap"].as_f64().unwrap() >= 0.0, "{f}");
+}

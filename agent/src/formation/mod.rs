@@ -8,6 +8,7 @@
 //! - [`hungarian`]: the minimum-cost assignment (Kuhn 1955, the paper's ref. \[20\]).
 //! - [`constraints`]: the pattern constraints of eqs. (9)-(13).
 //! - [`optimise`]: eqs. (1)-(14), solved to the global optimum by spatial branch-and-bound.
+//! - [`centroid_repair`]: the nearest feasible centroid for one shape (the search's incumbents).
 //! - [`alignment`]: the polygon of achievable alignments, which gives the branch-and-bound its
 //!   assignment bound without a Hungarian solve a node.
 //! - [`preferred`]: the preferred velocity of eq. (16).
@@ -17,6 +18,7 @@
 
 pub mod alignment;
 pub mod blocked;
+pub mod centroid_repair;
 pub mod constraints;
 pub mod hungarian;
 pub mod linear_program;

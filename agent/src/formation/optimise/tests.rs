@@ -517,3 +517,65 @@ fn bounds_side_by_side() {
     }
     eprintln!("total: polygon {tp:.3} s, corners {tc:.3} s");
 }
+
+/// configs/formation.toml seed 3, robot 0 killed at tick 15 (docs/formation.md 9): robot 1
+/// re-plans for the 8 left, the C less point 7, with the dead robot's last position as one
+/// more obstacle. A placement exists (the C at alpha 1 round (18, 18) clears every obstacle),
+/// but the polygon bound's search answered Infeasible at 0 nodes.
+#[test]
+fn the_re_plan_of_eight_after_a_coordinator_death_is_feasible_with_both_bounds() {
+    let starts: Vec<Vec2> = [
+        [18.278468566101083, 8.612064413060466],
+        [11.831437826948376, 19.554383043067507],
+        [6.415284318616858, 19.001674986443327],
+        [7.0054795256587195, 6.9098634347846986],
+        [10.883551629419202, 5.192191801682433],
+        [17.47598736187647, 19.155793694872774],
+        [5.325863543752372, 10.46159648295782],
+        [5.329644850137452, 14.896340078121714],
+    ]
+    .iter()
+    .map(|p| Vec2::new(p[0], p[1]))
+    .collect();
+    let c = Template::letter_c();
+    let template = Template {
+        name: "C less 7".into(),
+        points: [0, 1, 2, 3, 4, 5, 6, 8]
+            .iter()
+            .map(|j| c.points[*j])
+            .collect(),
+    };
+    let mut params = FormationParams::default();
+    params
+        .obstacle_centres
+        .push([13.426152987226548, 6.328866748783702]);
+    // Placements that satisfy every constraint (a grid over alpha, theta and d): no
+    // certificate needed to know the instance is feasible.
+    let cons = PatternConstraints::new(&params);
+    let mut feasible = 0;
+    for alpha in [1.2, 1.5, 2.0] {
+        for theta in linspace(-PI, PI, 24) {
+            for i in 0..=48 {
+                for j in 0..=48 {
+                    let d = [i as f64 * 0.5, j as f64 * 0.5];
+                    let t = Transform { alpha, d, theta };
+                    if cons.satisfied(&t.targets(params.transform_reading, &template)) {
+                        feasible += 1;
+                    }
+                }
+            }
+        }
+    }
+    eprintln!("{feasible} feasible grid placements");
+    assert!(feasible > 0);
+    for bound in [OptimiserBound::Polygon, OptimiserBound::Corners] {
+        let mut p = params.clone();
+        p.optimiser.bound = bound;
+        let sol = optimise(&starts, &template, &p).unwrap_or_else(|e| panic!("{bound:?}: {e}"));
+        check_solution(&sol, &starts, &p);
+        eprintln!(
+            "{bound:?}: cost {:.3} gap {:.3} nodes {} proven {}",
+            sol.cost, sol.gap, sol.nodes, sol.proven
+        );
+    }
+}
