@@ -26,12 +26,15 @@ pub const MAX_PAIRWISE: usize = 64;
 
 /// The centroid c nearest `p_bar` within `cbox` (\[x range, y range\]) for which every target
 /// `offsets[j] + c` meets C1 and C2 of `cons`; None when no candidate does. `offsets` are
-/// A s~_j, the targets relative to the centroid.
+/// A s~_j, the targets relative to the centroid. Adds the work done (candidates tried times
+/// the checks of each) to `work`: only the regions that meet `cbox` make candidates, so a
+/// small box costs little.
 pub fn nearest_feasible_centroid(
     offsets: &[Vec2],
     cons: &PatternConstraints,
     p_bar: Vec2,
     cbox: [[f64; 2]; 2],
+    work: &mut f64,
 ) -> Option<Vec2> {
     // C1 exactly: every target in the box.
     let mut r = cbox;
@@ -116,6 +119,7 @@ pub fn nearest_feasible_centroid(
             }
         }
     }
+    *work += (candidates.len() * (offsets.len() * (1 + cons.obstacles.len()))) as f64;
     let mut best: Option<(f64, Vec2)> = None;
     for q in candidates {
         let q = clamp(q);
@@ -190,7 +194,7 @@ mod tests {
                     .collect();
                 let p = Vec2::new(rng.gen_range(2.0..22.0), rng.gen_range(2.0..22.0));
                 let grid = grid_nearest(&offsets, &c, p, 0.05);
-                match nearest_feasible_centroid(&offsets, &c, p, whole) {
+                match nearest_feasible_centroid(&offsets, &c, p, whole, &mut 0.0) {
                     Some(q) => {
                         assert!(offsets
                             .iter()
@@ -215,11 +219,14 @@ mod tests {
         let p = Vec2::new(5.0, 5.0);
         let whole = [[-100.0, 100.0], [-100.0, 100.0]];
         assert_eq!(
-            nearest_feasible_centroid(&[Vec2::zeros()], &c, p, whole),
+            nearest_feasible_centroid(&[Vec2::zeros()], &c, p, whole, &mut 0.0),
             Some(p)
         );
         // Targets 30 apart cannot both be in the 24 box.
         let wide = [Vec2::new(-15.0, 0.0), Vec2::new(15.0, 0.0)];
-        assert_eq!(nearest_feasible_centroid(&wide, &c, p, whole), None);
+        assert_eq!(
+            nearest_feasible_centroid(&wide, &c, p, whole, &mut 0.0),
+            None
+        );
     }
 }

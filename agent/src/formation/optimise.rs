@@ -95,7 +95,7 @@
 //! bound, so `cost - lower_bound = gap` is a certificate even when the node budget runs out.
 
 use super::alignment::{alignment_matrices, AlignmentPolygon, MatrixOracle};
-use super::centroid_repair::{nearest_feasible_centroid, MAX_PAIRWISE};
+use super::centroid_repair::nearest_feasible_centroid;
 use super::constraints::{PatternConstraints, SLACK};
 use super::hungarian::Hungarian;
 use super::params::{FormationParams, OptimiserBound, TransformReading};
@@ -114,6 +114,10 @@ use swarm::geometry::Vec2;
 /// gets an incumbent (configs/formation.toml seed 3, coordinator killed at 15: the polygon
 /// bound's search had none in 400 000 nodes).
 const REPAIR_WORK: f64 = 3e8;
+
+/// The regions `Problem::blocked_distance2` takes as certainly forbidden are shrunk by this on
+/// every side, so that a centroid C2 allows with its SLACK is never inside one.
+const BLOCKED_SLACK: f64 = 1e-6;
 
 /// The optimiser's answer.
 #[derive(Debug, Clone, PartialEq)]
@@ -206,18 +210,6 @@ impl Node {
         let dy = p.y - p.y.clamp(self.c[1][0], self.c[1][1]);
         dx * dx + dy * dy
     }
-}
-
-/// The work one centroid repair may take for n targets among m obstacles: its candidates (12
-/// per region, 8 per pair of regions up to `MAX_PAIRWISE`) times the n m checks of each.
-fn repair_cost(n: usize, m: usize) -> f64 {
-    let regions = (n * m) as f64;
-    let pairs = if n * m <= MAX_PAIRWISE {
-        regions * regions * 4.0
-    } else {
-        0.0
-    };
-    (12.0 * regions + pairs + 1.0) * regions.max(1.0)
 }
 
 /// `Node::shape` before the node's (alpha, theta) box was evaluated.
@@ -409,7 +401,47 @@ impl Problem {
             dist_to_interval(self.p_bar.x, node.c[0]),
             dist_to_interval(self.p_bar.y, node.c[1]),
         );
-        Some(g_lb + self.n as f64 * dc.norm_squared())
+        let d2 = dc.norm_squared().max(self.blocked_distance2(node, ar, br));
+        Some(g_lb + self.n as f64 * d2)
+    }
+
+    /// A lower bound on |p_bar - c|^2 over the centroids c of the node that C2 may allow: the
+    /// centroid nearest p_bar in the node's box lies in no region where, for every (a, b) of
+    /// the node, one target stands in one obstacle (the obstacle's square, or the square
+    /// inscribed in its disc, less the spread of A s~_j over the node); when it does lie in
+    /// one, the distance from p_bar to the node's box less that region. 0 when no region holds
+    /// it. Without it the bound ignored C2 short of a whole target box inside an obstacle, and
+    /// nodes round an optimum that an obstacle blocks were split without end (a re-plan of 8
+    /// robots, configs/formation.toml seed 3: gap 59.8 after 400 000 nodes).
+    fn blocked_distance2(&self, node: &Node, ar: [f64; 2], br: [f64; 2]) -> f64 {
+        let cons = &self.constraints;
+        if cons.obstacles.is_empty() {
+            return 0.0;
+        }
+        let half = match cons.obstacle_form {
+            super::params::ObstacleConstraint::Square => cons.keep_out,
+            super::params::ObstacleConstraint::Circle => cons.keep_out / std::f64::consts::SQRT_2,
+        } - BLOCKED_SLACK;
+        let c = node.c;
+        let q = Vec2::new(
+            self.p_bar.x.clamp(c[0][0], c[0][1]),
+            self.p_bar.y.clamp(c[1][0], c[1][1]),
+        );
+        let mut best = 0.0f64;
+        for s in &self.s_tilde {
+            let ox = sub(scale(ar, s.x), scale(br, s.y));
+            let oy = add(scale(br, s.x), scale(ar, s.y));
+            for o in &cons.obstacles {
+                // c + (ox, oy) lies in the square for every offset of the node.
+                let rx = [o.x - half - ox[0], o.x + half - ox[1]];
+                let ry = [o.y - half - oy[0], o.y + half - oy[1]];
+                if !(rx[0] < q.x && q.x < rx[1] && ry[0] < q.y && q.y < ry[1]) {
+                    continue;
+                }
+                best = best.max(distance2_outside(self.p_bar, c, rx, ry));
+            }
+        }
+        best
     }
 
     /// The lower bound on g over the (a, b) rectangle: max(bound 1-2, bound 4).
@@ -713,19 +745,23 @@ impl Problem {
         // The centroid nearest p_bar that meets C1 and C2 for this shape (centroid_repair.rs),
         // when no candidate above did, while repair work is left (`REPAIR_WORK`).
         let ub = best.as_ref().map_or(f64::INFINITY, |b| b.cost);
-        let work = repair_cost(self.n, self.constraints.obstacles.len());
         let left = self.repair_work.get();
-        if g + self.n as f64 * node.c_distance2(self.p_bar) < ub && (best.is_none() || left >= work)
-        {
-            self.repair_work.set(left - work);
+        if g + self.n as f64 * node.c_distance2(self.p_bar) < ub && (best.is_none() || left > 0.0) {
             let offsets: Vec<Vec2> = self
                 .s_tilde
                 .iter()
                 .map(|s| Vec2::new(a * s.x - b * s.y, b * s.x + a * s.y))
                 .collect();
-            if let Some(c) =
-                nearest_feasible_centroid(&offsets, &self.constraints, self.p_bar, node.c)
-            {
+            let mut work = 0.0;
+            let found = nearest_feasible_centroid(
+                &offsets,
+                &self.constraints,
+                self.p_bar,
+                node.c,
+                &mut work,
+            );
+            self.repair_work.set(left - work);
+            if let Some(c) = found {
                 let f = g + self.n as f64 * (self.p_bar - c).norm_squared();
                 if f < ub && self.feasible(a, b, c) {
                     *best = Some(Incumbent {
@@ -952,6 +988,30 @@ fn sq_min(x: [f64; 2]) -> f64 {
 /// max of v^2 over v in the interval.
 fn sq_max(x: [f64; 2]) -> f64 {
     (x[0] * x[0]).max(x[1] * x[1])
+}
+
+/// The squared distance from `p` to the box `c` less the open rectangle `rx` x `ry` (infinite
+/// when the rectangle covers the box: no centroid is left).
+fn distance2_outside(p: Vec2, c: [[f64; 2]; 2], rx: [f64; 2], ry: [f64; 2]) -> f64 {
+    let to_box = |x: [f64; 2], y: [f64; 2]| {
+        if x[0] > x[1] || y[0] > y[1] {
+            return f64::INFINITY;
+        }
+        let dx = dist_to_interval(p.x, x);
+        let dy = dist_to_interval(p.y, y);
+        dx * dx + dy * dy
+    };
+    // The parts of the box left, right, below and above the rectangle.
+    let parts = [
+        ([c[0][0], c[0][1].min(rx[0])], c[1]),
+        ([c[0][0].max(rx[1]), c[0][1]], c[1]),
+        (c[0], [c[1][0], c[1][1].min(ry[0])]),
+        (c[0], [c[1][0].max(ry[1]), c[1][1]]),
+    ];
+    parts
+        .iter()
+        .map(|(x, y)| to_box(*x, *y))
+        .fold(f64::INFINITY, f64::min)
 }
 
 fn dist_to_interval(v: f64, r: [f64; 2]) -> f64 {

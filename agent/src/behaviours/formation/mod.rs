@@ -637,9 +637,6 @@ impl Formation {
         let sub = self.sub_template(&points);
         let mut params = self.p.kernels.clone();
         params.obstacle_centres.extend(dead.iter().copied());
-        if std::env::var("FORMATION_DEBUG_SOLVE").is_ok() {
-            eprintln!("SOLVE positions={positions:?} points={points:?} dead={dead:?} err={:?}", optimise(&positions, &sub, &params).err());
-        }
         let solution = match self.f.pattern {
             PatternChoice::Optimise => optimise(&positions, &sub, &params).ok(),
             PatternChoice::NoRotation => optimise_without_rotation(&positions, &sub, &params).ok(),
