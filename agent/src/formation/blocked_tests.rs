@@ -223,3 +223,44 @@ fn after_a_blocked_swap_the_pair_holds_for_hold_ticks_though_swapping_back_would
     let c0 = &r0.changes[4];
     assert!(c0.windows(2).any(|w| w[1] < w[0] + hold), "{c0:?}");
 }
+
+#[test]
+fn an_escaping_robot_trades_for_a_slot_it_can_reach_priced_by_its_path() {
+    // Robot 0 stands still 6 from its slot (6, 0) (frozen: stalled); robot 1 is in place on
+    // (-2.2, 0), behind it, out of the straight corridor. By the straight line the swap costs
+    // 36.08 (> max_price 10) and robot 1 is not in the way: no blocked swap. When robot 0
+    // escapes (escape.rs) and its planned way round the wrecks is 14 long, its own cost is
+    // 196, the swap gains 123.9, and robot 1 (the receiver, judging by the proposer's path
+    // cost it was sent) accepts. (fourteen ids seed 2, docs/formation.md 9: a robot enclosed
+    // by three wrecks and two parked robots, one of which had its slot beside it.)
+    let slots = vec![Vec2::new(6.0, 0.0), Vec2::new(-2.2, 0.0)];
+    let at = [Vec2::zeros(), slots[1]];
+    let b = BlockedParams::default();
+    let rounds = b.wait_ticks + 20;
+    assert!(-swap_gain(at[0], at[1], slots[0], slots[1]) > b.max_price);
+    let p = params(Some(b));
+    for (length, swapped) in [(None, false), (Some(6.0), false), (Some(14.0), true)] {
+        let mut agents: Vec<SwapAgent> = (0..2).map(|i| SwapAgent::new(i, i)).collect();
+        let mut in_flight: Vec<Message> = Vec::new();
+        for round in 0..rounds {
+            agents[0].set_path_length(length);
+            let delivered: Vec<Message> = std::mem::take(&mut in_flight);
+            for i in 0..2 {
+                let other = NeighbourView {
+                    id: 1 - i,
+                    position: at[1 - i],
+                    target: agents[1 - i].target,
+                    tick: round.saturating_sub(1),
+                };
+                in_flight.extend(agents[i].step(round, at[i], &slots, &[other], &delivered, &p));
+            }
+        }
+        assert_eq!(
+            (agents[0].target, agents[1].target) == (1, 0),
+            swapped,
+            "path length {length:?}: targets {} {}",
+            agents[0].target,
+            agents[1].target
+        );
+    }
+}

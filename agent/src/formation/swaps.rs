@@ -101,6 +101,9 @@ pub enum Message {
         deadline: u64,
         /// A blocked robot's proposal (blocked.rs): judged by price, not gain.
         blocked: bool,
+        /// An escaping proposer's cost to its own target (its planned path's length,
+        /// squared) in place of the straight distance's square, for the price.
+        from_cost: Option<f64>,
     },
     /// The receiver's answer to proposal `seq`.
     Reply {
@@ -141,6 +144,7 @@ struct Pending {
     to_target: usize,
     deadline: u64,
     blocked: bool,
+    from_cost: Option<f64>,
 }
 
 /// An acceptance whose proposer's side is not known yet.
@@ -179,6 +183,9 @@ pub struct SwapAgent {
     /// After its blocked swap stands, the blocked robot makes way for the partner stepping
     /// into its vacated slot: (partner, the slot the partner took, until this tick).
     make_way: Option<(usize, usize, u64)>,
+    /// While this robot escapes (escape.rs): its planned path's length to its target,
+    /// squared, the cost its blocked swap is priced by.
+    path_cost: Option<f64>,
 }
 
 /// How much robots i, j at `pi`, `pj` holding `a`, `b` gain by swapping (eq. 4 costs).
@@ -203,7 +210,16 @@ impl SwapAgent {
             blocked_swaps: 0,
             blocked_partner: None,
             make_way: None,
+            path_cost: None,
         }
+    }
+
+    /// Sets (Some, while the robot escapes) or clears its planned path's length to its
+    /// target: its blocked swap then asks any in-place neighbour in range, not only those
+    /// in the straight corridor, priced with the path's length in place of the straight
+    /// distance (the way round wrecks is longer than the line through them).
+    pub fn set_path_length(&mut self, length: Option<f64>) {
+        self.path_cost = length.map(|l| l * l);
     }
 
     /// Whether a proposal of this robot awaits its answer.
@@ -312,6 +328,7 @@ impl SwapAgent {
                     from_position,
                     deadline,
                     blocked,
+                    from_cost,
                     ..
                 } => {
                     let accepted = match self.answered.get(&from) {
@@ -324,12 +341,16 @@ impl SwapAgent {
                                 && self.target == to_target
                                 && from_target < targets.len();
                             let gain = || {
-                                swap_gain(
+                                let straight = swap_gain(
                                     theirs,
                                     position,
                                     targets[from_target],
                                     targets[to_target],
-                                )
+                                );
+                                // The proposer's own cost by its path, not the line.
+                                from_cost.map_or(straight, |c| {
+                                    straight - (theirs - targets[from_target]).norm_squared() + c
+                                })
                             };
                             let fits = free
                                 && if blocked {
@@ -433,6 +454,7 @@ impl SwapAgent {
                     to_target: n.target,
                     deadline: now + p.timeout_ticks,
                     blocked,
+                    from_cost: self.path_cost.filter(|_| blocked),
                 });
             }
         }
@@ -446,6 +468,7 @@ impl SwapAgent {
                 from_position: [position.x, position.y],
                 deadline: pd.deadline,
                 blocked: pd.blocked,
+                from_cost: pd.from_cost,
             });
         }
         out
@@ -498,9 +521,13 @@ impl SwapAgent {
                 && Some(n.id) != self.blocked_partner
                 && (n.position - position).norm() <= p.range
                 && (n.position - targets[n.target]).norm() <= b.in_place
-                && blocked::in_the_way(position, mine, n.position, b.corridor)
+                && (self.path_cost.is_some()
+                    || blocked::in_the_way(position, mine, n.position, b.corridor))
         }) {
-            let gain = swap_gain(position, n.position, mine, targets[n.target]);
+            let straight = swap_gain(position, n.position, mine, targets[n.target]);
+            let gain = self.path_cost.map_or(straight, |c| {
+                straight - (position - mine).norm_squared() + c
+            });
             if -gain <= b.max_price
                 && best.is_none_or(|(g, o)| gain > g || (gain == g && n.id < o.id))
             {

@@ -136,6 +136,19 @@ pub fn waypoint(
     cell: f64,
     window: f64,
 ) -> Option<Vec2> {
+    plan(me, slot, keepouts, necks, bounds, cell, window).map(|(aim, _)| aim)
+}
+
+/// [`waypoint`], with the length of the path found (cells, then straight to the slot).
+pub fn plan(
+    me: Vec2,
+    slot: Vec2,
+    keepouts: &[Keepout],
+    necks: &[Neck],
+    bounds: Option<Bounds>,
+    cell: f64,
+    window: f64,
+) -> Option<(Vec2, f64)> {
     let half = (window / cell).round() as i32;
     let at = |i: i32, j: i32| me + Vec2::new(i as f64, j as f64) * cell;
     let inside = |q: Vec2| {
@@ -180,7 +193,7 @@ pub fn waypoint(
         Node::Cell(i, j) => ((at(i, j) - slot).norm() * 1e6).floor() as u64,
         Node::Goal => 0,
     };
-    let (path, _) = astar(&Node::Cell(0, 0), successors, heuristic, |n| *n == Node::Goal)?;
+    let (path, length) = astar(&Node::Cell(0, 0), successors, heuristic, |n| *n == Node::Goal)?;
     let points: Vec<Vec2> = path
         .iter()
         .map(|n| match *n {
@@ -189,15 +202,14 @@ pub fn waypoint(
         })
         .collect();
     // The farthest point of the path in sight (the slot when the goal is).
-    Some(
-        points
-            .iter()
-            .skip(1)
-            .rev()
-            .find(|q| sees(me, **q, keepouts) && !necks.iter().any(|n| segments_cross(me, **q, n.0, n.1)))
-            .copied()
-            .unwrap_or(points.get(1).copied().unwrap_or(slot)),
-    )
+    let aim = points
+        .iter()
+        .skip(1)
+        .rev()
+        .find(|q| sees(me, **q, keepouts) && !necks.iter().any(|n| segments_cross(me, **q, n.0, n.1)))
+        .copied()
+        .unwrap_or(points.get(1).copied().unwrap_or(slot));
+    Some((aim, length as f64 * 1e-6))
 }
 
 /// Eq. (16)'s preferred velocity for the slot at `slot`, turned towards `aim`: the speed of

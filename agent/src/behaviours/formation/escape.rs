@@ -18,7 +18,7 @@
 //! line to the slot passes every wreck at 2 r or more, the aim is the slot itself. A run in
 //! which no robot is held still while squeezing is unchanged.
 
-use super::detour::{segment_distance, steer, waypoint, Bounds, Keepout, Neck};
+use super::detour::{plan, segment_distance, steer, Bounds, Keepout, Neck};
 use serde::{Deserialize, Serialize};
 use swarm::geometry::Vec2;
 
@@ -103,7 +103,22 @@ pub struct Obstacles<'a> {
 /// waypoint when a wreck or a disc stands within the true contact distance of the straight
 /// line; eq. (16) itself when no path exists in the window. The cells keep `cell_tolerance`
 /// less from every disc, wreck or arena's (ORCA, squeezing, holds both at the true radii).
+#[cfg(test)]
 pub fn preferred(me: Vec2, slot: Vec2, o: &Obstacles, max_speed: f64, k_a: f64, p: &EscapeParams) -> Vec2 {
+    preferred_and_length(me, slot, o, max_speed, k_a, p).0
+}
+
+/// [`preferred`], with the length of the way to the slot: the straight distance when no wreck
+/// or disc blocks it, the planned path's when one does, and the straight distance plus twice
+/// the window when no path exists in the window (longer than any path the window holds).
+pub fn preferred_and_length(
+    me: Vec2,
+    slot: Vec2,
+    o: &Obstacles,
+    max_speed: f64,
+    k_a: f64,
+    p: &EscapeParams,
+) -> (Vec2, f64) {
     let contact = 2.0 * o.robot_radius;
     let near = |c: Vec2, radius: f64| (c - me).norm() <= p.window + radius;
     let blocked = o
@@ -113,7 +128,8 @@ pub fn preferred(me: Vec2, slot: Vec2, o: &Obstacles, max_speed: f64, k_a: f64, 
         || o.discs
             .iter()
             .any(|k| near(k.centre, k.radius) && segment_distance(me, slot, k.centre) < k.radius);
-    let aim = if blocked {
+    let straight = (slot - me).norm();
+    let (aim, length) = if blocked {
         // Never below 0 (point robots, r = 0: no tolerance to take).
         let cells = (contact - p.cell_tolerance).max(0.0);
         let keepouts: Vec<Keepout> = o
@@ -130,11 +146,12 @@ pub fn preferred(me: Vec2, slot: Vec2, o: &Obstacles, max_speed: f64, k_a: f64, 
             }))
             .collect();
         let necks = closed_necks(&keepouts, p.cell_tolerance, o.bounds);
-        waypoint(me, slot, &keepouts, &necks, Some(o.bounds), p.cell, p.window).unwrap_or(slot)
+        plan(me, slot, &keepouts, &necks, Some(o.bounds), p.cell, p.window)
+            .unwrap_or((slot, straight + 2.0 * p.window))
     } else {
-        slot
+        (slot, straight)
     };
-    steer(me, slot, aim, max_speed, k_a)
+    (steer(me, slot, aim, max_speed, k_a), length)
 }
 
 /// The necks no robot passes among `keepouts` (each `tolerance` inside its true contact
@@ -172,6 +189,7 @@ pub fn closed_necks(keepouts: &[Keepout], tolerance: f64, bounds: Bounds) -> Vec
 impl super::Formation {
     /// Eq. (16) towards this robot's slot, turned by the escape plan round `wrecks` (the
     /// wrecks motion() puts into ORCA).
+    /// Remembers the way's length for the blocked swap (swaps.rs `set_path_length`).
     pub(super) fn preferred_escaping(&self, me: Vec2, wrecks: &[Vec2]) -> Vec2 {
         let k = &self.p.kernels;
         let Some(slot) = self.slot.map(|s| self.targets[s]) else {
@@ -188,7 +206,9 @@ impl super::Formation {
             ),
             robot_radius: r,
         };
-        preferred(me, slot, &o, k.max_speed, k.k_a, &self.p.escape)
+        let (v, length) = preferred_and_length(me, slot, &o, k.max_speed, k.k_a, &self.p.escape);
+        self.escape_length.set(Some(length));
+        v
     }
 }
 

@@ -81,6 +81,8 @@ pub enum Msg {
         epoch: u32,
         /// A blocked robot's proposal (agent/src/formation/blocked.rs).
         blocked: bool,
+        /// An escaping proposer's squared path length to its target (swaps.rs).
+        from_cost: Option<f64>,
     },
     /// The answer to proposal `seq` (of the plan of `epoch`).
     Reply {

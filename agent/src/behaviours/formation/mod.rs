@@ -212,6 +212,9 @@ pub struct Formation {
     squeeze: squeeze::Squeeze,
     /// Backing out of a notch of wrecks (escape.rs).
     escape: escape::Escape,
+    /// The escape's way to the slot, as long as the last tick planned it (for the blocked
+    /// swap's price, swaps.rs `set_path_length`).
+    escape_length: std::cell::Cell<Option<f64>>,
     /// Where the partner of this robot's blocked swap stands while this robot makes way for
     /// it (swaps.rs `making_way`).
     make_way_from: Option<Vec2>,
@@ -286,6 +289,7 @@ impl Formation {
             compact: None,
             squeeze: Default::default(),
             escape: Default::default(),
+            escape_length: Default::default(),
             make_way_from: None,
             relay: relay_params.map(|r| relay_step::RelayState::new(robot, r, diagonal, sc.radio.comm_radius)),
         }
@@ -431,6 +435,7 @@ impl Formation {
                     deadline,
                     epoch,
                     blocked,
+                    from_cost,
                 } if *to == self.robot && Some(*epoch) == my_epoch => swaps.push(SwapMessage::Propose {
                     from: r.from as usize,
                     to: *to as usize,
@@ -440,6 +445,7 @@ impl Formation {
                     from_position: *from_position,
                     deadline: *deadline,
                     blocked: *blocked,
+                    from_cost: *from_cost,
                 }),
                 Msg::Reply {
                     to,
@@ -771,6 +777,7 @@ impl Formation {
         } else {
             &self.p.swaps
         };
+        agent.set_path_length(self.escape_length.get().filter(|_| self.escape.on()));
         let msgs = agent.step(k, me, &self.targets, &neighbours, inbox, swap_params);
         self.slot = Some(agent.target);
         self.make_way_from = agent.making_way(k, &self.targets, &neighbours, swap_params);
@@ -784,6 +791,7 @@ impl Formation {
                     from_position,
                     deadline,
                     blocked,
+                    from_cost,
                     ..
                 } => out.send(
                     to as u32,
@@ -796,6 +804,7 @@ impl Formation {
                         deadline,
                         epoch,
                         blocked,
+                        from_cost,
                     },
                 ),
                 SwapMessage::Reply {
@@ -884,6 +893,7 @@ impl Formation {
     /// out of a notch of wrecks (escape.rs), else eq. (16), steered round walls of wrecks in
     /// the swaps mode (detour.rs).
     fn preferred(&self, me: Vec2, wrecks: &[Vec2]) -> Vec2 {
+        self.escape_length.set(None);
         let k = &self.p.kernels;
         let making_way = self.make_way_from.filter(|f| (me - f).norm() > 1e-9);
         let blocked = self.p.swaps.blocked.as_ref();
