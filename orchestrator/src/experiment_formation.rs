@@ -133,8 +133,20 @@ fn figures(job: &Job, s: &serde_json::Value) -> FormationRun {
         min_obstacle_clearance: f["min_obstacle_clearance"].as_f64().unwrap_or(f64::NAN),
         optimiser_seconds: plan["seconds"].as_f64().unwrap_or(0.0),
         optimiser_gap: plan["gap"].as_f64().unwrap_or(0.0),
-        series: serde_json::from_value(f["distance_to_slot"].clone()).ok(),
+        series: series_of(&f["distance_to_slot"]),
     }
+}
+
+/// summary.json's `distance_to_slot` (per robot, per tick; null where the robot had no slot
+/// yet: the world's NaN), with the nulls as NaN. Read as plain numbers, the first null failed
+/// the whole series and no Fig. 9 was written.
+fn series_of(v: &serde_json::Value) -> Option<Vec<Vec<f64>>> {
+    let rows: Vec<Vec<Option<f64>>> = serde_json::from_value(v.clone()).ok()?;
+    Some(
+        rows.into_iter()
+            .map(|r| r.into_iter().map(|x| x.unwrap_or(f64::NAN)).collect())
+            .collect(),
+    )
 }
 
 fn mean(v: impl Iterator<Item = f64>) -> f64 {
@@ -599,4 +611,27 @@ fn fig9(series: &[Vec<f64>]) -> String {
     }
     s.push_str("</svg>\n");
     s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_fig9_series_keeps_the_ticks_before_a_slot_as_gaps_and_draws_every_robot() {
+        let v = serde_json::json!([[null, 3.0, 2.0, 1.0], [null, null, 4.0, 0.5]]);
+        let s = series_of(&v).expect("a series with nulls is read");
+        assert!(s[0][0].is_nan() && s[1][1].is_nan());
+        assert_eq!((s[0][3], s[1][2]), (1.0, 4.0));
+        let svg = fig9(&s);
+        assert_eq!(svg.matches("<polyline").count(), 2);
+        // Robot 0 has 3 points, robot 1 has 2 (the nulls left out).
+        let points: Vec<usize> = svg
+            .lines()
+            .filter(|l| l.starts_with("<polyline"))
+            .map(|l| l.split("points=\"").nth(1).unwrap().split(' ').count())
+            .collect();
+        assert_eq!(points, vec![3, 2]);
+        assert!(series_of(&serde_json::json!("not a series")).is_none());
+    }
 }
