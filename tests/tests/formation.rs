@@ -473,19 +473,34 @@ fn eight_deaths_in_transit_under_the_relay_re_plan_once_round_eight_wrecks_and_f
         "--chaos-at",
         &kills,
     ];
-    let o = up(&args, &dir);
-    assert!(o.status.success(), "{}", stderr(&o));
-    let f = formation(&dir);
-    assert_eq!(f["formed"], true, "{f}");
-    assert_eq!(f["overlapping_pairs"], 0, "{f}");
+    let (o, f) = formed_with_one_re_plan(&args, &dir);
     let plans = f["plans"].as_array().unwrap();
-    assert_eq!(plans.len(), 2, "one plan and one re-plan: {f}");
     assert!(plans[1]["tick"].as_u64().unwrap() > 50, "{f}");
     assert!(
         stderr(&o).contains("re-plans (relayed) epoch 2") && stderr(&o).contains("8 wrecks)"),
         "{}",
         stderr(&o)
     );
+}
+
+/// Runs `orchestrator up` with `args` into `dir` and asserts that the formation completed with
+/// 0 overlapping pairs after exactly one plan and one re-plan; the output and
+/// `mission.formation`.
+fn formed_with_one_re_plan(
+    args: &[&str],
+    dir: &std::path::Path,
+) -> (std::process::Output, serde_json::Value) {
+    let o = up(args, dir);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let f = formation(dir);
+    assert_eq!(f["formed"], true, "{f}");
+    assert_eq!(f["overlapping_pairs"], 0, "{f}");
+    assert_eq!(
+        f["plans"].as_array().unwrap().len(),
+        2,
+        "one plan and one re-plan: {f}"
+    );
+    (o, f)
 }
 
 /// configs/formation.toml seed 3, the coordinator killed at tick 15: robot 1 re-plans for the 8
@@ -507,13 +522,8 @@ fn the_re_plan_after_the_coordinator_s_death_finds_a_placement_where_the_optimum
         "--chaos-at",
         "15:0",
     ];
-    let o = up(&args, &dir);
-    assert!(o.status.success(), "{}", stderr(&o));
-    let f = formation(&dir);
-    assert_eq!(f["formed"], true, "{f}");
-    assert_eq!(f["overlapping_pairs"], 0, "{f}");
+    let (_, f) = formed_with_one_re_plan(&args, &dir);
     let plans = f["plans"].as_array().unwrap();
-    assert_eq!(plans.len(), 2, "{f}");
     assert_eq!(plans[1]["robot"], 1, "{f}");
     assert_eq!(plans[1]["feasible"], true, "{f}");
     assert!(plans[1]["gap"].as_f64().unwrap() >= 0.0, "{f}");

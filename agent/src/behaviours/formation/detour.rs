@@ -114,7 +114,7 @@ pub fn aim(me: Vec2, slot: Vec2, wrecks: &[Keepout], others: &[Keepout], p: &Det
         return slot;
     }
     let keepouts: Vec<Keepout> = wrecks.iter().chain(others).filter(|k| in_window(k)).copied().collect();
-    waypoint(me, slot, &keepouts, &[], None, p.cell, p.window).unwrap_or(slot)
+    plan(me, slot, &keepouts, &[], None, p.cell, p.window).map_or(slot, |(aim, _)| aim)
 }
 
 /// The rectangle a robot's centre must stay in (the box less the robot's radius): (min, max).
@@ -126,20 +126,8 @@ pub type Bounds = (Vec2, Vec2);
 /// free), to the slot's cell when the slot lies in the window, else to a free border cell,
 /// paying the straight distance from it to the slot; then the farthest point of the path `me`
 /// sees in a straight line clear of every keep-out and crossing no neck (the slot itself when
-/// that is the whole path). None: no path in the window.
-pub fn waypoint(
-    me: Vec2,
-    slot: Vec2,
-    keepouts: &[Keepout],
-    necks: &[Neck],
-    bounds: Option<Bounds>,
-    cell: f64,
-    window: f64,
-) -> Option<Vec2> {
-    plan(me, slot, keepouts, necks, bounds, cell, window).map(|(aim, _)| aim)
-}
-
-/// [`waypoint`], with the length of the path found (cells, then straight to the slot).
+/// that is the whole path), with the path's length (cells, then straight to the slot). None:
+/// no path in the window.
 pub fn plan(
     me: Vec2,
     slot: Vec2,
