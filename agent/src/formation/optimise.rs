@@ -106,13 +106,12 @@ use std::collections::BinaryHeap;
 use std::f64::consts::{PI, TAU};
 use swarm::geometry::Vec2;
 
-/// A node whose two centroid candidates both break C1 or C2 (and whose bound leaves room
-/// below the incumbent) tries the centroid nearest p_bar that meets them for its shape
-/// (centroid_repair.rs), while the search has this much repair work left (candidates tried x
-/// their checks, counted, so runs stay deterministic). [chosen] 3e8 (about 0.3 s): some 3 500
-/// repairs for 9 robots among 3 obstacles; the first one always runs, so a feasible instance
-/// gets an incumbent (configs/formation.toml seed 3, coordinator killed at 15: the polygon
-/// bound's search had none in 400 000 nodes).
+/// A node whose midpoint shape could still beat the incumbent tries the centroid nearest
+/// p_bar that meets C1 and C2 for that shape (centroid_repair.rs), while the search has this
+/// much repair work left (candidates tried x their checks, counted, so runs stay
+/// deterministic). [chosen] 3e8 (at most about 0.3 s on this VM); with no incumbent yet the
+/// repair runs whatever is left, so a feasible instance gets one (configs/formation.toml seed
+/// 3, coordinator killed at 15: the polygon bound's search had none in 400 000 nodes).
 const REPAIR_WORK: f64 = 3e8;
 
 /// The regions `Problem::blocked_distance2` takes as certainly forbidden are shrunk by this on
@@ -410,9 +409,11 @@ impl Problem {
     /// the node, one target stands in one obstacle (the obstacle's square, or the square
     /// inscribed in its disc, less the spread of A s~_j over the node); when it does lie in
     /// one, the distance from p_bar to the node's box less that region. 0 when no region holds
-    /// it. Without it the bound ignored C2 short of a whole target box inside an obstacle, and
-    /// nodes round an optimum that an obstacle blocks were split without end (a re-plan of 8
-    /// robots, configs/formation.toml seed 3: gap 59.8 after 400 000 nodes).
+    /// it. Without it the bound ignored C2 short of a whole target box inside an obstacle.
+    /// Measured: formation.toml seed 1's first plan 17 167 -> 17 139 nodes, same optimum; the
+    /// re-plan of 8 robots (seed 3, coordinator killed at 15) still ends at the node cap with
+    /// gap 59.8: its least bounds sit on slivers where two targets' constraints pinch the
+    /// centroid, which no single (target, obstacle) region covers.
     fn blocked_distance2(&self, node: &Node, ar: [f64; 2], br: [f64; 2]) -> f64 {
         let cons = &self.constraints;
         if cons.obstacles.is_empty() {
@@ -743,7 +744,8 @@ impl Problem {
             });
         }
         // The centroid nearest p_bar that meets C1 and C2 for this shape (centroid_repair.rs),
-        // when no candidate above did, while repair work is left (`REPAIR_WORK`).
+        // when it could beat the incumbent and repair work is left (`REPAIR_WORK`; always
+        // while there is no incumbent).
         let ub = best.as_ref().map_or(f64::INFINITY, |b| b.cost);
         let left = self.repair_work.get();
         if g + self.n as f64 * node.c_distance2(self.p_bar) < ub && (best.is_none() || left > 0.0) {
