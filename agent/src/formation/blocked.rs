@@ -23,6 +23,14 @@
 //! neither moved, and after `hold_ticks` a pairwise swap undid the blocked one (500 robots,
 //! seed 4, docs/formation.md 9).
 //!
+//! An escaping robot (2026-12-06; behaviours/formation/escape.rs): its way to the slot runs
+//! round wrecks, so the straight corridor and the straight price mislead. While it escapes
+//! its own cost is its planned way's length squared (`SwapAgent::set_path_length`), it may ask
+//! any in-place neighbour in range, and its proposal carries that cost (`from_cost`), which
+//! the receiver prices by too. Measured: fourteen ids seed 2 at 100 robots, a robot boxed in by
+//! three wrecks and two parked robots, one of them with its slot beside it, formed (K 450; it
+//! stood for good before: the swap with that robot cost 26.4 at the straight price).
+//!
 //! A blocked robot is farther than `min_distance` from its slot and a receiver within
 //! `in_place` of its own, and `min_distance >= in_place` (checked at load), so no robot is
 //! both: blocked proposals never form a chain among themselves.
