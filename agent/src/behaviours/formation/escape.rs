@@ -277,18 +277,8 @@ mod tests {
         assert!(first.x > -0.5, "the first step is not straight west: {first:?}");
         // Driving at the aim (0.25 a step, no ORCA), re-planned every step, reaches the slot
         // and never comes within 2 r - cell_tolerance - (a step's cut) of a wreck centre.
-        let mut me = start;
-        let mut reached = None;
-        let mut least = f64::INFINITY;
-        for step in 0..400 {
-            me += preferred(me, slot, &o, 1.0, 1.0, &p) * 0.25;
-            least = wrecks.iter().map(|w| (me - w).norm()).fold(least, f64::min);
-            if (me - slot).norm() < 0.05 {
-                reached = Some(step);
-                break;
-            }
-        }
-        assert!(reached.is_some(), "not reached; at {me:?}");
+        let (reached, least) = drive(start, slot, &wrecks);
+        assert!(reached.is_some(), "not reached");
         assert!(least > 2.0 - p.cell_tolerance - 0.1, "came within {least} of a wreck");
         // Without the plan the same robot heads into the notch: eq. (16) points west.
         let straight = steer(start, slot, slot, 1.0, 1.0);
