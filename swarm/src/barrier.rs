@@ -6,18 +6,27 @@
 //! VM); the data (Sense, Action, the air) stays on iceoryx2. The same slots tell the world exactly
 //! which robots acknowledged a tick, which the fault handling needs.
 //!
-//! The segment is `/dev/shm/<run prefix>tick`, removed with the rest of the run.
+//! Two segments, removed with the rest of the run (docs/protocol.md section 4):
+//!
+//! - `/dev/shm/<prefix>tick`, the world's: the release and shutdown words, the world's pid, and
+//!   per robot the kill order (world) and dead-up-to mark (orchestrator). An agent maps it
+//!   read-only ([`TickBarrier::open_agent`]): nothing an agent program writes through its
+//!   mappings can release a tick, stop the run or steer the orchestrator's SIGKILLs.
+//! - `/dev/shm/<prefix>acks`, the agents': the ack counter the world sleeps on, the ready
+//!   counter, and per robot the acknowledged tick and the attach counter.
 
 use crate::bell::EventBell;
 use std::sync::atomic::{AtomicU32, AtomicU64, Ordering};
 use std::time::{Duration, Instant};
 
-const MAGIC: u64 = 0x5357_4152_4d54_4b33; // "SWARMTK3"
+const MAGIC: u64 = 0x5357_4152_4d54_4b34; // "SWARMTK4"
 
-/// Bytes of one robot's slot: ack word, two unused words, attach counter, kill order,
-/// dead-up-to mark.
-const SLOT_BYTES: usize = 48;
+/// Bytes of one robot's slot in the world's segment: kill order, dead-up-to mark.
+const CTL_SLOT_BYTES: usize = 16;
+/// Bytes of one robot's slot in the agents' segment: acknowledged tick + 1, attach counter.
+const ACK_SLOT_BYTES: usize = 16;
 
+/// The head of the world's segment (`<prefix>tick`).
 #[repr(C)]
 struct Header {
     magic: AtomicU64,
@@ -27,19 +36,115 @@ struct Header {
     release: AtomicU32,
     shutdown: AtomicU32,
     released_tick: AtomicU64,
-    /// Futex word the world sleeps on: acknowledgements since the last release.
-    acks: AtomicU32,
     /// How many acknowledgements wake the world.
     expected: AtomicU32,
-    /// Agents that attached and are ready for the first tick.
-    ready: AtomicU32,
     _pad: u32,
 }
 
-/// A mapping of the run's barrier segment.
-pub struct TickBarrier {
+/// The head of the agents' segment (`<prefix>acks`).
+#[repr(C)]
+struct AckHeader {
+    /// Futex word the world sleeps on: acknowledgements since the last release.
+    acks: AtomicU32,
+    /// Agents that attached and are ready for the first tick.
+    ready: AtomicU32,
+}
+
+/// One shared-memory segment of the barrier, mapped.
+struct Segment {
     base: *mut u8,
     len: usize,
+}
+
+impl Drop for Segment {
+    fn drop(&mut self) {
+        // SAFETY: unmapping our own mapping.
+        unsafe {
+            libc::munmap(self.base as *mut libc::c_void, self.len);
+        }
+    }
+}
+
+impl Segment {
+    /// Creates `/dev/shm/<name>` of `len` zero bytes, mapped read-write. Fails if it exists.
+    fn create(name: &str, len: usize) -> std::io::Result<Segment> {
+        let c = std::ffi::CString::new(format!("/{name}")).expect("prefix has no NUL");
+        // SAFETY: plain POSIX calls with checked results.
+        unsafe {
+            let fd = libc::shm_open(
+                c.as_ptr(),
+                libc::O_CREAT | libc::O_EXCL | libc::O_RDWR,
+                0o600,
+            );
+            if fd < 0 {
+                return Err(std::io::Error::last_os_error());
+            }
+            if libc::ftruncate(fd, len as libc::off_t) != 0 {
+                let e = std::io::Error::last_os_error();
+                libc::close(fd);
+                return Err(e);
+            }
+            Self::map(fd, len, true)
+        }
+    }
+
+    /// Opens `/dev/shm/<name>` (read-only unless `writable`): its mapping and its length as
+    /// `fstat` gives it.
+    fn open(name: &str, writable: bool) -> std::io::Result<Segment> {
+        let c = std::ffi::CString::new(format!("/{name}")).expect("prefix has no NUL");
+        let flags = if writable {
+            libc::O_RDWR
+        } else {
+            libc::O_RDONLY
+        };
+        // SAFETY: plain POSIX calls with checked results.
+        unsafe {
+            let fd = libc::shm_open(c.as_ptr(), flags, 0);
+            if fd < 0 {
+                return Err(std::io::Error::last_os_error());
+            }
+            let mut st: libc::stat = std::mem::zeroed();
+            if libc::fstat(fd, &mut st) != 0 {
+                let e = std::io::Error::last_os_error();
+                libc::close(fd);
+                return Err(e);
+            }
+            Self::map(fd, st.st_size as usize, writable)
+        }
+    }
+
+    /// Maps `fd` (closed here) shared.
+    unsafe fn map(fd: i32, len: usize, writable: bool) -> std::io::Result<Segment> {
+        if len == 0 {
+            libc::close(fd);
+            return Ok(Segment {
+                base: std::ptr::NonNull::<u64>::dangling().as_ptr() as *mut u8,
+                len: 0,
+            });
+        }
+        let prot = if writable {
+            libc::PROT_READ | libc::PROT_WRITE
+        } else {
+            libc::PROT_READ
+        };
+        let p = libc::mmap(std::ptr::null_mut(), len, prot, libc::MAP_SHARED, fd, 0);
+        libc::close(fd);
+        if p == libc::MAP_FAILED {
+            return Err(std::io::Error::last_os_error());
+        }
+        Ok(Segment {
+            base: p as *mut u8,
+            len,
+        })
+    }
+}
+
+/// A mapping of the run's barrier segments.
+pub struct TickBarrier {
+    /// The world's segment (read-only in an agent).
+    ctl: Segment,
+    /// The agents' segment.
+    ack: Segment,
     robots: u32,
 }
 
@@ -68,19 +173,20 @@ pub enum BarrierError {
     Uninitialised { segment: String },
 }
 
-/// The segment's name in /dev/shm.
+/// The world's segment's name in /dev/shm.
 fn segment(prefix: &str) -> String {
     format!("{prefix}tick")
+}
+
+/// The agents' segment's name in /dev/shm.
+fn ack_segment(prefix: &str) -> String {
+    format!("{prefix}acks")
 }
 
 pub enum Wake {
     Tick(u64),
     Timeout,
     Shutdown,
-}
-
-fn shm_name(prefix: &str) -> std::ffi::CString {
-    std::ffi::CString::new(format!("/{prefix}tick")).expect("prefix has no NUL")
 }
 
 /// Sleeps while `word` holds `expected` (at most `timeout`; spurious returns are possible).
@@ -121,123 +227,108 @@ pub fn futex_wake(word: &AtomicU32, n: i32) {
 }
 
 impl TickBarrier {
-    fn size_for(robots: u32) -> usize {
-        std::mem::size_of::<Header>() + SLOT_BYTES * robots as usize
+    fn ctl_len(robots: u32) -> usize {
+        std::mem::size_of::<Header>() + CTL_SLOT_BYTES * robots as usize
     }
 
-    /// Creates the segment (world side). Fails if it exists.
+    fn ack_len(robots: u32) -> usize {
+        std::mem::size_of::<AckHeader>() + ACK_SLOT_BYTES * robots as usize
+    }
+
+    /// Creates both segments (world side). Fails if either exists.
     pub fn create(prefix: &str, robots: u32) -> Result<TickBarrier, BarrierError> {
-        Self::create_io(prefix, robots).map_err(|source| BarrierError::Create {
-            segment: segment(prefix),
-            source,
-        })
-    }
-
-    fn create_io(prefix: &str, robots: u32) -> std::io::Result<TickBarrier> {
-        let name = shm_name(prefix);
-        let len = Self::size_for(robots);
-        // SAFETY: plain POSIX calls with checked results.
-        unsafe {
-            let fd = libc::shm_open(
-                name.as_ptr(),
-                libc::O_CREAT | libc::O_EXCL | libc::O_RDWR,
-                0o600,
-            );
-            if fd < 0 {
-                return Err(std::io::Error::last_os_error());
-            }
-            if libc::ftruncate(fd, len as libc::off_t) != 0 {
-                let e = std::io::Error::last_os_error();
-                libc::close(fd);
-                return Err(e);
-            }
-            let b = Self::map(fd, len, robots)?;
-            let h = b.header();
-            std::ptr::addr_of!(h.robots).cast_mut().write(robots);
-            h.world_pid.store(std::process::id(), Ordering::Relaxed);
-            h.magic.store(MAGIC, Ordering::Release);
-            Ok(b)
-        }
-    }
-
-    /// Opens the existing segment (agent and orchestrator side).
-    pub fn open(prefix: &str) -> Result<TickBarrier, BarrierError> {
-        let name = shm_name(prefix);
-        let open_error = |source| BarrierError::Open {
-            segment: segment(prefix),
-            source,
+        let create = |name: String, len: usize| {
+            Segment::create(&name, len).map_err(|source| BarrierError::Create {
+                segment: name,
+                source,
+            })
         };
-        // SAFETY: plain POSIX calls with checked results.
-        unsafe {
-            let fd = libc::shm_open(name.as_ptr(), libc::O_RDWR, 0);
-            if fd < 0 {
-                return Err(open_error(std::io::Error::last_os_error()));
-            }
-            let mut st: libc::stat = std::mem::zeroed();
-            if libc::fstat(fd, &mut st) != 0 {
-                let e = std::io::Error::last_os_error();
-                libc::close(fd);
-                return Err(open_error(e));
-            }
-            if (st.st_size as usize) < std::mem::size_of::<Header>() {
-                libc::close(fd);
-                return Err(BarrierError::TooSmall {
-                    segment: segment(prefix),
-                    bytes: st.st_size as usize,
-                });
-            }
-            let len = st.st_size as usize;
-            let robots = ((len - std::mem::size_of::<Header>()) / SLOT_BYTES) as u32;
-            let b = Self::map(fd, len, robots).map_err(open_error)?;
-            if b.header().magic.load(Ordering::Acquire) != MAGIC {
-                return Err(BarrierError::Uninitialised {
-                    segment: segment(prefix),
-                });
-            }
-            Ok(b)
-        }
+        let ctl = create(segment(prefix), Self::ctl_len(robots))?;
+        let ack = create(ack_segment(prefix), Self::ack_len(robots))?;
+        let b = TickBarrier { ctl, ack, robots };
+        let h = b.header();
+        // SAFETY: the segment is ours alone until the magic word is written below.
+        unsafe { std::ptr::addr_of!(h.robots).cast_mut().write(robots) };
+        h.world_pid.store(std::process::id(), Ordering::Relaxed);
+        h.magic.store(MAGIC, Ordering::Release);
+        Ok(b)
     }
 
-    unsafe fn map(fd: i32, len: usize, robots: u32) -> std::io::Result<TickBarrier> {
-        let p = libc::mmap(
-            std::ptr::null_mut(),
-            len,
-            libc::PROT_READ | libc::PROT_WRITE,
-            libc::MAP_SHARED,
-            fd,
-            0,
-        );
-        libc::close(fd);
-        if p == libc::MAP_FAILED {
-            return Err(std::io::Error::last_os_error());
+    /// Opens both segments read-write (the orchestrator, the benchmarks' children).
+    pub fn open(prefix: &str) -> Result<TickBarrier, BarrierError> {
+        Self::open_as(prefix, true)
+    }
+
+    /// Opens the segments as an agent: the world's read-only, the agents' read-write.
+    pub fn open_agent(prefix: &str) -> Result<TickBarrier, BarrierError> {
+        Self::open_as(prefix, false)
+    }
+
+    fn open_as(prefix: &str, world_writable: bool) -> Result<TickBarrier, BarrierError> {
+        let open = |name: String, writable: bool| {
+            Segment::open(&name, writable).map_err(|source| BarrierError::Open {
+                segment: name,
+                source,
+            })
+        };
+        let ctl = open(segment(prefix), world_writable)?;
+        if ctl.len < std::mem::size_of::<Header>() {
+            return Err(BarrierError::TooSmall {
+                segment: segment(prefix),
+                bytes: ctl.len,
+            });
         }
-        Ok(TickBarrier {
-            base: p as *mut u8,
-            len,
-            robots,
-        })
+        let ack = open(ack_segment(prefix), true)?;
+        let robots = ((ctl.len - std::mem::size_of::<Header>()) / CTL_SLOT_BYTES) as u32;
+        if ack.len < Self::ack_len(robots) {
+            return Err(BarrierError::TooSmall {
+                segment: ack_segment(prefix),
+                bytes: ack.len,
+            });
+        }
+        let b = TickBarrier { ctl, ack, robots };
+        if b.header().magic.load(Ordering::Acquire) != MAGIC || b.header().robots != robots {
+            return Err(BarrierError::Uninitialised {
+                segment: segment(prefix),
+            });
+        }
+        Ok(b)
     }
 
     fn header(&self) -> &Header {
-        // SAFETY: the mapping is at least size_of::<Header>() and page aligned.
-        unsafe { &*(self.base as *const Header) }
+        // SAFETY: the mapping is at least size_of::<Header>() (checked when opened) and page
+        // aligned.
+        unsafe { &*(self.ctl.base as *const Header) }
     }
 
-    /// Word `w` of robot `robot`'s slot: 0 = acknowledged tick + 1; 1, 2 = unused (the link
-    /// design's sent counts); 3 = agent processes that attached;
-    /// 4 = the attach number (value of word 3 after its attach) of the agent the world wants
-    /// killed; 5 = the highest attach number the orchestrator knows to be dead. Words 4 and 5
-    /// name an agent *incarnation*, so a death report, a kill or an attach is never applied to
-    /// the wrong process of a robot (issue 14 item 1).
-    fn word(&self, robot: u32, w: usize) -> &AtomicU64 {
+    fn ack_header(&self) -> &AckHeader {
+        // SAFETY: as above, for the agents' segment.
+        unsafe { &*(self.ack.base as *const AckHeader) }
+    }
+
+    /// Robot `robot`'s words in the world's segment: 0 = the attach number (the value of
+    /// its attach counter after that agent's attach) of the agent the world wants killed;
+    /// 1 = the highest attach number the orchestrator knows to be dead. Both name an agent
+    /// *incarnation*, so a death report, a kill or an attach is never applied to the wrong
+    /// process of a robot (issue 14 item 1).
+    fn ctl_word(&self, robot: u32, w: usize) -> &AtomicU64 {
         assert!(robot < self.robots, "robot {robot} out of range");
-        let at = std::mem::size_of::<Header>() + SLOT_BYTES * robot as usize + 8 * w;
-        // SAFETY: slots follow the header, 8-byte aligned, within len.
-        unsafe { &*(self.base.add(at) as *const AtomicU64) }
+        let at = std::mem::size_of::<Header>() + CTL_SLOT_BYTES * robot as usize + 8 * w;
+        // SAFETY: slots follow the header, 8-byte aligned, within the length checked at open.
+        unsafe { &*(self.ctl.base.add(at) as *const AtomicU64) }
+    }
+
+    /// Robot `robot`'s words in the agents' segment: 0 = acknowledged tick + 1; 1 = agent
+    /// processes that attached.
+    fn ack_word(&self, robot: u32, w: usize) -> &AtomicU64 {
+        assert!(robot < self.robots, "robot {robot} out of range");
+        let at = std::mem::size_of::<AckHeader>() + ACK_SLOT_BYTES * robot as usize + 8 * w;
+        // SAFETY: as above, for the agents' segment.
+        unsafe { &*(self.ack.base.add(at) as *const AtomicU64) }
     }
 
     fn slot(&self, robot: u32) -> &AtomicU64 {
-        self.word(robot, 0)
+        self.ack_word(robot, 0)
     }
 
     pub fn robots(&self) -> u32 {
@@ -256,7 +347,7 @@ impl TickBarrier {
     // ---- world side ----
 
     pub fn ready_count(&self) -> u32 {
-        self.header().ready.load(Ordering::Acquire)
+        self.ack_header().ready.load(Ordering::Acquire)
     }
 
     /// Releases tick k to the agents; `expected` acknowledgements will wake the world.
@@ -268,7 +359,7 @@ impl TickBarrier {
     /// (`runtime.barrier = "iox2-event"`).
     pub fn release_with(&self, tick: u64, expected: u32, bell: Option<&EventBell>) {
         let h = self.header();
-        h.acks.store(0, Ordering::Relaxed);
+        self.ack_header().acks.store(0, Ordering::Relaxed);
         h.expected.store(expected, Ordering::Relaxed);
         h.released_tick.store(tick, Ordering::Relaxed);
         h.release.store((tick + 1) as u32, Ordering::Release);
@@ -292,14 +383,14 @@ impl TickBarrier {
 
     /// `wait_acks`, sleeping on `bell` instead of the futex if given.
     pub fn wait_acks_with(&self, timeout: Duration, bell: Option<&EventBell>) {
-        let h = self.header();
-        let seen = h.acks.load(Ordering::Acquire);
-        if seen >= h.expected.load(Ordering::Relaxed) {
+        let a = self.ack_header();
+        let seen = a.acks.load(Ordering::Acquire);
+        if seen >= self.header().expected.load(Ordering::Relaxed) {
             return;
         }
         match bell {
             Some(b) => b.wait(timeout),
-            None => futex_wait(&h.acks, seen, timeout),
+            None => futex_wait(&a.acks, seen, timeout),
         }
     }
 
@@ -308,7 +399,7 @@ impl TickBarrier {
     /// then sleep with [`TickBarrier::wait_ack_change`] on the value read, and no wake-up is
     /// lost in between.
     pub fn ack_count(&self) -> u32 {
-        self.header().acks.load(Ordering::Acquire)
+        self.ack_header().acks.load(Ordering::Acquire)
     }
 
     /// Sleeps while the ack counter holds `seen`, at most `timeout` (real-time mode). Unlike
@@ -318,15 +409,15 @@ impl TickBarrier {
     pub fn wait_ack_change_with(&self, seen: u32, timeout: Duration, bell: Option<&EventBell>) {
         match bell {
             Some(b) => b.wait(timeout),
-            None => futex_wait(&self.header().acks, seen, timeout),
+            None => futex_wait(&self.ack_header().acks, seen, timeout),
         }
     }
 
     /// Wakes the world from `wait_acks` (the orchestrator does this after reporting a fault).
     pub fn nudge_world(&self) {
-        let h = self.header();
-        h.acks.fetch_add(1, Ordering::AcqRel);
-        futex_wake(&h.acks, 1);
+        let a = self.ack_header();
+        a.acks.fetch_add(1, Ordering::AcqRel);
+        futex_wake(&a.acks, 1);
     }
 
     /// Tells every agent to exit.
@@ -353,35 +444,35 @@ impl TickBarrier {
 
     /// An agent process for `robot` is attached and ready for its next tick.
     pub fn mark_ready(&self, robot: u32) {
-        self.word(robot, 3).fetch_add(1, Ordering::AcqRel);
-        self.header().ready.fetch_add(1, Ordering::AcqRel);
+        self.ack_word(robot, 1).fetch_add(1, Ordering::AcqRel);
+        self.ack_header().ready.fetch_add(1, Ordering::AcqRel);
     }
 
     /// How many agent processes have attached for `robot` (a restart makes it grow).
     pub fn attach_count(&self, robot: u32) -> u64 {
-        self.word(robot, 3).load(Ordering::Acquire)
+        self.ack_word(robot, 1).load(Ordering::Acquire)
     }
 
     /// World side: the robot's agent with attach number `attach` is declared dead (a scheduled
     /// kill, an ack deadline): the orchestrator must SIGKILL it if it still runs.
     pub fn order_kill(&self, robot: u32, attach: u64) {
-        self.word(robot, 4).fetch_max(attach, Ordering::AcqRel);
+        self.ctl_word(robot, 0).fetch_max(attach, Ordering::AcqRel);
     }
 
     /// The attach number of the robot's latest agent the world ordered killed (0 = none).
     pub fn kill_order(&self, robot: u32) -> u64 {
-        self.word(robot, 4).load(Ordering::Acquire)
+        self.ctl_word(robot, 0).load(Ordering::Acquire)
     }
 
     /// Orchestrator side: every agent of `robot` with an attach number up to `attach` is dead
     /// (reaped). Written before the death is reported on the control channel.
     pub fn set_dead_upto(&self, robot: u32, attach: u64) {
-        self.word(robot, 5).fetch_max(attach, Ordering::AcqRel);
+        self.ctl_word(robot, 1).fetch_max(attach, Ordering::AcqRel);
     }
 
     /// The highest attach number of `robot` known dead (0 = none).
     pub fn dead_upto(&self, robot: u32) -> u64 {
-        self.word(robot, 5).load(Ordering::Acquire)
+        self.ctl_word(robot, 1).load(Ordering::Acquire)
     }
 
     /// The last tick this robot acknowledged plus one (0 if none): where a (re)started agent
@@ -434,35 +525,28 @@ impl TickBarrier {
 
     /// `ack`, ringing `bell` instead of the futex if given.
     pub fn ack_with(&self, robot: u32, tick: u64, bell: Option<&EventBell>) {
-        let h = self.header();
+        let a = self.ack_header();
         self.slot(robot).store(tick + 1, Ordering::Release);
-        let n = h.acks.fetch_add(1, Ordering::AcqRel) + 1;
-        if n >= h.expected.load(Ordering::Acquire) {
+        let n = a.acks.fetch_add(1, Ordering::AcqRel) + 1;
+        if n >= self.header().expected.load(Ordering::Acquire) {
             match bell {
                 Some(b) => b.ring(),
                 None => {
-                    futex_wake(&h.acks, 1);
+                    futex_wake(&a.acks, 1);
                 }
             }
         }
     }
 }
 
-impl Drop for TickBarrier {
-    fn drop(&mut self) {
-        // SAFETY: unmapping our own mapping.
-        unsafe {
-            libc::munmap(self.base as *mut libc::c_void, self.len);
-        }
-    }
-}
-
-/// Removes the segment's name (the mappings stay valid until dropped).
+/// Removes the segments' names (the mappings stay valid until dropped).
 pub fn unlink(prefix: &str) {
-    let name = shm_name(prefix);
-    // SAFETY: plain POSIX call.
-    unsafe {
-        libc::shm_unlink(name.as_ptr());
+    for name in [segment(prefix), ack_segment(prefix)] {
+        let c = std::ffi::CString::new(format!("/{name}")).expect("prefix has no NUL");
+        // SAFETY: plain POSIX call.
+        unsafe {
+            libc::shm_unlink(c.as_ptr());
+        }
     }
 }
 
@@ -470,9 +554,9 @@ pub fn unlink(prefix: &str) {
 mod tests {
     use super::*;
 
-    /// A segment of `len` zero bytes under the barrier's name for `prefix`.
-    fn raw_segment(prefix: &str, len: usize) {
-        let name = shm_name(prefix);
+    /// A segment of `len` zero bytes under the name `name`.
+    fn raw_segment(name: &str, len: usize) {
+        let name = std::ffi::CString::new(format!("/{name}")).unwrap();
         // SAFETY: plain POSIX calls; the fd is closed at once.
         unsafe {
             let fd = libc::shm_open(name.as_ptr(), libc::O_CREAT | libc::O_RDWR, 0o600);
@@ -502,15 +586,40 @@ mod tests {
         assert!(matches!(e, BarrierError::Create { ref segment, .. } if *segment == seg));
         unlink(&prefix);
 
-        raw_segment(&prefix, 8);
+        raw_segment(&seg, 8);
         let e = TickBarrier::open(&prefix).err().expect("too small");
         assert!(matches!(e, BarrierError::TooSmall { bytes: 8, .. }), "{e}");
         unlink(&prefix);
 
         // Big enough, but its magic word was never written.
-        raw_segment(&prefix, std::mem::size_of::<Header>() + SLOT_BYTES);
+        raw_segment(&seg, std::mem::size_of::<Header>() + CTL_SLOT_BYTES);
+        raw_segment(&ack_segment(&prefix), TickBarrier::ack_len(1));
         let e = TickBarrier::open(&prefix).err().expect("uninitialised");
         assert!(matches!(e, BarrierError::Uninitialised { .. }), "{e}");
+        unlink(&prefix);
+    }
+
+    /// An agent maps the world's segment read-only (its release, shutdown and kill-order
+    /// words cannot be written through it) and the agents' segment read-write.
+    #[test]
+    fn an_agent_maps_the_worlds_words_read_only() {
+        let prefix = format!("swbr{}_", std::process::id());
+        let _w = TickBarrier::create(&prefix, 2).unwrap();
+        let a = TickBarrier::open_agent(&prefix).unwrap();
+        a.mark_ready(1);
+        assert_eq!(a.attach_count(1), 1);
+        let maps = std::fs::read_to_string("/proc/self/maps").unwrap();
+        let perms = |name: &str| -> Vec<String> {
+            maps.lines()
+                .filter(|l| l.ends_with(&format!("/dev/shm/{name}")))
+                .map(|l| l.split_whitespace().nth(1).unwrap().to_string())
+                .collect()
+        };
+        // The world's own mapping and the agent's, of each segment.
+        let mut ctl = perms(&segment(&prefix));
+        ctl.sort();
+        assert_eq!(ctl, ["r--s", "rw-s"], "{maps}");
+        assert_eq!(perms(&ack_segment(&prefix)), ["rw-s", "rw-s"], "{maps}");
         unlink(&prefix);
     }
 

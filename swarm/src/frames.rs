@@ -342,3 +342,106 @@ mod tests {
         assert_eq!(s.nearby().len(), MAX_NEARBY);
     }
 }
+
+#[cfg(test)]
+mod protocol_tests {
+    use super::*;
+    use std::mem::{offset_of, size_of};
+
+    /// The layouts docs/protocol.md gives, byte for byte: a change here is a change of the
+    /// protocol every agent program speaks, and must change the page too.
+    #[test]
+    fn the_protocol_documents_layouts() {
+        assert_eq!(size_of::<SenseHeader>(), 16);
+        assert_eq!(
+            [
+                offset_of!(SenseHeader, tick),
+                offset_of!(SenseHeader, robots),
+                offset_of!(SenseHeader, bytes)
+            ],
+            [0, 8, 12]
+        );
+        assert_eq!(size_of::<Sense>(), 14_920);
+        assert_eq!(SENSE_FIXED_BYTES, 72);
+        assert_eq!(
+            [
+                offset_of!(Sense, tick),
+                offset_of!(Sense, robot),
+                offset_of!(Sense, run_state),
+                offset_of!(Sense, pos),
+                offset_of!(Sense, heading),
+                offset_of!(Sense, vel),
+                offset_of!(Sense, alive_robots),
+                offset_of!(Sense, n_obstacle_points),
+                offset_of!(Sense, n_entities),
+                offset_of!(Sense, n_nearby),
+                offset_of!(Sense, obstacle_points),
+                offset_of!(Sense, entities),
+                offset_of!(Sense, nearby),
+            ],
+            [0, 8, 12, 16, 32, 40, 56, 60, 64, 68, 72, 12_360, 13_640]
+        );
+        assert_eq!(size_of::<Entity>(), 40);
+        assert_eq!(
+            [
+                offset_of!(Entity, id),
+                offset_of!(Entity, kind),
+                offset_of!(Entity, flags),
+                offset_of!(Entity, pos),
+                offset_of!(Entity, value)
+            ],
+            [0, 4, 8, 16, 32]
+        );
+        assert_eq!(size_of::<Nearby>(), 40);
+        assert_eq!(
+            [
+                offset_of!(Nearby, robot),
+                offset_of!(Nearby, pos),
+                offset_of!(Nearby, vel)
+            ],
+            [0, 8, 24]
+        );
+        assert_eq!(size_of::<AirHeader>(), 32);
+        assert_eq!(
+            [
+                offset_of!(AirHeader, tick),
+                offset_of!(AirHeader, sent_tick),
+                offset_of!(AirHeader, robots),
+                offset_of!(AirHeader, messages),
+                offset_of!(AirHeader, index_len),
+                offset_of!(AirHeader, payload_bytes),
+            ],
+            [0, 8, 16, 20, 24, 28]
+        );
+        assert_eq!(size_of::<AirEntry>(), 48);
+        assert_eq!(offset_of!(AirEntry, offset), 40);
+        assert_eq!(size_of::<RadioHeader>(), 40);
+        assert_eq!(
+            [
+                offset_of!(RadioHeader, sender),
+                offset_of!(RadioHeader, dest),
+                offset_of!(RadioHeader, tick),
+                offset_of!(RadioHeader, seq),
+                offset_of!(RadioHeader, len),
+                offset_of!(RadioHeader, sender_pos),
+            ],
+            [0, 4, 8, 16, 20, 24]
+        );
+        assert_eq!(size_of::<Action>(), 144);
+        assert_eq!(
+            [
+                offset_of!(Action, tick),
+                offset_of!(Action, robot),
+                offset_of!(Action, events),
+                offset_of!(Action, cmd),
+                offset_of!(Action, report),
+                offset_of!(Action, n_sent),
+                offset_of!(Action, radio_delivered),
+                offset_of!(Action, radio_bytes),
+                offset_of!(Action, radio_malformed),
+                offset_of!(Action, sent_to),
+            ],
+            [0, 8, 12, 16, 32, 64, 68, 72, 76, 80]
+        );
+    }
+}

@@ -435,7 +435,12 @@ pub fn run(args: &WorldArgs) -> Result<i32> {
         // was reset by the release): handled now, not after a whole poll_ms.
         drain_control(&control, &mut world, &mut ctl, &barrier, &drivers);
         loop {
-            let now_acked = world.live_robots().filter(|&i| barrier.acked(i, k)).count();
+            // A robot is done with tick k when its act service holds its action of tick k;
+            // its ack word only says when to look (docs/protocol.md section 5).
+            let now_acked = world
+                .live_robots()
+                .filter(|&i| barrier.acked(i, k) && acts.arrived(i, k))
+                .count();
             if now_acked == world.alive_count() as usize {
                 break;
             }
@@ -455,7 +460,7 @@ pub fn run(args: &WorldArgs) -> Result<i32> {
             if waited.elapsed() > deadline {
                 let silent: Vec<u32> = world
                     .live_robots()
-                    .filter(|&i| !barrier.acked(i, k))
+                    .filter(|&i| !(barrier.acked(i, k) && acts.arrived(i, k)))
                     .collect();
                 for i in silent {
                     world.mark_dead(i, "no action within runtime.ack_deadline_ms", None, None);

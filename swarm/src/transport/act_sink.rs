@@ -52,35 +52,50 @@ pub struct ActPort {
     _service: ActService,
 }
 
-/// The world's side of the Action frames: every robot's act service.
-pub struct ActSource(Vec<ActPort>);
+/// The world's side of the Action frames: every robot's act service, and the sample of this
+/// tick each robot has sent so far (held until the tick is applied).
+pub struct ActSource {
+    ports: Vec<ActPort>,
+    held: Vec<Option<ActSample>>,
+}
 
 impl ActSource {
     /// Makes the run's act services for `sc.run.robots` robots.
     pub fn create(node: &Node<ipc::Service>, sc: &Scenario) -> TransportResult<Self> {
-        Ok(ActSource(
-            (0..sc.run.robots)
-                .map(|i| {
-                    let service = act_service(node, i, true)?;
-                    Ok(ActPort {
-                        subscriber: super::act_subscriber(&service)?,
-                        _service: service,
-                    })
+        let ports = (0..sc.run.robots)
+            .map(|i| {
+                let service = act_service(node, i, true)?;
+                Ok(ActPort {
+                    subscriber: super::act_subscriber(&service)?,
+                    _service: service,
                 })
-                .collect::<TransportResult<Vec<_>>>()?,
-        ))
+            })
+            .collect::<TransportResult<Vec<_>>>()?;
+        let held = (0..ports.len()).map(|_| None).collect();
+        Ok(ActSource { ports, held })
     }
 
-    /// Lock-step: robot `robot`'s newest action (every live robot acknowledged tick `k`),
-    /// its messages appended to `sent` (`World::apply` judges both: an action of another
-    /// tick is refused there). None: no sample.
-    pub fn take(&mut self, robot: u32, _k: u64, sent: &mut Air) -> Option<Action> {
-        let act = &self.0.get(robot as usize)?.subscriber;
-        let mut latest = None;
-        while let Ok(Some(s)) = act.receive() {
-            latest = Some(s);
+    /// Lock-step: whether robot `robot`'s action of tick `k` has arrived (received and held
+    /// until [`ActSource::take`]). The barrier's ack words only say when to look: a robot
+    /// counts as done with tick k when its own act service holds a sample of tick k, so an
+    /// ack word written by anyone else cannot make the world go on without the robot.
+    pub fn arrived(&mut self, robot: u32, k: u64) -> bool {
+        let Some(port) = self.ports.get(robot as usize) else {
+            return false;
+        };
+        let held = &mut self.held[robot as usize];
+        while let Ok(Some(s)) = port.subscriber.receive() {
+            *held = Some(s);
         }
-        let s = latest?;
+        held.as_ref().is_some_and(|s| s.user_header().tick == k)
+    }
+
+    /// Lock-step: robot `robot`'s newest action (every live robot's action of tick `k`
+    /// arrived, or the ack deadline passed), its messages appended to `sent` (`World::apply`
+    /// judges both: an action of another tick is refused there). None: no sample.
+    pub fn take(&mut self, robot: u32, k: u64, sent: &mut Air) -> Option<Action> {
+        self.arrived(robot, k);
+        let s = self.held.get_mut(robot as usize)?.take()?;
         transmit_area(robot, area_of(&s), sent);
         Some(action_of(robot, &s))
     }
@@ -99,7 +114,7 @@ impl ActSource {
         sent: &mut Air,
         late_msgs: &mut Air,
     ) -> (Option<Action>, Option<Action>) {
-        let Some(port) = self.0.get(robot as usize) else {
+        let Some(port) = self.ports.get(robot as usize) else {
             return (None, None);
         };
         let (mut cur, mut late) = (None, None);
@@ -124,8 +139,9 @@ impl ActSource {
 
     /// Robot `robot` is dead: nothing its agent sent is taken later (as late).
     pub fn discard(&mut self, robot: u32) {
-        if let Some(p) = self.0.get(robot as usize) {
+        if let Some(p) = self.ports.get(robot as usize) {
             while let Ok(Some(_)) = p.subscriber.receive() {}
+            self.held[robot as usize] = None;
         }
     }
 }
