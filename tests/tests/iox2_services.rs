@@ -30,7 +30,7 @@ fn a_live_runs_sense_air_and_act_services_are_listed_by_iceoryx2() {
     const ROBOTS: usize = 5;
     let out = tmp_dir("iox2-list");
     let id = own_run_id("iox2-list");
-    let mut child = spawn_up_as(
+    let child = spawn_up_as(
         &[
             "--scenario",
             roam(),
