@@ -45,11 +45,18 @@ fn a_live_runs_sense_air_and_act_services_are_listed_by_iceoryx2() {
         &out,
         Some(&id),
     );
-    // Every agent attached: the Sense service has the world and every agent as nodes.
+    // Every agent attached (an agent opens the Sense service, its act service and then the
+    // air, so wait for all of them): each shared service has the world and every agent as
+    // nodes, each act service its agent and the world.
+    let attached = |seen: &BTreeMap<String, usize>| {
+        ["world/sense", "radio/air"]
+            .iter()
+            .all(|s| seen.get(*s).copied().unwrap_or(0) >= 1 + ROBOTS)
+            && (0..ROBOTS).all(|i| seen.get(&format!("robot/{i}/act")).copied().unwrap_or(0) >= 2)
+    };
     let t = Instant::now();
     let mut seen = services_of(&id);
-    while seen.get("world/sense").copied().unwrap_or(0) < 1 + ROBOTS && t.elapsed() < ATTACH_WITHIN
-    {
+    while !attached(&seen) && t.elapsed() < ATTACH_WITHIN {
         std::thread::sleep(Duration::from_millis(50));
         seen = services_of(&id);
     }
