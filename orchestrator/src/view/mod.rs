@@ -6,6 +6,8 @@
 //! recording is followed.
 
 pub mod feed;
+pub mod guard;
+pub mod http;
 pub mod frame;
 pub mod meta;
 pub mod server;

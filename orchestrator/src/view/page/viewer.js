@@ -344,7 +344,8 @@
   $("kill").onclick = () => {
     if (selected === null) return;
     const r = selected;
-    fetch("/api/kill?robot=" + r, { method: "POST" })
+    const token = document.querySelector('meta[name="swarm-kill-token"]').content;
+    fetch("/api/kill?robot=" + r, { method: "POST", headers: { "X-Swarm-Token": token } })
       .then((resp) => resp.text()).then((t) => { $("killmsg").textContent = t; })
       .catch((err) => { $("killmsg").textContent = "kill failed: " + err; });
   };
