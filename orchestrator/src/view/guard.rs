@@ -23,8 +23,9 @@ pub const TOKEN_HEADER: &str = "X-Swarm-Token";
 /// Why a request was refused (answered 403 with this text).
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum Refused {
+    /// The Host header given ("(none)", "(repeated)").
     #[error("Host {0:?} is not this viewer's (allowed: 127.0.0.1:PORT, localhost:PORT)")]
-    Host(Option<String>),
+    Host(String),
     #[error("Origin {0:?} is not this viewer's")]
     Origin(String),
     #[error("Sec-Fetch-Site {0:?}: only the viewer's own page may ask this")]
@@ -74,7 +75,9 @@ impl Guard {
     pub fn check(&self, r: &Request) -> Result<(), Refused> {
         match r.header("host") {
             Some(h) if self.own_host(h) => {}
-            h => return Err(Refused::Host(h.map(str::to_string))),
+            Some(h) => return Err(Refused::Host(h.to_string())),
+            None if r.has_header("host") => return Err(Refused::Host("(repeated)".into())),
+            None => return Err(Refused::Host("(none)".into())),
         }
         if r.has_header("origin") {
             match r.header("origin") {
@@ -130,7 +133,7 @@ mod tests {
         }
         assert!(matches!(
             g.check(&req(&["GET / HTTP/1.1"])),
-            Err(Refused::Host(None))
+            Err(Refused::Host(h)) if h == "(none)"
         ));
         // Two Host headers: neither is trusted.
         let two = req(&["GET / HTTP/1.1", "Host: 127.0.0.1:8080", "Host: evil:8080"]);
