@@ -7,9 +7,10 @@
 //! - `GET /` (any query: `?tick=N` shows tick N, `?robot=I` selects robot I, `?trail=K`): the
 //!   page, whose `/run.js` asks for the frames that tick and its trail need;
 //! - `GET /viewer.js`, `GET /viewer.css`: the page's code and style (embedded, no CDN);
-//! - `GET /run.js?tick=N&trail=K`: `window.RUN = {meta, ended, count, chunk, first, frames}`:
-//!   the frame count so far, the chunk length (ticks the page asks for at a time) and the
-//!   frames of the chunks from tick N - K to tick N (N: the newest of a live run, else 0).
+//! - `GET /run.js?tick=N&trail=K`: `window.RUN = {meta, ended, count, chunk, first, seen,
+//!   frames}`: the frame count so far, the chunk length (ticks the page asks for at a time),
+//!   what the run has shown so far (its legend's states and marks) and the frames of the
+//!   chunks from tick N - K to tick N (N: the newest of a live run, else 0).
 //!   Loaded before the page's script, so a page drawn at load shows them: a headless
 //!   screenshot needs no JS driver;
 //! - `GET /api/meta`, `GET /api/frames?from=K&to=L` (L: the end if left out): JSON;
@@ -188,8 +189,9 @@ fn run_js(url: &str, feed: &Feed) -> String {
             let trail = number(url, "trail").unwrap_or(DEFAULT_TRAIL);
             let (first, end) = load_window(number(url, "tick"), trail, live, count, chunk);
             let frames = feed.range(first, end);
+            let seen = feed.seen().unwrap_or_else(|| "null".into());
             format!(
-                "window.RUN = {{\"meta\": {m}, \"ended\": {ended}, \"count\": {count}, \"chunk\": {chunk}, \"first\": {first}, \"frames\": [{}]}};\n",
+                "window.RUN = {{\"meta\": {m}, \"ended\": {ended}, \"count\": {count}, \"chunk\": {chunk}, \"first\": {first}, \"seen\": {seen}, \"frames\": [{}]}};\n",
                 frames.join(",\n")
             )
         }

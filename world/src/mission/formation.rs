@@ -308,7 +308,8 @@ const STATES: &[DisplayState] = &[
     DisplayState {
         state: STATE_IN_PLACE as u8,
         name: "in place",
-        colour: [0, 150, 60],
+        // Teal, not the slots' green: a robot and a slot are two things.
+        colour: [20, 170, 170],
     },
     DisplayState {
         state: STATE_COORDINATOR as u8,
