@@ -312,9 +312,11 @@
       heap: performance.memory ? performance.memory.usedJSHeapSize : null,
       view: { zoom: view.zoom, cx: view.cx, cy: view.cy, scale, width: canvas.width, height: canvas.height },
       progress: f && meta.progress_label ? { label: meta.progress_label, done: f.done, total: f.total } : null,
-      legend: legendState(),
+      legend: null,
     };
-    if (!f) { $("info").textContent = ""; $("state").textContent = JSON.stringify(state); return; }
+    // Written last: the legend's place on the page once the text above it is set.
+    const write = () => { state.legend = legendState(); $("state").textContent = JSON.stringify(state); };
+    if (!f) { $("info").textContent = ""; write(); return; }
     const alive = f.alive.reduce((a, b) => a + b, 0);
     const r = f.radio;
     let t = `tick ${f.tick}\nrobots alive ${alive}/${meta.robots}\n`;
@@ -349,7 +351,7 @@
     }
     $("robot").textContent = s;
     $("kill").disabled = !(meta.live && !ended && selected !== null && f.alive[selected]);
-    $("state").textContent = JSON.stringify(state);
+    write();
   }
 
   // A legend swatch (16 x 16 SVG) of `kind` in colour `c`, and the point of it that shows
