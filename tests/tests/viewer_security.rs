@@ -166,10 +166,19 @@ fn only_the_viewers_own_page_may_kill_and_the_attacks_leave_the_robot_alive() {
         "POST",
         &url,
         &kill,
-        &[("Host", &evil), ("Origin", &origin), ("X-Swarm-Token", &token)],
+        &[
+            ("Host", &evil),
+            ("Origin", &origin),
+            ("X-Swarm-Token", &token),
+        ],
     );
     assert_eq!(status, 403, "{body}");
-    let (status, _) = http_with("GET", &url, "/api/meta", &[("Host", &format!("localhost:{port}"))]);
+    let (status, _) = http_with(
+        "GET",
+        &url,
+        "/api/meta",
+        &[("Host", &format!("localhost:{port}"))],
+    );
     assert_eq!(status, 200);
 
     // Heads over the limits: a 10 MB request line, 20,000 headers.
@@ -189,7 +198,11 @@ fn only_the_viewers_own_page_may_kill_and_the_attacks_leave_the_robot_alive() {
     }
     some.extend(b"\r\n");
     assert_eq!(send_raw(&url, some).0, 431, "150 headers");
-    assert_eq!(http("GET", &url, "/api/meta").0, 200, "the server still serves");
+    assert_eq!(
+        http("GET", &url, "/api/meta").0,
+        200,
+        "the server still serves"
+    );
 
     // Kills without the page's token, with a wrong one, without its Origin, from another.
     let wrong = format!("{}0", &token[1..]);
@@ -198,12 +211,18 @@ fn only_the_viewers_own_page_may_kill_and_the_attacks_leave_the_robot_alive() {
         ("no token", vec![("Origin", origin.as_str())]),
         (
             "a wrong token",
-            vec![("Origin", origin.as_str()), ("X-Swarm-Token", wrong.as_str())],
+            vec![
+                ("Origin", origin.as_str()),
+                ("X-Swarm-Token", wrong.as_str()),
+            ],
         ),
         ("no Origin", vec![("X-Swarm-Token", token.as_str())]),
         (
             "another Origin",
-            vec![("Origin", other.as_str()), ("X-Swarm-Token", token.as_str())],
+            vec![
+                ("Origin", other.as_str()),
+                ("X-Swarm-Token", token.as_str()),
+            ],
         ),
     ] {
         let (status, body) = http_with("POST", &url, &kill, &headers);
@@ -214,10 +233,16 @@ fn only_the_viewers_own_page_may_kill_and_the_attacks_leave_the_robot_alive() {
     let report = attack_from_another_port(&url);
     assert!(report.contains("no-cors sent"), "{report}");
     assert!(report.contains("cors refused"), "{report}");
-    assert!(report.contains("RUN undefined"), "the attacker read the run: {report}");
+    assert!(
+        report.contains("RUN undefined"),
+        "the attacker read the run: {report}"
+    );
     // A kill that got through would show within a few ticks (30 ticks/s).
     std::thread::sleep(Duration::from_millis(700));
-    assert!(alive_now(&url, TARGET as usize), "robot {TARGET} died: {report}");
+    assert!(
+        alive_now(&url, TARGET as usize),
+        "robot {TARGET} died: {report}"
+    );
 
     // The page's own button, clicked.
     let mut b = Browser::open(&format!("{url}?robot={BUTTON}"), 1280, 720, "button");
@@ -229,7 +254,10 @@ fn only_the_viewers_own_page_may_kill_and_the_attacks_leave_the_robot_alive() {
     drop(b);
     let t = Instant::now();
     while alive_now(&url, BUTTON as usize) {
-        assert!(t.elapsed() < Duration::from_secs(20), "robot {BUTTON} never died");
+        assert!(
+            t.elapsed() < Duration::from_secs(20),
+            "robot {BUTTON} never died"
+        );
         std::thread::sleep(Duration::from_millis(50));
     }
     let o = child.wait_with_output().unwrap();
@@ -237,7 +265,10 @@ fn only_the_viewers_own_page_may_kill_and_the_attacks_leave_the_robot_alive() {
     let s = summary(&out);
     assert_eq!(s["end"], "completed", "{s}");
     let faults = s["faults"].as_array().unwrap();
-    let robots: Vec<u64> = faults.iter().map(|f| f["robot"].as_u64().unwrap()).collect();
+    let robots: Vec<u64> = faults
+        .iter()
+        .map(|f| f["robot"].as_u64().unwrap())
+        .collect();
     assert_eq!(robots, vec![BUTTON as u64], "{s}");
     assert_left_nothing(&out);
 }

@@ -48,7 +48,12 @@ fn view_of(st: &serde_json::Value) -> View {
 fn run(config: &str, extra: &[&str], tag: &str) -> PathBuf {
     let out = tmp_dir(tag);
     let sc = configs().join(config);
-    let mut args = vec!["--executor", "inprocess", "--scenario", sc.to_str().unwrap()];
+    let mut args = vec![
+        "--executor",
+        "inprocess",
+        "--scenario",
+        sc.to_str().unwrap(),
+    ];
     args.extend(extra);
     let o = up(&args, &out);
     assert!(o.status.success(), "{}", stderr(&o));
@@ -120,7 +125,10 @@ fn the_page_fits_a_1280x720_window_and_zooms_at_the_wheel_pans_by_dragging_and_f
             at.0 >= 0.0 && at.1 >= 0.0 && at.0 < fit.canvas().0 && at.1 < H as f64,
             "the arena's {name} side is off the canvas at {at:?}"
         );
-        assert!(shows(&whole, at, [0, 0, 0]), "no border at the {name} side {at:?}");
+        assert!(
+            shows(&whole, at, [0, 0, 0]),
+            "no border at the {name} side {at:?}"
+        );
     }
     assert!(check_robots_in(&whole, &meta, f, fit) >= 4);
 
@@ -132,7 +140,11 @@ fn the_page_fits_a_1280x720_window_and_zooms_at_the_wheel_pans_by_dragging_and_f
     let st = b.state();
     let zoomed = view_of(&st);
     let want = (300.0 * 0.002f64).exp();
-    assert!((zoomed.zoom - want).abs() < 1e-9, "zoom {} want {want}", zoomed.zoom);
+    assert!(
+        (zoomed.zoom - want).abs() < 1e-9,
+        "zoom {} want {want}",
+        zoomed.zoom
+    );
     let q = zoomed.project(&meta, pose(f, i));
     let want_q = (p.0 + (r.0 - p.0) * want, p.1 + (r.1 - p.1) * want);
     assert!(
@@ -155,7 +167,11 @@ fn the_page_fits_a_1280x720_window_and_zooms_at_the_wheel_pans_by_dragging_and_f
     b.drag(p, (p.0 + 120.0, p.1 + 80.0), 6);
     let st = b.state();
     let panned = view_of(&st);
-    assert_eq!(st["selected"], serde_json::Value::Null, "a drag selected a robot");
+    assert_eq!(
+        st["selected"],
+        serde_json::Value::Null,
+        "a drag selected a robot"
+    );
     let s = zoomed.scale(&meta);
     let (c0, c1) = (zoomed.centre.unwrap(), panned.centre.unwrap());
     assert!(
@@ -164,7 +180,11 @@ fn the_page_fits_a_1280x720_window_and_zooms_at_the_wheel_pans_by_dragging_and_f
     );
     let pshot = shot(&mut b, "dragged");
     assert!(check_robots_in(&pshot, &meta, f, panned) >= 2);
-    assert!(shows(&pshot, (q.0 + 120.0, q.1 + 80.0), robot_colour(&meta, f, i)));
+    assert!(shows(
+        &pshot,
+        (q.0 + 120.0, q.1 + 80.0),
+        robot_colour(&meta, f, i)
+    ));
     // A click (no drag) on the robot selects it.
     b.click(p.0 + 120.0, p.1 + 80.0);
     assert_eq!(b.state()["selected"], i);
@@ -190,9 +210,15 @@ fn the_page_fits_a_1280x720_window_and_zooms_at_the_wheel_pans_by_dragging_and_f
 fn a_formation_runs_counter_is_the_missions_robots_in_place() {
     let _g = serial();
     chromium();
-    let out = run("formation.toml", &["--max-ticks", "300"], "view-form-counter");
+    let out = run(
+        "formation.toml",
+        &["--max-ticks", "300"],
+        "view-form-counter",
+    );
     let s = summary(&out);
-    let in_place = s["mission"]["formation"]["robots_in_place"].as_u64().unwrap();
+    let in_place = s["mission"]["formation"]["robots_in_place"]
+        .as_u64()
+        .unwrap();
     assert!(in_place > 0, "{s}");
     let v = ViewServer::start(&out, 0);
     let meta = json(&v.url, "/api/meta");
@@ -253,7 +279,10 @@ fn check_legend(st: &serde_json::Value, shot: &Shot) -> Vec<String> {
             continue;
         }
         if let Some(other) = colours.insert(c, r["label"].clone()) {
-            panic!("legend rows {other} and {} share colour {c:?}: {st}", r["label"]);
+            panic!(
+                "legend rows {other} and {} share colour {c:?}: {st}",
+                r["label"]
+            );
         }
     }
     rows.iter()
@@ -266,8 +295,10 @@ fn states_in(out: &Path, meta: &serde_json::Value) -> Vec<String> {
     let (_, ticks) =
         swarm::recording::read_recording(std::fs::File::open(out.join("recording.bin")).unwrap())
             .unwrap();
-    let seen: std::collections::BTreeSet<u8> =
-        ticks.iter().flat_map(|t| t.states.iter().copied()).collect();
+    let seen: std::collections::BTreeSet<u8> = ticks
+        .iter()
+        .flat_map(|t| t.states.iter().copied())
+        .collect();
     meta["states"]
         .as_array()
         .unwrap()
@@ -282,7 +313,11 @@ fn legends_list_only_what_the_run_has_in_distinct_colours() {
     let _g = serial();
     chromium();
     // Hunt, 3 evaders: no T4..T8; the robots' tasks are those the recording has.
-    let out = run("hunt-auction.toml", &["--max-ticks", "40"], "view-legend-hunt");
+    let out = run(
+        "hunt-auction.toml",
+        &["--max-ticks", "40"],
+        "view-legend-hunt",
+    );
     let v = ViewServer::start(&out, 0);
     let meta = json(&v.url, "/api/meta");
     let mut b = Browser::open(&format!("{}?tick=39&trail=0", v.url), W, H, "legend-hunt");
@@ -317,13 +352,22 @@ fn legends_list_only_what_the_run_has_in_distinct_colours() {
 
     // Formation: obstacles and final discs in distinct colours, both listed; no start-region
     // tint (the robots start anywhere in the arena).
-    let out = run("formation.toml", &["--max-ticks", "300"], "view-legend-form");
+    let out = run(
+        "formation.toml",
+        &["--max-ticks", "300"],
+        "view-legend-form",
+    );
     let v = ViewServer::start(&out, 0);
     let meta = json(&v.url, "/api/meta");
     assert_eq!(meta["start_region_shown"], false);
     let frames = json(&v.url, "/api/frames");
     let last = frames.as_array().unwrap().len() - 1;
-    let mut b = Browser::open(&format!("{}?tick={last}&trail=0", v.url), W, H, "legend-form");
+    let mut b = Browser::open(
+        &format!("{}?tick={last}&trail=0", v.url),
+        W,
+        H,
+        "legend-form",
+    );
     let st = b.state();
     let form = shot(&mut b, "legend-formation");
     let labels = check_legend(&st, &form);
@@ -344,7 +388,10 @@ fn legends_list_only_what_the_run_has_in_distinct_colours() {
     let centre = fit.project(&meta, [d[0].as_f64().unwrap(), d[1].as_f64().unwrap()]);
     let oc = row("obstacle");
     let oc = [0, 1, 2].map(|k| oc[k].as_u64().unwrap() as u8);
-    assert!(close(form.rgb(centre.0, centre.1), oc), "obstacle at {centre:?}");
+    assert!(
+        close(form.rgb(centre.0, centre.1), oc),
+        "obstacle at {centre:?}"
+    );
     let corner = fit.project(&meta, [0.3, 0.3]);
     assert_eq!(form.rgb(corner.0 + 3.0, corner.1 - 3.0), [255, 255, 255]);
     drop(b);
@@ -381,10 +428,7 @@ fn legends_list_only_what_the_run_has_in_distinct_colours() {
     let mut b = Browser::open(&url, W, H, "legend-live");
     let running = b.state();
     let live = check_legend(&running, &shot(&mut b, "legend-live-running"));
-    assert!(
-        live.iter().any(|l| l == "target not found yet"),
-        "{live:?}"
-    );
+    assert!(live.iter().any(|l| l == "target not found yet"), "{live:?}");
     assert!(!live.iter().any(|l| l.contains("missed")), "{live:?}");
     b.wait_for("document.getElementById('status').textContent.startsWith('live run: ended')");
     let o = child.wait_with_output().unwrap();

@@ -194,11 +194,17 @@ mod tests {
         let mut f = Framer::new(0, vec![ring(red), ring(black)]);
         let v = |s: String| serde_json::from_str::<serde_json::Value>(&s).unwrap();
         let a = v(f.json(&tick(0, vec![0, 2], vec![], vec![ring(black)])));
-        assert_eq!(a["seen"], serde_json::json!({"states": [0, 2], "legend": [1], "dead": false}));
+        assert_eq!(
+            a["seen"],
+            serde_json::json!({"states": [0, 2], "legend": [1], "dead": false})
+        );
         let b = v(f.json(&tick(1, vec![2, 0], vec![], vec![ring(black)])));
         assert!(b.get("seen").is_none(), "{b}");
         let c = v(f.json(&tick(2, vec![1, 0], vec![], vec![ring(red)])));
-        assert_eq!(c["seen"], serde_json::json!({"states": [0, 1, 2], "legend": [0, 1], "dead": false}));
+        assert_eq!(
+            c["seen"],
+            serde_json::json!({"states": [0, 1, 2], "legend": [0, 1], "dead": false})
+        );
         // A disc of the legend's ring's colour is not the ring.
         let disc = Mark::Disc {
             at: [0.0; 2],

@@ -120,8 +120,12 @@ mod tests {
     #[test]
     fn only_this_servers_host_and_origin_pass() {
         let g = Guard::with_token(8080, "t0k".into());
-        assert!(g.check(&req(&["GET / HTTP/1.1", "Host: 127.0.0.1:8080"])).is_ok());
-        assert!(g.check(&req(&["GET / HTTP/1.1", "Host: LocalHost:8080"])).is_ok());
+        assert!(g
+            .check(&req(&["GET / HTTP/1.1", "Host: 127.0.0.1:8080"]))
+            .is_ok());
+        assert!(g
+            .check(&req(&["GET / HTTP/1.1", "Host: LocalHost:8080"]))
+            .is_ok());
         for bad in [
             "Host: 127.0.0.1:8081",
             "Host: evil.example:8080",
@@ -140,14 +144,20 @@ mod tests {
         assert!(g.check(&two).is_err());
         let h = "Host: 127.0.0.1:8080";
         assert!(g
-            .check(&req(&["GET / HTTP/1.1", h, "Origin: http://localhost:8080"]))
+            .check(&req(&[
+                "GET / HTTP/1.1",
+                h,
+                "Origin: http://localhost:8080"
+            ]))
             .is_ok());
         for o in [
             "Origin: http://127.0.0.1:9999",
             "Origin: null",
             "Origin: https://127.0.0.1:8080",
         ] {
-            let e = g.check(&req(&["POST /api/kill HTTP/1.1", h, o])).unwrap_err();
+            let e = g
+                .check(&req(&["POST /api/kill HTTP/1.1", h, o]))
+                .unwrap_err();
             assert!(matches!(e, Refused::Origin(_)), "{o}: {e}");
         }
     }
@@ -157,8 +167,12 @@ mod tests {
         let g = Guard::with_token(80, "t".into());
         let h = "Host: localhost:80";
         let nav = ["Sec-Fetch-Site: cross-site", "Sec-Fetch-Mode: navigate"];
-        assert!(g.check(&req(&["GET / HTTP/1.1", h, nav[0], nav[1]])).is_ok());
-        assert!(g.check(&req(&["POST /api/kill HTTP/1.1", h, nav[0], nav[1]])).is_err());
+        assert!(g
+            .check(&req(&["GET / HTTP/1.1", h, nav[0], nav[1]]))
+            .is_ok());
+        assert!(g
+            .check(&req(&["POST /api/kill HTTP/1.1", h, nav[0], nav[1]]))
+            .is_err());
         for site in ["same-site", "cross-site"] {
             let s = format!("Sec-Fetch-Site: {site}");
             let r = req(&["GET /run.js HTTP/1.1", h, &s, "Sec-Fetch-Mode: no-cors"]);
@@ -175,7 +189,9 @@ mod tests {
         let t = format!("X-Swarm-Token: {}", g.token());
         assert_eq!(g.token().len(), 32);
         assert_ne!(g.token(), Guard::new(80).token());
-        assert!(g.check_kill(&req(&["POST /api/kill HTTP/1.1", h, o, &t])).is_ok());
+        assert!(g
+            .check_kill(&req(&["POST /api/kill HTTP/1.1", h, o, &t]))
+            .is_ok());
         assert_eq!(
             g.check_kill(&req(&["POST /api/kill HTTP/1.1", h, &t])),
             Err(Refused::NoOrigin)

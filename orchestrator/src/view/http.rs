@@ -78,7 +78,9 @@ impl Request {
     }
     /// Whether header `name` is there at all (once or more).
     pub fn has_header(&self, name: &str) -> bool {
-        self.headers.iter().any(|(k, _)| k.eq_ignore_ascii_case(name))
+        self.headers
+            .iter()
+            .any(|(k, _)| k.eq_ignore_ascii_case(name))
     }
     /// The target's path (before `?`).
     pub fn path(&self) -> &str {
@@ -234,7 +236,9 @@ mod tests {
         let fine = format!("GET / HTTP/1.1\r\n{}\r\n", "X: y\r\n".repeat(MAX_HEADERS));
         assert!(parse_head(fine.as_bytes()).is_ok());
         assert_eq!(
-            parse_head(b"GET\x01 / HTTP/1.1\r\n\r\n").unwrap_err().status(),
+            parse_head(b"GET\x01 / HTTP/1.1\r\n\r\n")
+                .unwrap_err()
+                .status(),
             Some(400)
         );
     }

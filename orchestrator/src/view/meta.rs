@@ -1,8 +1,8 @@
 //! What the page needs to know of a run besides its ticks: the arena, the radio range, the
 //! mission's display states, legend and progress label; built from a recording's header.
 
-use serde::Serialize;
 use super::frame::Framer;
+use serde::Serialize;
 use swarm::layer::Mark;
 use swarm::recording::RecordingHeader;
 use swarm::scenario::Scenario;

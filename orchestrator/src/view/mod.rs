@@ -6,9 +6,9 @@
 //! recording is followed.
 
 pub mod feed;
+pub mod frame;
 pub mod guard;
 pub mod http;
-pub mod frame;
 pub mod meta;
 pub mod server;
 

@@ -103,7 +103,10 @@ impl Browser {
             session: String::new(),
             dir,
         };
-        let target = b.call("Target.createTarget", serde_json::json!({"url": "about:blank"}));
+        let target = b.call(
+            "Target.createTarget",
+            serde_json::json!({"url": "about:blank"}),
+        );
         let id = target["targetId"].as_str().unwrap().to_string();
         let s = b.call(
             "Target.attachToTarget",
@@ -224,7 +227,10 @@ impl Browser {
 
     /// A screenshot of the page, PNG bytes.
     pub fn screenshot_png(&mut self) -> Vec<u8> {
-        let r = self.call("Page.captureScreenshot", serde_json::json!({"format": "png"}));
+        let r = self.call(
+            "Page.captureScreenshot",
+            serde_json::json!({"format": "png"}),
+        );
         base64::engine::general_purpose::STANDARD
             .decode(r["data"].as_str().unwrap())
             .unwrap()

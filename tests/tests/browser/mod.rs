@@ -275,12 +275,7 @@ pub fn http(method: &str, base: &str, path: &str) -> (u16, String) {
 }
 
 /// [`http`] with more headers (`Host` is the server's own unless `extra` gives one).
-pub fn http_with(
-    method: &str,
-    base: &str,
-    path: &str,
-    extra: &[(&str, &str)],
-) -> (u16, String) {
+pub fn http_with(method: &str, base: &str, path: &str, extra: &[(&str, &str)]) -> (u16, String) {
     let addr = base.trim_start_matches("http://").trim_end_matches('/');
     let mut s = TcpStream::connect(addr).expect("connect to the viewer");
     let mut head = format!("{method} {path} HTTP/1.1\r\n");
@@ -523,4 +518,3 @@ pub fn near_colour(shot: &Shot, at: (f64, f64), c: [u8; 3]) -> bool {
         })
     })
 }
-
