@@ -133,9 +133,10 @@ fn only_the_viewers_own_page_may_kill_and_the_attacks_leave_the_robot_alive() {
             roam(),
             "--robots",
             "6",
-            // 20 s: every attack and the button's kill happen while it runs.
+            // 30 s: every attack and the button's kill happen while it runs (they took 12 s
+            // at load 12).
             "--max-ticks",
-            "600",
+            "900",
             "--tick-hz",
             "30",
             "--seed",
