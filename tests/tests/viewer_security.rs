@@ -75,8 +75,8 @@ fetch(V + "/api/kill?robot={TARGET}", {{method: "POST", mode: "no-cors"}})
                 continue;
             }
             let path = line.split_whitespace().nth(1).unwrap_or("/").to_string();
-            let body = if path.starts_with("/report?") {
-                let _ = tx.send(path["/report?".len()..].to_string());
+            let body = if let Some(report) = path.strip_prefix("/report?") {
+                let _ = tx.send(report.to_string());
                 "ok".to_string()
             } else {
                 page.clone()
