@@ -110,8 +110,13 @@ pub enum Event {
     /// Behaviour-declared event flags.
     Declared { robot: u32, flags: u32 },
     /// Real-time mode (`runtime.realtime_hz`): the robot's action for this tick missed its
-    /// deadline; it kept its last command. (Last variant: older recordings read unchanged.)
+    /// deadline; it kept its last command.
     DeadlineMissed { robot: u32 },
+    /// The mission's progress figure is now `done` of `total`: pushed when it changes by a
+    /// mission whose figure is not a count of `EntityDone` events (formation: robots in
+    /// place of live robots, which goes down as well as up), so a viewer of the recording
+    /// shows what the terminal showed. (Last variant: older recordings read unchanged.)
+    Progress { done: u32, total: u32 },
 }
 
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

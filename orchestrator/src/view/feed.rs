@@ -95,6 +95,8 @@ struct State {
     /// Ticks per chunk given by the user (`view --chunk`), instead of [`CHUNK_BYTES`]'.
     chunk: Option<usize>,
     error: Option<String>,
+    /// What the run has shown so far, as JSON (`frame::Seen`).
+    seen: Option<String>,
 }
 
 /// Frames so far of one run.
@@ -171,6 +173,19 @@ impl Feed {
             .wait_timeout_while(s, timeout, |s| s.count() <= seen && !s.ended);
     }
 
+    /// What the run has shown so far (`frame::Seen` as JSON; None before the first frame).
+    pub fn seen(&self) -> Option<String> {
+        self.lock().seen.clone()
+    }
+
+    /// Frames tick `t` and pushes it; what the run has shown so far follows.
+    fn push_tick(&self, framer: &mut Framer, t: &swarm::recording::TickRecord) {
+        let f = framer.json(t);
+        let seen = serde_json::to_string(framer.seen()).expect("seen JSON");
+        self.lock().seen = Some(seen);
+        self.push(f);
+    }
+
     fn set_meta(&self, m: String) {
         self.lock().meta = Some(m);
         self.inner.1.notify_all();
@@ -245,10 +260,10 @@ pub fn finished(path: &Path, run: &str) -> Result<Feed, FeedError> {
     let feed = Feed::default();
     feed.set_meta(serde_json::to_string(&meta).expect("meta JSON"));
     // One tick at a time: neither the records nor their JSON are held.
-    let mut framer = Framer::default();
+    let mut framer = meta.framer();
     let mut reader = TickReader::new(&header);
     while let Some(t) = reader.next(&mut inp).map_err(read)? {
-        feed.push(framer.json(&t));
+        feed.push_tick(&mut framer, &t);
     }
     feed.end();
     match feed.error() {
@@ -282,8 +297,7 @@ fn follow_loop(path: &Path, run: &str, feed: &Feed) -> Result<(), String> {
     };
     let mut buf: Vec<u8> = Vec::new();
     let mut pos = 0usize;
-    let mut header: Option<(RecordingHeader, TickReader)> = None;
-    let mut framer = Framer::default();
+    let mut header: Option<(RecordingHeader, TickReader, Framer)> = None;
     loop {
         // Read what the feed's end leaves: after end(), one more pass reads the last bytes.
         let last_pass = feed.lock().ended;
@@ -304,13 +318,13 @@ fn follow_loop(path: &Path, run: &str, feed: &Feed) -> Result<(), String> {
                         let meta = Meta::of(&h, run, true).map_err(|e| e.to_string())?;
                         feed.set_meta(serde_json::to_string(&meta).expect("meta JSON"));
                         let r = TickReader::new(&h);
-                        header = Some((h, r));
+                        header = Some((h, r, meta.framer()));
                     }
                     // The header is not all written yet.
                     Err(_) => break,
                 },
-                Some((_, reader)) => match reader.next(&mut cur) {
-                    Ok(Some(t)) => feed.push(framer.json(&t)),
+                Some((_, reader, framer)) => match reader.next(&mut cur) {
+                    Ok(Some(t)) => feed.push_tick(framer, &t),
                     // A tick not all written yet.
                     Ok(None) => break,
                     Err(e) => return Err(e.to_string()),

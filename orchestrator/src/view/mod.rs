@@ -7,6 +7,8 @@
 
 pub mod feed;
 pub mod frame;
+pub mod guard;
+pub mod http;
 pub mod meta;
 pub mod server;
 

@@ -109,6 +109,7 @@ impl FormationMission {
         plans: Vec::new(),
         error_series: (n <= MAX_ERROR_SERIES_ROBOTS).then(|| vec![Vec::new(); n]),
         tick: 0,
+        recorded_progress: None,
     })
     }
 }
@@ -207,6 +208,8 @@ pub struct FormationMission {
     plans: Vec<PlanReport>,
     error_series: Option<Vec<Vec<f64>>>,
     tick: u64,
+    /// The progress last pushed as an `Event::Progress` (None: none yet).
+    recorded_progress: Option<(u32, u32)>,
 }
 
 impl FormationMission {
@@ -305,7 +308,8 @@ const STATES: &[DisplayState] = &[
     DisplayState {
         state: STATE_IN_PLACE as u8,
         name: "in place",
-        colour: [0, 150, 60],
+        // Teal, not the slots' green: a robot and a slot are two things.
+        colour: [20, 170, 170],
     },
     DisplayState {
         state: STATE_COORDINATOR as u8,
@@ -371,7 +375,7 @@ impl Mission for FormationMission {
         }
         *slot = Some(new);
     }
-    fn update(&mut self, tick: u64, poses: &[[f64; 3]], alive: &[bool], _events: &mut Vec<Event>) {
+    fn update(&mut self, tick: u64, poses: &[[f64; 3]], alive: &[bool], events: &mut Vec<Event>) {
         self.tick = tick + 1;
         self.poses = poses.iter().map(|p| [p[0], p[1]]).collect();
         self.alive = alive.to_vec();
@@ -398,6 +402,14 @@ impl Mission for FormationMission {
         }
         let (all, in_place) = self.judge();
         self.in_place = in_place;
+        // The progress figure into the recording when it changes (the viewer's counter).
+        if self.recorded_progress != Some((in_place, self.live)) {
+            self.recorded_progress = Some((in_place, self.live));
+            events.push(Event::Progress {
+                done: in_place,
+                total: self.live,
+            });
+        }
         if all && self.formed_at.is_none() {
             self.formed_at = Some(tick);
         }
@@ -485,6 +497,29 @@ mod tests {
         m.observe(1, [3.0, 0.0, 1.0, 2.0]);
         m.update(1, &poses, &[true, true, false], &mut vec![]);
         assert!(m.complete());
+    }
+
+    #[test]
+    fn the_progress_figure_is_recorded_as_an_event_each_time_it_changes() {
+        let mut m = mission(2);
+        let poses = [[0.0, 0.0, 0.0], [3.0, 0.0, 0.0]];
+        let mut ev = Vec::new();
+        m.update(0, &poses, &[true, true], &mut ev);
+        assert_eq!(ev, vec![Event::Progress { done: 0, total: 2 }]);
+        m.observe(0, [0.0, 0.0, 0.0, 1.0]);
+        for (k, want) in [(1, Some((1, 2))), (2, None)] {
+            let mut ev = Vec::new();
+            m.update(k, &poses, &[true, true], &mut ev);
+            let want: Vec<Event> = want
+                .map(|(done, total)| Event::Progress { done, total })
+                .into_iter()
+                .collect();
+            assert_eq!(ev, want, "tick {k}");
+        }
+        // Robot 0 dies on its slot: 0 of 1 live robot in place.
+        let mut ev = Vec::new();
+        m.update(3, &poses, &[false, true], &mut ev);
+        assert_eq!(ev, vec![Event::Progress { done: 0, total: 1 }]);
     }
 
     #[test]

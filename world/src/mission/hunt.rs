@@ -348,12 +348,7 @@ impl HuntMission {
                 }
             }
             marks.push(if e.captured.is_some() {
-                Mark::Disc {
-                    at: [e.pos.x, e.pos.y],
-                    px: 5,
-                    fill: BLACK,
-                    outline: None,
-                }
+                captured_mark([e.pos.x, e.pos.y])
             } else {
                 Mark::Ring {
                     at: [e.pos.x, e.pos.y],
@@ -496,7 +491,8 @@ const STATES: &[DisplayState] = &[
     DisplayState {
         state: STATE_AUCTIONEER as u8,
         name: "auctioneer",
-        colour: [0, 0, 0],
+        // Navy, not black: black marks a free evader.
+        colour: [0, 0, 110],
     },
 ];
 
@@ -508,6 +504,17 @@ fn colour_of(state: u32) -> [u8; 3] {
 }
 
 const BLACK: [u8; 3] = [0, 0, 0];
+/// A captured evader's fill: not black, which marks a free one (its ring) and the auctioneer.
+const CAPTURED: [u8; 3] = [255, 200, 0];
+
+fn captured_mark(at: [f64; 2]) -> Mark {
+    Mark::Disc {
+        at,
+        px: 5,
+        fill: CAPTURED,
+        outline: Some(BLACK),
+    }
+}
 
 impl Mission for HuntMission {
     fn name(&self) -> &'static str {
@@ -669,12 +676,7 @@ impl Mission for HuntMission {
     fn legend(&self) -> Vec<LegendEntry> {
         vec![
             LegendEntry {
-                mark: Mark::Disc {
-                    at: [0.0; 2],
-                    px: 5,
-                    fill: BLACK,
-                    outline: None,
-                },
+                mark: captured_mark([0.0; 2]),
                 label: "evader captured",
             },
             LegendEntry {
