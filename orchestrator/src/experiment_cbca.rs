@@ -16,6 +16,7 @@
 //!    (one sweep point, every level), and the hunt world under loss, with 20 % of the robots
 //!    killed, and the ablations (loyalty off, grouping off), `variant_seeds` seeds a variant.
 
+use crate::experiment::runner::{parse_file, Context, Report, Row, SeedSpec, DEFAULT_FIRST_SEED};
 use agent::behaviours::cbca::Section;
 use agent::cbca::compare::{replanned_utility_curve, run_cbca, run_method, Method, MethodRun};
 use agent::cbca::grouping::{temporary_groups, PriorInfo};
@@ -23,7 +24,6 @@ use agent::cbca::instance::{random_instance, InstanceParams};
 use agent::cbca::model::{Robot, Task};
 use agent::cbca::rounds::Radio;
 use agent::cbca::CbcaParams;
-use crate::experiment::runner::{parse_file, Context, Report, Row, SeedSpec, DEFAULT_FIRST_SEED};
 use serde::Deserialize;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -324,73 +324,37 @@ Conflict merge {} (CBCA, `merge_on_conflict`): shared {}; the groups meet at t =
     Ok(())
 }
 
-/// Utility curves as an SVG: one polyline per robot against time.
+/// Utility curves as a chart (`charts::write`): one line per robot against time.
 fn write_curves_svg(
     title: &str,
     times: &[f64],
     series: &[(String, Vec<f64>)],
     path: &Path,
 ) -> Result<(), String> {
-    let (w, h, pad, right) = (720.0, 420.0, 55.0, 60.0);
-    let tmax = times.last().copied().unwrap_or(1.0).max(1e-9);
-    let ymax = series
-        .iter()
-        .flat_map(|s| s.1.iter().copied())
-        .fold(1.0, f64::max);
-    let ymin = series
-        .iter()
-        .flat_map(|s| s.1.iter().copied())
-        .fold(0.0, f64::min);
-    let x = |t: f64| pad + (w - pad - right) * t / tmax;
-    let y = |u: f64| h - pad - (h - 2.0 * pad) * (u - ymin) / ((ymax - ymin) * 1.05);
-    let colours = [
-        "#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#9467bd", "#8c564b", "#e377c2", "#17becf",
-        "#7f7f7f", "#bcbd22",
-    ];
-    let mut svg = format!(
-        "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{w}\" height=\"{h}\"><rect width=\"100%\" height=\"100%\" fill=\"white\"/>\
-         <text x=\"{pad}\" y=\"22\" font-size=\"14\">{title}</text>\
-         <line x1=\"{pad}\" y1=\"{0}\" x2=\"{1}\" y2=\"{0}\" stroke=\"black\"/><line x1=\"{pad}\" y1=\"{pad}\" x2=\"{pad}\" y2=\"{2}\" stroke=\"black\"/>\
-         <text x=\"{3}\" y=\"{4}\" font-size=\"13\">time (CBCA time units)</text><text x=\"6\" y=\"{5}\" font-size=\"13\">utility</text>",
-        y(0.0).min(h - pad),
-        w - right,
-        h - pad,
-        w / 2.0 - 60.0,
-        h - 14.0,
-        pad - 12.0
-    );
-    for k in 0..=4 {
-        let u = ymin + (ymax - ymin) * k as f64 / 4.0;
-        let _ = write!(
-            svg,
-            "<text x=\"4\" y=\"{:.1}\" font-size=\"11\">{u:.0}</text>",
-            y(u) + 4.0
-        );
-        let t = tmax * k as f64 / 4.0;
-        let _ = write!(
-            svg,
-            "<text x=\"{:.1}\" y=\"{:.1}\" font-size=\"11\">{t:.1}</text>",
-            x(t) - 8.0,
-            h - pad + 16.0
-        );
-    }
-    for (k, (label, us)) in series.iter().enumerate() {
-        let c = colours[k % colours.len()];
-        let pts: Vec<String> = times
+    use crate::export::charts::{write, Chart, Point, Series};
+    let chart = Chart {
+        title: title.to_string(),
+        x_label: "time (CBCA time units)".into(),
+        y_label: "utility".into(),
+        series: series
             .iter()
-            .zip(us)
-            .map(|(t, u)| format!("{:.1},{:.1}", x(*t), y(*u)))
-            .collect();
-        let _ = write!(
-            svg,
-            "<polyline fill=\"none\" stroke=\"{c}\" stroke-width=\"2\" points=\"{}\"/><text x=\"{:.1}\" y=\"{:.1}\" fill=\"{c}\" font-size=\"11\">{label}</text>",
-            pts.join(" "),
-            w - right + 4.0 + 22.0 * (k % 2) as f64,
-            y(*us.last().unwrap_or(&0.0)) + 4.0
-        );
-    }
-    svg.push_str("</svg>\n");
-    std::fs::write(path, svg).map_err(|e| format!("{}: {e}", path.display()))
+            .map(|(label, us)| Series {
+                label: label.clone(),
+                points: times
+                    .iter()
+                    .zip(us)
+                    .map(|(&x, &u)| Point {
+                        x,
+                        mean: u,
+                        lo: u,
+                        hi: u,
+                    })
+                    .collect(),
+                reference: false,
+            })
+            .collect(),
+    };
+    write(&chart, path)
 }
 
 /// A hunt-world run as results.csv has it (the capture time empty when not every evader was
@@ -410,7 +374,10 @@ fn hunt_row(variant: &str, sc: &Scenario, s: &serde_json::Value) -> Row {
         .with("messages_offered", s["messages"]["offered"].as_u64())
         .with("messages_delivered", s["messages"]["delivered"].as_u64())
         .with("bytes_delivered", s["message_bytes"]["delivered"].as_u64())
-        .with("robots_killed", s["faults"].as_array().map_or(0, |f| f.len()))
+        .with(
+            "robots_killed",
+            s["faults"].as_array().map_or(0, |f| f.len()),
+        )
 }
 
 fn ids(v: &serde_json::Value) -> String {
@@ -606,7 +573,15 @@ fn sweeps(
         let results: Vec<PointResult> = points
             .iter()
             .map(|&(n_r, n_e)| {
-                sweep_point(n_r, n_e, seeds, &x.instance, params, &format!("fig {fig}"), rows)
+                sweep_point(
+                    n_r,
+                    n_e,
+                    seeds,
+                    &x.instance,
+                    params,
+                    &format!("fig {fig}"),
+                    rows,
+                )
             })
             .collect();
         let header: Vec<&str> = Method::ALL.iter().map(|m| m.label()).collect();
@@ -684,7 +659,7 @@ fn sweeps(
                 let file = format!("fig-{fig}{}.svg", if pick == 0 { "a" } else { "b" });
                 write(
                     &Chart {
-                        title: format!("Fig. {fig}{}", &what[..3]),
+                        title: format!("Fig. {fig}{}: {}", &what[..3], &what[4..]),
                         x_label: if by_robots { "n_r" } else { "n_e" }.into(),
                         y_label: if pick == 0 {
                             "system utility"
@@ -949,11 +924,7 @@ fn variants(
 pub fn run(ctx: &Context) -> Result<Report, String> {
     let x: CbcaExperiment = parse_file(&ctx.file)?;
     if x.kind != "cbca" {
-        return Err(format!(
-            "{}: kind = {:?}, not \"cbca\"",
-            ctx.name(),
-            x.kind
-        ));
+        return Err(format!("{}: kind = {:?}, not \"cbca\"", ctx.name(), x.kind));
     }
     let seeds = ctx.seeds(&x.seeds, x.first_seed)?;
     let variant_seeds = ctx.seeds(&x.variant_seeds, x.first_seed)?;
@@ -966,9 +937,7 @@ pub fn run(ctx: &Context) -> Result<Report, String> {
     let ex1 = load(&x.example1)?;
     let ex2 = load(&x.example2)?;
     let out = ctx.out_dir()?;
-    let mut md = format!(
-        "# CBCA, thesis 003 chapter 4 (`orchestrator experiment {name}`)\n\n"
-    );
+    let mut md = format!("# CBCA, thesis 003 chapter 4 (`orchestrator experiment {name}`)\n\n");
     let mut rows = Vec::new();
     example_rounds(1, &ex1, &x, out, &mut md)?;
     example_rounds(2, &ex2, &x, out, &mut md)?;

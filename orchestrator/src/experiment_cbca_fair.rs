@@ -76,16 +76,21 @@ fn point(
                 let e = r.evaluation.as_ref();
                 let s = r.consensus.as_ref();
                 rows.push(
-                    Row::new(figure, format!("{}, {info_name}", a.label()), n_r as u32, seed)
-                        .with("targets", n_e)
-                        .with("deadlocked", e.is_none())
-                        .with("system_utility", e.map(|e| e.system_utility))
-                        .with("mean_completion", e.map(|e| e.mean_completion))
-                        .with("hunted", e.map(|e| e.hunted as f64))
-                        .with("consensus_rounds", s.map(|s| s.rounds as f64))
-                        .with("converged", s.map(|s| f64::from(u8::from(s.converged))))
-                        .with("bytes", s.map(|s| s.bytes as f64))
-                        .with("delivered", s.map(|s| s.delivered as f64)),
+                    Row::new(
+                        figure,
+                        format!("{}, {info_name}", a.label()),
+                        n_r as u32,
+                        seed,
+                    )
+                    .with("targets", n_e)
+                    .with("deadlocked", e.is_none())
+                    .with("system_utility", e.map(|e| e.system_utility))
+                    .with("mean_completion", e.map(|e| e.mean_completion))
+                    .with("hunted", e.map(|e| e.hunted as f64))
+                    .with("consensus_rounds", s.map(|s| s.rounds as f64))
+                    .with("converged", s.map(|s| f64::from(u8::from(s.converged))))
+                    .with("bytes", s.map(|s| s.bytes as f64))
+                    .with("delivered", s.map(|s| s.delivered as f64)),
                 );
                 match &r.evaluation {
                     Some(e) => {
@@ -148,10 +153,8 @@ pub fn fair_sweeps(
             let results: Vec<Vec<Cell>> = points
                 .iter()
                 .map(|&(n_r, n_e)| {
-                    let figure = format!(
-                        "fair fig {fig}, (2.6) {}",
-                        if cover { "on" } else { "off" }
-                    );
+                    let figure =
+                        format!("fair fig {fig}, (2.6) {}", if cover { "on" } else { "off" });
                     point(n_r, n_e, seeds, ip, &p, &figure, rows)
                 })
                 .collect();

@@ -735,13 +735,22 @@ mod tests {
             run(BASELINE, 2, None),
         ];
         let md = table1_report(&runs, 10, &[1, 2]);
-        assert!(!md.contains("inf") && !md.contains("NaN") && !md.contains("-0.0"), "{md}");
+        assert!(
+            !md.contains("inf") && !md.contains("NaN") && !md.contains("-0.0"),
+            "{md}"
+        );
         assert!(
             md.contains("| scenario 2 | baseline [10] | 0/2 (0 %) | - | - | - |"),
             "{md}"
         );
-        assert!(md.contains("| scenario 2 | ours | 2/2 (100 %) | 42.0 | 10.50 | 30.00 |"), "{md}");
-        assert!(md.contains("| scenario 2 | 0 of 2 | n/a | n/a | n/a |"), "{md}");
+        assert!(
+            md.contains("| scenario 2 | ours | 2/2 (100 %) | 42.0 | 10.50 | 30.00 |"),
+            "{md}"
+        );
+        assert!(
+            md.contains("| scenario 2 | 0 of 2 | n/a | n/a | n/a |"),
+            "{md}"
+        );
         // The baseline formed seed 2 only: the reduction is over seed 2 alone (44 vs 50).
         let runs = vec![
             run(OURS, 1, Some(40)),
@@ -750,7 +759,13 @@ mod tests {
             run(BASELINE, 2, Some(50)),
         ];
         let md = table1_report(&runs, 10, &[1, 2]);
-        assert!(md.contains("| scenario 2 | baseline [10] | 1/2 (50 %) | 50.0 |"), "{md}");
-        assert!(md.contains("| scenario 2 | 1 of 2 | 12.0 % | 12.0 % | 0.0 % |"), "{md}");
+        assert!(
+            md.contains("| scenario 2 | baseline [10] | 1/2 (50 %) | 50.0 |"),
+            "{md}"
+        );
+        assert!(
+            md.contains("| scenario 2 | 1 of 2 | 12.0 % | 12.0 % | 0.0 % |"),
+            "{md}"
+        );
     }
 }

@@ -15,13 +15,13 @@
 //!    under each variant (radio loss, robots killed): C and Y of the auctions as made,
 //!    messages and bytes (the medium's counts), auction rounds, capture rate and time.
 
+use crate::experiment::runner::{
+    parse_file, run_scenario, Context, Report, Row, SeedSpec, DEFAULT_FIRST_SEED,
+};
 use agent::hunt::auction::run_auction;
 use agent::hunt::instance::{random_instance, InstanceParams};
 use agent::hunt::parallel_auction::run_parallel_auction;
 use agent::hunt::scenario::HuntKernels;
-use crate::experiment::runner::{
-    parse_file, run_scenario, Context, Report, Row, SeedSpec, DEFAULT_FIRST_SEED,
-};
 use serde::Deserialize;
 use serde_json::Value;
 use std::fmt::Write as _;
@@ -326,8 +326,18 @@ fn sweep_point(
         let a = run_auction(&tasks, &robots, p);
         let b = run_parallel_auction(&tasks, &robots, p);
         for (name, cost, utility, coalitions) in [
-            ("improved", a.auctioneer_cost, a.total_utility, a.coalitions.len()),
-            ("parallel", b.auctioneer_cost, b.total_utility, b.coalitions.len()),
+            (
+                "improved",
+                a.auctioneer_cost,
+                a.total_utility,
+                a.coalitions.len(),
+            ),
+            (
+                "parallel",
+                b.auctioneer_cost,
+                b.total_utility,
+                b.coalitions.len(),
+            ),
         ] {
             rows.push(
                 Row::new(figure, name, n_r as u32, seed)
@@ -490,7 +500,10 @@ fn live_row(variant: &str, sc: &Scenario, s: &Value) -> Row {
     .with("bytes_offered", s["message_bytes"]["offered"].as_u64())
     .with("bytes_delivered", s["message_bytes"]["delivered"].as_u64())
     .with("auction_rounds", m["auction_rounds"].as_u64())
-    .with("robots_killed", s["faults"].as_array().map_or(0, |f| f.len()))
+    .with(
+        "robots_killed",
+        s["faults"].as_array().map_or(0, |f| f.len()),
+    )
 }
 
 fn variants(
@@ -573,11 +586,7 @@ fn variants(
 pub fn run(ctx: &Context) -> Result<Report, String> {
     let mut x: HuntExperiment = parse_file(&ctx.file)?;
     if x.kind != "hunt" {
-        return Err(format!(
-            "{}: kind = {:?}, not \"hunt\"",
-            ctx.name(),
-            x.kind
-        ));
+        return Err(format!("{}: kind = {:?}, not \"hunt\"", ctx.name(), x.kind));
     }
     let seeds = ctx.seeds(&x.seeds, x.first_seed)?;
     let variant_seeds = ctx.seeds(&x.variant_seeds, x.first_seed)?;

@@ -154,7 +154,10 @@ impl<'de> Deserialize<'de> for SeedSpec {
             fn visit_str<E: serde::de::Error>(self, v: &str) -> Result<SeedSpec, E> {
                 SeedSpec::parse(v).map_err(E::custom)
             }
-            fn visit_seq<A: serde::de::SeqAccess<'de>>(self, mut a: A) -> Result<SeedSpec, A::Error> {
+            fn visit_seq<A: serde::de::SeqAccess<'de>>(
+                self,
+                mut a: A,
+            ) -> Result<SeedSpec, A::Error> {
                 let mut v = Vec::new();
                 while let Some(s) = a.next_element::<u64>()? {
                     v.push(s);
@@ -506,7 +509,10 @@ mod tests {
             Err(SeedError::TooFew { runs: 4, have: 3 })
         ));
         assert_eq!(SeedSpec::parse("9..3"), Err(SeedError::Reversed(9, 3)));
-        assert!(matches!(SeedSpec::parse("a..3"), Err(SeedError::NotASeed(_))));
+        assert!(matches!(
+            SeedSpec::parse("a..3"),
+            Err(SeedError::NotASeed(_))
+        ));
         assert_eq!(SeedSpec::parse("4,4"), Err(SeedError::Repeated(4)));
     }
 
@@ -518,7 +524,10 @@ mod tests {
         }
         let f = |t: &str| toml::from_str::<F>(t).map(|f| f.seeds);
         assert_eq!(f("seeds = 10").unwrap(), SeedSpec::Count(10));
-        assert_eq!(f("seeds = \"9001..9010\"").unwrap(), SeedSpec::Range(9001, 9010));
+        assert_eq!(
+            f("seeds = \"9001..9010\"").unwrap(),
+            SeedSpec::Range(9001, 9010)
+        );
         assert_eq!(f("seeds = [4, 2]").unwrap(), SeedSpec::List(vec![4, 2]));
         let e = f("seeds = 1.5").unwrap_err().to_string();
         assert!(e.contains("a range \"9001..9010\""), "{e}");

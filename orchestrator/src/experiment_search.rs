@@ -106,7 +106,11 @@ fn min_mean_max(v: &[f64]) -> Option<[f64; 3]> {
 fn load(path: &Path) -> Result<Experiment, String> {
     let mut x: Experiment = parse_file(path)?;
     if x.kind.as_deref().is_some_and(|k| k != "search") {
-        return Err(format!("{}: kind = {:?}, not \"search\"", path.display(), x.kind));
+        return Err(format!(
+            "{}: kind = {:?}, not \"search\"",
+            path.display(),
+            x.kind
+        ));
     }
     if x.modes.is_empty() || x.robots.is_empty() {
         return Err(format!(
@@ -147,10 +151,10 @@ pub fn run(ctx: &Context) -> Result<Report, String> {
     for mode in &x.modes {
         let mut ok = true;
         for &n in &x.robots {
-            for (s, seed, (v, vbase)) in
-                seed_list.iter().enumerate().flat_map(|(s, &seed)| {
-                    x.variants.iter().zip(&bases).map(move |v| (s, seed, v))
-                })
+            for (s, seed, (v, vbase)) in seed_list
+                .iter()
+                .enumerate()
+                .flat_map(|(s, &seed)| x.variants.iter().zip(&bases).map(move |v| (s, seed, v)))
             {
                 let mut sc = vbase.clone();
                 sc.search.mode = mode.clone();

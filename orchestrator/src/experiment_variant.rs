@@ -83,7 +83,6 @@ impl Variant {
     }
 }
 
-
 #[cfg(test)]
 mod tests {
     use super::*;
