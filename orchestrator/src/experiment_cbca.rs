@@ -5,7 +5,7 @@
 //!    MATLAB runs): the temporary groups, the coalitions beside the thesis's, the idle robots,
 //!    consensus rounds, messages and bytes, every method scored alike, and each robot's utility
 //!    against time (Figs. 4.3, 4.5) as `utility-example1.svg` / `utility-example2.svg`.
-//! 2. **Examples 1 and 2 in the hunt world** (the `cbca` behaviour, in-process: the same
+//! 2. **Examples 1 and 2 in the hunt world** (the `cbca` behaviour, with `--executor`: the same
 //!    recording as the processes): who captured what, when, and the coalition changes.
 //! 3. **Figs. 4.6-4.7 as tables** (and `fig-4.6a.svg` ... `fig-4.7b.svg`): average system
 //!    utility and average completion time, CBCA against the three baselines and the ablation
@@ -16,7 +16,9 @@
 //!    (one sweep point, every level), and the hunt world under loss, with 20 % of the robots
 //!    killed, and the ablations (loyalty off, grouping off), `variant_seeds` seeds a variant.
 
-use crate::experiment::runner::{parse_file, Context, Report, Row, SeedSpec, DEFAULT_FIRST_SEED};
+use crate::experiment::runner::{
+    parse_file, tag_of, Context, Report, Row, SeedSpec, DEFAULT_FIRST_SEED,
+};
 use agent::behaviours::cbca::Section;
 use agent::cbca::compare::{replanned_utility_curve, run_cbca, run_method, Method, MethodRun};
 use agent::cbca::grouping::{temporary_groups, PriorInfo};
@@ -406,7 +408,11 @@ fn example_hunt(
     let dt = sc.hunt.params.minutes_per_tick;
     let _ = writeln!(
         md,
-        "## Example {n} in the hunt world (the `cbca` behaviour, in-process, seed {})\n",
+        "## Example {n} in the hunt world (the `cbca` behaviour, {}, seed {})\n",
+        match ctx.executor {
+            crate::up::Executor::Inprocess => "in-process",
+            crate::up::Executor::Processes => "with real processes",
+        },
         sc.run.seed
     );
     let _ = writeln!(
@@ -854,6 +860,18 @@ fn variants(
     );
     let _ = writeln!(md, "A run that does not capture every evader by `run.max_ticks` ({}) is censored: it counts in 'runs capturing all' and its time is left out of the mean (the column says how many runs the mean has).\n", base.run.max_ticks);
     let _ = writeln!(md, "| variant | runs | captured (mean of {}) | runs capturing all | time to the last capture, min (mean ± sd, n) | first commitment, tick (mean) | messages offered | delivered | kB delivered | robots killed |\n|---|---|---|---|---|---|---|---|---|---|", base.hunt.evaders.len());
+    // Every run's scenario first (all validated before any runs), then `--jobs` at a time.
+    let mut jobs = Vec::new();
+    for v in &x.variants {
+        for &seed in seeds {
+            let mut sc = v.scenario(base, &ctx.dir)?;
+            sc.run.seed = seed;
+            v.apply(&mut sc);
+            crate::prepare::prepare_from(&mut sc, &ctx.name()).map_err(|e| e.to_string())?;
+            jobs.push((sc, tag_of(&format!("cbca-{}-{seed}", v.name))));
+        }
+    }
+    let mut summaries = ctx.run_all(&jobs).into_iter().zip(&jobs);
     for v in &x.variants {
         let mut captured = Vec::new();
         let mut all = 0;
@@ -863,17 +881,10 @@ fn variants(
         let mut delivered = Vec::new();
         let mut kb = Vec::new();
         let mut killed = Vec::new();
-        for &seed in seeds {
-            let mut sc = v.scenario(base, &ctx.dir)?;
-            sc.run.seed = seed;
-            v.apply(&mut sc);
-            crate::prepare::prepare_from(&mut sc, &ctx.name()).map_err(|e| e.to_string())?;
-            let tag: String = format!("cbca-{}-{seed}", v.name)
-                .chars()
-                .map(|c| if c.is_ascii_alphanumeric() { c } else { '-' })
-                .collect();
-            let s = ctx.run(&sc, &tag)?;
-            rows.push(hunt_row(&v.name, &sc, &s));
+        for _ in seeds {
+            let (s, (sc, _)) = summaries.next().expect("a summary a job");
+            let s = s?;
+            rows.push(hunt_row(&v.name, sc, &s));
             let m = &s["mission"]["hunt"];
             captured.push(m["captured"].as_f64().unwrap_or(0.0));
             if let Some(t) = m["all_captured_minutes"].as_f64() {

@@ -21,8 +21,6 @@ use agent::formation::{Template, Transform};
 use serde::{Deserialize, Serialize};
 use std::fmt::Write as _;
 use std::path::PathBuf;
-use std::sync::atomic::{AtomicUsize, Ordering};
-use std::sync::Mutex;
 use swarm::geometry::Vec2;
 use swarm::scenario::Scenario;
 use swarm::sections::formation::{PatternChoice, Reassignment};
@@ -98,25 +96,18 @@ struct Job {
     sc: Scenario,
 }
 
+/// Runs the jobs (`--jobs` at a time) and reads each one's figures.
 fn run_all(jobs: Vec<Job>, ctx: &Context) -> Result<Vec<FormationRun>, String> {
-    let next = AtomicUsize::new(0);
-    let out: Mutex<Vec<(usize, Result<FormationRun, String>)>> = Mutex::new(Vec::new());
-    std::thread::scope(|s| {
-        for _ in 0..ctx.jobs {
-            s.spawn(|| loop {
-                let i = next.fetch_add(1, Ordering::SeqCst);
-                let Some(job) = jobs.get(i) else { break };
-                let r = ctx.run(&job.sc, &format!("f{i}")).map(|s| figures(job, &s));
-                if !ctx.quiet {
-                    eprintln!("run {}/{}: {} {}", i + 1, jobs.len(), job.group, job.label);
-                }
-                out.lock().expect("lock").push((i, r));
-            });
-        }
-    });
-    let mut v = out.into_inner().expect("lock");
-    v.sort_by_key(|x| x.0);
-    v.into_iter().map(|x| x.1).collect()
+    let runs: Vec<(Scenario, String)> = jobs
+        .iter()
+        .enumerate()
+        .map(|(i, j)| (j.sc.clone(), format!("f{i}")))
+        .collect();
+    ctx.run_all(&runs)
+        .into_iter()
+        .zip(&jobs)
+        .map(|(s, job)| s.map(|s| figures(job, &s)))
+        .collect()
 }
 
 /// A run as results.csv has it: K, T empty when it did not form.

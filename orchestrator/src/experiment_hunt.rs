@@ -16,7 +16,7 @@
 //!    messages and bytes (the medium's counts), auction rounds, capture rate and time.
 
 use crate::experiment::runner::{
-    parse_file, run_scenario, Context, Report, Row, SeedSpec, DEFAULT_FIRST_SEED,
+    parse_file, run_scenario, tag_of, Context, Report, Row, SeedSpec, DEFAULT_FIRST_SEED,
 };
 use agent::hunt::auction::run_auction;
 use agent::hunt::instance::{random_instance, InstanceParams};
@@ -526,21 +526,29 @@ fn variants(
     );
     let _ = writeln!(md, "C and Y are those of the auctioneer's auctions as it made the awards (3.13, 3.14; all its auctions: the initial one and the new target's). Reward paid: the sum over the tasks of the last z_j the auctioneer reported (assistance raises it).\n");
     let _ = writeln!(md, "| auction | variant | runs | captured (mean of {}) | all captured | time to the last capture, min (mean over runs that captured all) | C | Y | reward paid | messages offered | delivered | kB offered | kB delivered | bytes a delivered message | auction rounds | robots killed |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|", base.hunt.evaders.len());
+    // Every run's scenario first (all validated before any runs), then `--jobs` at a time.
+    let mut jobs = Vec::new();
     for auction in &auctions {
         for v in &x.variants {
-            let mut row = LiveRow::default();
             for &seed in seeds {
                 let mut sc = base.clone();
                 sc.run.seed = seed;
                 sc.hunt.params.auction = *auction;
                 v.apply(&mut sc);
                 crate::prepare::prepare_from(&mut sc, &ctx.name()).map_err(|e| e.to_string())?;
-                let tag: String = format!("hunt-{auction:?}-{}-{seed}", v.name)
-                    .chars()
-                    .map(|c| if c.is_ascii_alphanumeric() { c } else { '-' })
-                    .collect();
-                let s = ctx.run(&sc, &tag)?;
-                rows.push(live_row(&v.name, &sc, &s));
+                let tag = tag_of(&format!("hunt-{auction:?}-{}-{seed}", v.name));
+                jobs.push((sc, tag));
+            }
+        }
+    }
+    let mut summaries = ctx.run_all(&jobs).into_iter().zip(&jobs);
+    for auction in &auctions {
+        for v in &x.variants {
+            let mut row = LiveRow::default();
+            for _ in seeds {
+                let (s, (sc, _)) = summaries.next().expect("a summary a job");
+                let s = s?;
+                rows.push(live_row(&v.name, sc, &s));
                 row.add(&s);
             }
             let ms = |v: &[f64]| {

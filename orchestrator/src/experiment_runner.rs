@@ -10,6 +10,8 @@ use clap::Args;
 use serde::{Deserialize, Deserializer};
 use serde_json::{Map, Value};
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::Mutex;
 use swarm::scenario::Scenario;
 
 /// Where an experiment writes when `--out` is not given, relative to the working directory
@@ -279,6 +281,38 @@ impl Context {
     pub fn run(&self, sc: &Scenario, tag: &str) -> Result<Value, String> {
         run_scenario(sc, self.executor, &format!("{}-{tag}", self.id))
     }
+}
+
+impl Context {
+    /// Runs every (scenario, tag) of `jobs`, `--jobs` at a time, and returns their summaries
+    /// in the jobs' order (see [`Context::run`]).
+    pub fn run_all(&self, jobs: &[(Scenario, String)]) -> Vec<Result<Value, String>> {
+        let next = AtomicUsize::new(0);
+        let done: Mutex<Vec<(usize, Result<Value, String>)>> = Mutex::new(Vec::new());
+        std::thread::scope(|s| {
+            for _ in 0..self.jobs.min(jobs.len()).max(1) {
+                s.spawn(|| loop {
+                    let i = next.fetch_add(1, Ordering::SeqCst);
+                    let Some((sc, tag)) = jobs.get(i) else { break };
+                    let r = self.run(sc, tag);
+                    if !self.quiet {
+                        eprintln!("run {}/{}: {tag}", i + 1, jobs.len());
+                    }
+                    done.lock().expect("lock").push((i, r));
+                });
+            }
+        });
+        let mut v = done.into_inner().expect("lock");
+        v.sort_by_key(|x| x.0);
+        v.into_iter().map(|x| x.1).collect()
+    }
+}
+
+/// A run's tag from free text (a variant's name): letters and digits, the rest '-'.
+pub fn tag_of(text: &str) -> String {
+    text.chars()
+        .map(|c| if c.is_ascii_alphanumeric() { c } else { '-' })
+        .collect()
 }
 
 /// Runs `sc` (see [`Context::run`]) under the run id `run_id`.
