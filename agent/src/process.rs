@@ -63,16 +63,15 @@ fn run_loop<B: Behaviour>(args: &AgentArgs, mut rt: AgentRuntime<B>) -> Result<i
     let robot = args.robot;
     let config = transport::run_config(&args.prefix)?;
     let node = transport::node(&config, &format!("agent-{robot}"))?;
-    // Sense frames (`runtime.sense`): this robot's record in the world's ring (copied into
-    // `frame`), or its own iceoryx2 service (read in place).
-    let mut sense_in = transport::SenseSource::open(&node, &args.prefix, sc, robot)?;
+    // Sense frames: this robot's record in the world's `world/sense` sample, copied into
+    // `frame`.
+    let mut sense_in = transport::SenseSource::open(&node, robot)?;
     let mut frame = swarm::frames::Sense::zeroed();
-    // Actions (`runtime.acts`): this robot's cell in the world's acts segment, or its own
-    // iceoryx2 service.
-    let mut act_out = transport::ActSink::open(&node, &args.prefix, sc, robot)?;
-    // The air (`radio.air`): the world's ring (a hold cell of this robot's own while a
-    // read or a zero-copy view lasts) or the iceoryx2 air service.
-    let mut air_in = transport::AirSource::open(&node, &args.prefix, sc, robot)?;
+    // Actions: this robot's own `robot/<i>/act` service.
+    let mut act_out = transport::ActSink::open(&node, sc, robot)?;
+    // The air: the `radio/air` service (a sample held while a read or a zero-copy view
+    // lasts).
+    let mut air_in = transport::AirSource::open(&node, sc)?;
     let barrier = TickBarrier::open(&args.prefix)?;
     let world_pid = barrier.world_pid();
     let bell = match sc.runtime.barrier {
@@ -114,11 +113,7 @@ fn run_loop<B: Behaviour>(args: &AgentArgs, mut rt: AgentRuntime<B>) -> Result<i
         // one). Draining in a loop could hold two samples at once when the world publishes
         // the next tick's in between (real-time mode), beyond the air's borrow limit.
         let got = sense_in.receive(&mut frame)?;
-        let latest: Option<&swarm::frames::Sense> = match &got {
-            Some(transport::SenseGot::Sample(s)) => Some(s.payload()),
-            Some(transport::SenseGot::Copied) => Some(&frame),
-            None => None,
-        };
+        let latest: Option<&swarm::frames::Sense> = got.map(|_| &*frame);
         if let Some(s) = latest.filter(|s| s.robot == robot && s.tick > k) {
             // The world is past tick k already: keep this Sense for its own tick.
             let mut copy = ahead_sense
@@ -147,9 +142,8 @@ fn run_loop<B: Behaviour>(args: &AgentArgs, mut rt: AgentRuntime<B>) -> Result<i
         // before the release, so it is there unless we attached after).
         inbox.clear();
         let mut malformed = 0;
-        // One receive, as for the Sense frame (iceoryx2: buffer 1, borrowed 1 +
-        // radio.zero_copy_held; the ring: the published slot, held in one of this robot's
-        // radio.zero_copy_held + 1 cells until decoded or until its views go).
+        // One receive, as for the Sense frame (buffer 1, borrowed 1 + radio.zero_copy_held:
+        // the sample is held until decoded or until its views go).
         let air = air_in.receive()?;
         match air {
             Some(a) if a.tick() == k => {
@@ -174,16 +168,15 @@ fn run_loop<B: Behaviour>(args: &AgentArgs, mut rt: AgentRuntime<B>) -> Result<i
                 _ => {}
             },
         }
-        // The messages are written in place into the cell's (or the loaned sample's)
-        // message area; the world reads only the `radio_bytes` that ActTx writes.
-        act_out.send(k, |area| {
+        // The messages are written in place into the loaned sample's message area; the
+        // world reads only the `radio_bytes` that ActTx writes.
+        act_out.send(|area| {
             let mut tx = ActTx::new(area);
             let mut action = rt.step_owned(sense, &inbox, malformed, &mut tx);
             action.radio_bytes = tx.used as u32;
             action
         })?;
         inbox.clear();
-        drop(got);
         drop(kept);
         barrier.ack_with(robot, k, bell);
         done = k + 1;

@@ -207,6 +207,14 @@ pub fn air_len(air: Option<&TickAir>, robots: usize) -> usize {
     }
 }
 
+/// Bytes of the largest air a tick of `robots` agents can make, each sending `max_messages`
+/// messages of `max_bytes`, every message reaching every agent (its sender too: an upper
+/// bound). The air service's slots are this size.
+pub fn air_max_len(robots: usize, max_messages: usize, max_bytes: usize) -> usize {
+    let messages = robots * max_messages;
+    layout(robots, messages * robots, messages, messages * max_bytes).end
+}
+
 /// Writes `air` (None: nothing due) into an air sample's payload `out` (at least
 /// [`air_len`] bytes) and returns its header. `due` is the tick it is due at. The air must
 /// hold its payloads (not `lent`: see [`write_air_from`]).

@@ -222,6 +222,20 @@ impl Default for RadioHeader {
     }
 }
 
+/// The user header of a Sense sample (`world/sense`, see `swarm::sense_pack`): the world's one
+/// publication of every live robot's Sense record of `tick`.
+#[derive(Debug, Clone, Copy, ZeroCopySend, Default, PartialEq)]
+#[type_name("swarm::SenseHeader")]
+#[repr(C)]
+pub struct SenseHeader {
+    /// The tick the frames are of.
+    pub tick: u64,
+    /// Robots in the sample's index (the run's agents, stations included).
+    pub robots: u32,
+    /// Bytes of the packed payload.
+    pub bytes: u32,
+}
+
 /// The user header of an air sample (`radio/air`, see `swarm::air`): the world's one
 /// publication of the messages due at `tick`.
 #[derive(Debug, Clone, Copy, ZeroCopySend, Default, PartialEq)]

@@ -7,7 +7,6 @@
 //! plumbing of the multi-process path.
 
 pub mod air;
-pub mod air_ring;
 pub mod barrier;
 pub mod behaviour;
 pub mod bell;
@@ -24,6 +23,7 @@ pub mod radio;
 pub mod recording;
 pub mod scenario;
 pub mod sections;
+pub mod sense_pack;
 pub mod streams;
 pub mod toml_u64;
 pub mod transport;

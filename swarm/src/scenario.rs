@@ -212,31 +212,6 @@ pub struct RadioParams {
     /// same deliveries.
     #[serde(default, skip_serializing_if = "RangeScan::is_grid")]
     pub range_scan: RangeScan,
-    /// How the world hands each tick's air to the agents (multi-process executor): its own
-    /// ring of shared-memory slots (`swarm::air_ring`, default) or an iceoryx2 service (kept
-    /// to measure both). Both carry the same bytes: recordings do not depend on it (and a
-    /// resolved scenario leaves the default out).
-    #[serde(default, skip_serializing_if = "AirTransport::is_ring")]
-    pub air: AirTransport,
-}
-
-/// `radio.air`: the transport of the air from the world to the agents.
-#[derive(Serialize, Deserialize, Clone, Copy, Debug, PartialEq, Eq, Default)]
-#[serde(rename_all = "kebab-case")]
-pub enum AirTransport {
-    /// The world's ring of shared-memory slots: one copy of the air in /dev/shm however many
-    /// agents read it (`swarm::air_ring`).
-    #[default]
-    Ring,
-    /// One iceoryx2 publish-subscribe service, every agent a subscriber: iceoryx2 reserves
-    /// subscribers x (buffer + borrowed) samples of the largest air.
-    Iceoryx2,
-}
-
-impl AirTransport {
-    fn is_ring(&self) -> bool {
-        *self == AirTransport::Ring
-    }
 }
 
 /// `[[radio.sender_ranges]]`: one agent's own radio range.
@@ -318,56 +293,6 @@ pub struct RuntimeParams {
     /// leaves it off records what it did before (and its resolved scenario does not list it).
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub record_deliveries: bool,
-    /// How the world hands each robot its Sense frame (multi-process executor): in the
-    /// world's ring beside the air (`swarm::air_ring::sense`, default: one shared-memory
-    /// publication a tick for every robot) or one iceoryx2 service per robot (kept to
-    /// measure both). The same frames either way: recordings do not depend on it (and a
-    /// resolved scenario leaves the default out).
-    #[serde(default, skip_serializing_if = "FrameTransport::is_ring")]
-    pub sense: FrameTransport,
-    /// How each agent hands the world its Action frame and the tick's messages
-    /// (multi-process executor): in its own cell of one world-made shared-memory segment
-    /// (`swarm::air_ring::acts`, default: no iceoryx2 port operation a tick) or one iceoryx2
-    /// service per robot (kept to measure both). The same actions either way: recordings do
-    /// not depend on it (and a resolved scenario leaves the default out).
-    #[serde(default, skip_serializing_if = "ActTransport::is_cells")]
-    pub acts: ActTransport,
-}
-
-/// `runtime.acts`: the transport of the agents' Action frames to the world.
-#[derive(Serialize, Deserialize, Clone, Copy, Debug, PartialEq, Eq, Default)]
-#[serde(rename_all = "kebab-case")]
-pub enum ActTransport {
-    /// Per-robot cells of one shared-memory segment (`swarm::air_ring::acts`): the agent
-    /// writes its cell, the world reads every cell after the acks.
-    #[default]
-    Cells,
-    /// One iceoryx2 publish-subscribe service per robot.
-    Iceoryx2,
-}
-
-impl ActTransport {
-    fn is_cells(&self) -> bool {
-        *self == ActTransport::Cells
-    }
-}
-
-/// `runtime.sense`: the transport of a per-tick frame between the world and the agents.
-#[derive(Serialize, Deserialize, Clone, Copy, Debug, PartialEq, Eq, Default)]
-#[serde(rename_all = "kebab-case")]
-pub enum FrameTransport {
-    /// A world-owned ring of shared-memory slots (`swarm::air_ring`'s protocol): the world
-    /// writes every robot's frame once a tick, each agent reads its own in place.
-    #[default]
-    Ring,
-    /// One iceoryx2 publish-subscribe service per robot.
-    Iceoryx2,
-}
-
-impl FrameTransport {
-    fn is_ring(&self) -> bool {
-        *self == FrameTransport::Ring
-    }
 }
 
 impl RuntimeParams {
@@ -983,12 +908,6 @@ mod tests {
         sc.validate(&file).unwrap();
         assert_eq!(sc.radio.ranges(4), vec![50.0, 50.0, 50.0, 900.0]);
         assert_eq!(sc.radio.range_scan, RangeScan::All);
-        assert_eq!(sc.radio.air, AirTransport::Ring, "the default air");
-        let ice = Scenario::parse("[radio]\nair = \"iceoryx2\"\n", "t.toml").unwrap();
-        assert_eq!(ice.radio.air, AirTransport::Iceoryx2);
-        assert!(ice.to_toml().contains("air = \"iceoryx2\""));
-        assert!(!Scenario::default().to_toml().contains("air ="));
-        assert!(Scenario::parse("[radio]\nair = \"links\"\n", "t.toml").is_err());
         // The resolved scenario keeps them (and omits them when they are the defaults).
         assert_eq!(Scenario::parse(&sc.to_toml(), "r.toml").unwrap(), sc);
         assert!(!Scenario::default().to_toml().contains("sender_ranges"));
@@ -1097,14 +1016,20 @@ mod tests {
         assert_eq!(sc, again);
     }
 
+    /// The hand-written transports are retired (one transport per flow, iceoryx2): their
+    /// keys are unknown, and the resolved scenario names no transport.
     #[test]
-    fn acts_default_to_cells_and_are_left_out_of_a_resolved_scenario() {
-        assert_eq!(Scenario::default().runtime.acts, ActTransport::Cells);
-        assert!(!Scenario::default().to_toml().contains("acts ="));
-        let ice = Scenario::parse("[runtime]\nacts = \"iceoryx2\"\n", "t.toml").unwrap();
-        assert_eq!(ice.runtime.acts, ActTransport::Iceoryx2);
-        assert!(ice.to_toml().contains("acts = \"iceoryx2\""));
-        assert_eq!(Scenario::parse(&ice.to_toml(), "r.toml").unwrap(), ice);
-        assert!(Scenario::parse("[runtime]\nacts = \"ring\"\n", "t.toml").is_err());
+    fn the_retired_transport_keys_are_refused() {
+        for text in [
+            "[runtime]\nacts = \"cells\"\n",
+            "[runtime]\nsense = \"ring\"\n",
+            "[radio]\nair = \"ring\"\n",
+        ] {
+            assert!(Scenario::parse(text, "t.toml").is_err(), "{text}");
+        }
+        let resolved = Scenario::default().to_toml();
+        for key in ["acts =", "sense =", "air ="] {
+            assert!(!resolved.contains(key), "{key}");
+        }
     }
 }

@@ -6,9 +6,8 @@
 //! runs never see each other and a run's leftovers are easy to find and remove.
 
 use crate::air::AirView;
-use crate::air_ring::AirRead;
 use crate::blob::AsBytes;
-use crate::frames::{Action, AirHeader, Control, Sense, WorldStatus};
+use crate::frames::{Action, AirHeader, Control, Sense, SenseHeader, WorldStatus};
 use crate::scenario::Scenario;
 use crate::wire::{decode, decode_in, Received};
 use iceoryx2::prelude::*;
@@ -25,10 +24,10 @@ mod service;
 pub use act_sink::{ActSink, ActSource};
 pub use air_source::{AirGot, AirSink, AirSource};
 pub use error::{Port, TransportError, TransportResult};
-pub use sense_source::{SenseGot, SenseSink, SenseSource};
+pub use sense_source::{SenseSink, SenseSource};
 pub use service::{
     event, pub_sub, service_name, EventCapacity, EventService, PubSubCapacity, PubSubService,
-    Reach, ServiceId, ShmPayload, AIR_NAME, CONTROL_NAME, STATUS_NAME,
+    Reach, ServiceId, ShmPayload, AIR_NAME, CONTROL_NAME, SENSES_NAME, STATUS_NAME,
 };
 
 /// A boxed error of any kind, and a result with it: what a process's run loop returns when
@@ -37,7 +36,11 @@ pub use service::{
 pub type Error = Box<dyn std::error::Error + Send + Sync>;
 pub type Result<T> = std::result::Result<T, Error>;
 
+/// One robot's Sense frame as one sample (`robot/<i>/sense`): the latency benchmark's
+/// one-hop frame.
 pub type SenseService = PubSubService<Sense, ()>;
+/// Every robot's Sense record of a tick, packed (`crate::sense_pack`), in one sample.
+pub type SensesService = PubSubService<[u8], SenseHeader>;
 /// A robot's Action frame as the user header, its messages of the tick behind it.
 pub type ActService = PubSubService<[u8], Action>;
 /// The world's one publication a tick of the messages due (`swarm::air`).
@@ -171,12 +174,39 @@ pub fn air_capacity(sc: &Scenario) -> PubSubCapacity {
     }
 }
 
-/// The first air sample's size, before the publisher's data segment grows (by powers of two)
-/// to the largest tick: every robot's header and index start, a message each, ~8 receivers
-/// each.
-pub fn air_initial_len(sc: &Scenario) -> usize {
-    let n = sc.run.robots as usize;
-    crate::air::air_len(None, n) + n * (std::mem::size_of::<crate::frames::AirEntry>() + 64 + 32)
+/// Bytes of the largest air a tick of this scenario can make: every agent sends
+/// `radio.max_messages_per_tick` messages of `radio.max_message_bytes`, each reaching every
+/// agent (`swarm::air::air_max_len`). The air's slots are this size
+/// (`AllocationStrategy::Static`): iceoryx2 neither zeroes nor touches a slot's pages, so
+/// only the bytes of real airs are ever backed by memory.
+pub fn air_max_len(sc: &Scenario) -> usize {
+    crate::air::air_max_len(
+        sc.run.robots as usize,
+        sc.radio.max_messages_per_tick as usize,
+        sc.radio.max_message_bytes as usize,
+    )
+}
+
+/// The Sense service: the world publishes every robot's record once a tick, every agent
+/// subscribes (a restarted agent's dead predecessor may still hold its port). Each subscriber
+/// keeps the latest sample only and holds one at a time (it copies its record out at once).
+pub fn senses_capacity(sc: &Scenario) -> PubSubCapacity {
+    let subscribers = sc.run.robots as usize + 2 * RESTART_SLACK;
+    PubSubCapacity {
+        publishers: 1,
+        subscribers,
+        nodes: subscribers + 2,
+        buffer: 1,
+        borrowed: Some(1),
+        history: Some(0),
+        safe_overflow: None,
+    }
+}
+
+/// Bytes of the largest Sense sample of this scenario: every robot's record with every list
+/// full (`crate::sense_pack::max_len`); the slots are this size, as the air's.
+pub fn senses_max_len(sc: &Scenario) -> usize {
+    crate::sense_pack::max_len(sc.run.robots)
 }
 
 /// The world's status: the world publishes; the orchestrator and tools subscribe.
@@ -206,7 +236,37 @@ pub fn control_capacity() -> PubSubCapacity {
     }
 }
 
-/// Robot i's Sense service: the world creates it (`create`), the agent opens it.
+/// The run's Sense service: the world creates it (`create`), agents open it.
+pub fn senses_service(
+    node: &Node<ipc::Service>,
+    sc: &Scenario,
+    create: bool,
+) -> TransportResult<SensesService> {
+    pub_sub(
+        node,
+        ServiceId::Senses,
+        Reach::create_if(create, || senses_capacity(sc)),
+    )
+}
+
+/// The world's Sense publisher: static slots of the largest Sense sample.
+pub fn senses_publisher(
+    svc: &SensesService,
+    sc: &Scenario,
+) -> TransportResult<iceoryx2::port::publisher::Publisher<ipc::Service, [u8], SenseHeader>> {
+    svc.publisher_builder()
+        .initial_max_slice_len(senses_max_len(sc))
+        .allocation_strategy(AllocationStrategy::Static)
+        .max_loaned_samples(1)
+        .create()
+        .map_err(|source| TransportError::Publisher {
+            service: ServiceId::of(svc),
+            source,
+        })
+}
+
+/// One robot's Sense service (the latency benchmark's one-hop frame): the parent creates it
+/// (`create`), the child opens it.
 pub fn sense_service(
     node: &Node<ipc::Service>,
     robot: u32,
@@ -293,16 +353,18 @@ pub fn act_subscriber(
         })
 }
 
-/// The world's air publisher: its data segment grows by powers of two to the largest tick
-/// (the air of 1,000 robots in one square is megabytes; of the same robots spread out,
-/// kilobytes).
+/// The world's air publisher: static slots of the scenario's largest air
+/// ([`air_max_len`]). Not `PowerOfTwo` or `BestFit`: with a growing strategy every
+/// publisher-subscriber connection keeps a flag per chunk for each of up to 255 segments and
+/// writes them all when it is made (~500 KiB a subscriber: 544 MiB of /dev/shm at 1,000
+/// robots, which was once blamed on the samples).
 pub fn air_publisher(
     svc: &AirService,
     sc: &Scenario,
 ) -> TransportResult<iceoryx2::port::publisher::Publisher<ipc::Service, [u8], AirHeader>> {
     svc.publisher_builder()
-        .initial_max_slice_len(air_initial_len(sc))
-        .allocation_strategy(AllocationStrategy::PowerOfTwo)
+        .initial_max_slice_len(air_max_len(sc))
+        .allocation_strategy(AllocationStrategy::Static)
         .max_loaned_samples(1)
         .create()
         .map_err(|source| TransportError::Publisher {
@@ -377,88 +439,11 @@ pub fn air_inbox<M: DeserializeOwned>(
     inbox: &mut Vec<Received<M>>,
 ) -> u32 {
     let h = *sample.user_header();
-    inbox_of(sample, &h, robot, zero_copy, live, held_limit, inbox)
-}
-
-/// An air read from the world's ring ([`crate::air_ring`]) while zero-copy views hold it,
-/// counted in `live`. Its hold (one of the robot's cells in the ring) ends when the last view
-/// goes, on whatever thread: no iceoryx2 state is involved.
-struct HeldRead {
-    read: AirRead,
-    live: Arc<AtomicUsize>,
-}
-
-impl AsBytes for HeldRead {
-    fn as_bytes(&self) -> &[u8] {
-        self.read.bytes()
-    }
-}
-
-impl Drop for HeldRead {
-    fn drop(&mut self) {
-        self.live.fetch_sub(1, Ordering::AcqRel);
-    }
-}
-
-/// [`air_inbox`] for an air read from the world's ring: the same lists and decoding; the
-/// read's hold on its slot ends here unless views keep it.
-pub fn ring_inbox<M: DeserializeOwned>(
-    air: AirRead,
-    robot: u32,
-    zero_copy: bool,
-    live: &Arc<AtomicUsize>,
-    held_limit: usize,
-    inbox: &mut Vec<Received<M>>,
-) -> u32 {
-    let h = air.header;
-    inbox_of(air, &h, robot, zero_copy, live, held_limit, inbox)
-}
-
-/// An air as either transport hands it to an agent: its bytes, and how views keep it alive.
-trait HeldAir: Sized {
-    fn air_bytes(&self) -> &[u8];
-    /// The air as the owner of zero-copy views, counted in `live` while any view lives.
-    fn hold_for_views(self, live: &Arc<AtomicUsize>) -> Arc<dyn AsBytes>;
-}
-
-impl HeldAir for AirSample {
-    fn air_bytes(&self) -> &[u8] {
-        self.payload()
-    }
-    fn hold_for_views(self, live: &Arc<AtomicUsize>) -> Arc<dyn AsBytes> {
-        Arc::new(HeldSample::new(self, live))
-    }
-}
-
-impl HeldAir for AirRead {
-    fn air_bytes(&self) -> &[u8] {
-        self.bytes()
-    }
-    fn hold_for_views(self, live: &Arc<AtomicUsize>) -> Arc<dyn AsBytes> {
-        live.fetch_add(1, Ordering::AcqRel);
-        Arc::new(HeldRead {
-            read: self,
-            live: live.clone(),
-        })
-    }
-}
-
-/// Robot `robot`'s inbox from `air` (header `h`): decoded in place as views when `zero_copy`
-/// and fewer than `held_limit` airs are held by views (`live`), else as copies.
-fn inbox_of<A: HeldAir, M: DeserializeOwned>(
-    air: A,
-    h: &AirHeader,
-    robot: u32,
-    zero_copy: bool,
-    live: &Arc<AtomicUsize>,
-    held_limit: usize,
-    inbox: &mut Vec<Received<M>>,
-) -> u32 {
     if zero_copy && live.load(Ordering::Acquire) < held_limit {
-        let owner = air.hold_for_views(live);
-        decode_list(h, robot, Some(&owner), owner.as_bytes(), inbox)
+        let owner: Arc<dyn AsBytes> = Arc::new(HeldSample::new(sample, live));
+        decode_list(&h, robot, Some(&owner), owner.as_bytes(), inbox)
     } else {
-        decode_list(h, robot, None, air.air_bytes(), inbox)
+        decode_list(&h, robot, None, sample.payload(), inbox)
     }
 }
 

@@ -24,13 +24,13 @@ pub struct WorldArgs {
 }
 
 /// Publishes the messages due at tick `k` as one air (`swarm::air`) through the run's air
-/// transport (`radio.air`: the world's ring, or the iceoryx2 service), before the tick is
+/// service (`radio/air`), before the tick is
 /// released: every agent reads its list in it. The world lends its airs
 /// (`World::lend_air`): the payloads are copied from `sent`, the buffer of the last tick's
 /// messages, which is not touched between `World::apply` and this publish.
 fn publish_air(air: &mut transport::AirSink, world: &World, sent: &Air, k: u64) -> Result<()> {
     let len = swarm::air::air_len(world.air(), world.n);
-    air.publish(k, len, |out| {
+    air.publish(len, |out| {
         swarm::air::write_air_from(world.air(), sent.bytes(), world.n, k, out)
     })?;
     Ok(())
@@ -265,11 +265,11 @@ pub fn run(args: &WorldArgs) -> Result<i32> {
     world.lend_air();
     let config = transport::run_config(&args.prefix)?;
     let node = transport::node(&config, "world")?;
-    // Sense frames (`runtime.sense`): the world's ring beside the air, or a service a robot.
-    let mut senses = transport::SenseSink::create(&node, &args.prefix, sc)?;
-    // Actions (`runtime.acts`): every robot's cell of one segment, or a service a robot.
-    let mut acts = transport::ActSource::create(&node, &args.prefix, sc)?;
-    let mut air = transport::AirSink::create(&node, &args.prefix, sc)?;
+    // Sense frames: every robot's record packed into one `world/sense` sample a tick.
+    let mut senses = transport::SenseSink::create(&node, sc)?;
+    // Actions: one `robot/<i>/act` service a robot.
+    let mut acts = transport::ActSource::create(&node, sc)?;
+    let mut air = transport::AirSink::create(&node, sc)?;
     let status_svc = transport::status_service(&node, true)?;
     let status_pub = status_svc
         .publisher_builder()
@@ -336,7 +336,6 @@ pub fn run(args: &WorldArgs) -> Result<i32> {
     let mut tick_ns = Vec::with_capacity(sc.run.max_ticks.min(10_000_000) as usize);
     let mut actions: Vec<Option<Action>> = vec![None; n as usize];
     let mut sent = Air::default();
-    let mut revived = vec![false; n as usize];
     // Who is alive as this tick's frames are written (a copy: sensing needs the world).
     let mut alive_now: Vec<bool> = Vec::with_capacity(n as usize);
     let deadline = Duration::from_millis(sc.runtime.ack_deadline_ms);
@@ -364,7 +363,6 @@ pub fn run(args: &WorldArgs) -> Result<i32> {
                 let c = barrier.attach_count(i);
                 if c > drivers.attached[i as usize] && c > barrier.dead_upto(i) && world.revive(i) {
                     drivers.attached[i as usize] = c;
-                    revived[i as usize] = true;
                     clock.start(i as usize, k);
                 }
             }
@@ -372,22 +370,13 @@ pub fn run(args: &WorldArgs) -> Result<i32> {
         if ctl.stop || k + 1 == sc.run.max_ticks {
             world.set_stopping();
         }
-        // Sense_k of every live robot (`runtime.sense`: packed once into the world's ring, or
-        // written in place into each robot's loaned iceoryx2 sample). Frames first, then the
-        // holds of dead robots are cleared below, before anyone is released.
+        // Sense_k of every live robot, packed once into the tick's `world/sense` sample. What
+        // a SIGKILLed agent held of the Sense and air samples does not need to be released:
+        // the services' static slots count every subscriber's holds (a dead one's too), and
+        // iceoryx2 reclaims them when the dead node is cleaned (`orchestrator::processes`).
         alive_now.clear();
         alive_now.extend_from_slice(&world.alive);
         senses.publish(k, &alive_now, |i, s| world.sense(i as usize, s))?;
-        // What dead robots' agents held of the air is free (a SIGKILLed agent never lets
-        // go of its holds; a restarted one starts with none): cleared every tick a robot is
-        // dead, and at the tick it is revived, before the agent reads.
-        for i in 0..n {
-            if !world.alive[i as usize] || revived[i as usize] {
-                air.release_robot(i);
-                senses.release_robot(i);
-            }
-        }
-        revived.iter_mut().for_each(|r| *r = false);
         publish_air(&mut air, &world, &sent, k)?;
         barrier.release_with(k, world.alive_count(), bell);
         if realtime {

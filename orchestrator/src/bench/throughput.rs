@@ -29,7 +29,7 @@ use swarm::air::ActTx;
 use swarm::barrier::{TickBarrier, Wake};
 use swarm::frames::RadioHeader;
 use swarm::mailbox::Air;
-use swarm::scenario::{AirTransport, Scenario};
+use swarm::scenario::Scenario;
 use swarm::transport::{PubSubCapacity, Reach, ServiceId, TransportError};
 use swarm::{cleanup, transport, AgentRuntime, Behaviour, Blob, Command, Outbox, Received, Sense};
 use world::medium::{Medium, MediumParams};
@@ -64,21 +64,15 @@ impl WorldCopy {
 /// bytes received in place (`swarm::Blob`, zero-copy), `raw` raw iceoryx2 without the runtime
 /// (no air, no world), `raw-copy` the same with each received payload copied into an owned
 /// buffer (what a `bytes` receiver gets: the counterpart the raw rows, which drop their samples
-/// unread, do not make). The air is `radio.air`: the world's ring (the runtime's default) or the
-/// iceoryx2 air service. The `copy` rows are the world's old three-copy path (`WorldCopy`).
-pub const CASES: [(usize, &str, Option<AirTransport>, WorldCopy); 18] = [
-    (64, "seq", Some(AirTransport::Ring), WorldCopy::Lent),
-    (4096, "seq", Some(AirTransport::Ring), WorldCopy::Lent),
-    (64, "bytes", Some(AirTransport::Ring), WorldCopy::Lent),
-    (4096, "bytes", Some(AirTransport::Ring), WorldCopy::Lent),
-    (64, "bytes", Some(AirTransport::Ring), WorldCopy::Copy),
-    (4096, "bytes", Some(AirTransport::Ring), WorldCopy::Copy),
+/// unread, do not make). The air is the runtime's iceoryx2 air service (`radio/air`). The
+/// `copy` rows are the world's old three-copy path (`WorldCopy`).
+pub const CASES: [(usize, &str, Option<AirTransport>, WorldCopy); 12] = [
+    (64, "seq", Some(AirTransport::Iceoryx2), WorldCopy::Lent),
+    (4096, "seq", Some(AirTransport::Iceoryx2), WorldCopy::Lent),
     (64, "bytes", Some(AirTransport::Iceoryx2), WorldCopy::Lent),
     (4096, "bytes", Some(AirTransport::Iceoryx2), WorldCopy::Lent),
-    (64, "blob", Some(AirTransport::Ring), WorldCopy::Lent),
-    (4096, "blob", Some(AirTransport::Ring), WorldCopy::Lent),
-    (64, "blob", Some(AirTransport::Ring), WorldCopy::Copy),
-    (4096, "blob", Some(AirTransport::Ring), WorldCopy::Copy),
+    (64, "bytes", Some(AirTransport::Iceoryx2), WorldCopy::Copy),
+    (4096, "bytes", Some(AirTransport::Iceoryx2), WorldCopy::Copy),
     (64, "blob", Some(AirTransport::Iceoryx2), WorldCopy::Lent),
     (4096, "blob", Some(AirTransport::Iceoryx2), WorldCopy::Lent),
     (64, "raw", None, WorldCopy::Lent),
@@ -87,10 +81,16 @@ pub const CASES: [(usize, &str, Option<AirTransport>, WorldCopy); 18] = [
     (4096, "raw-copy", None, WorldCopy::Lent),
 ];
 
+/// The air of a row: the runtime's iceoryx2 air service (the raw rows have none).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum AirTransport {
+    #[default]
+    Iceoryx2,
+}
+
 /// The air's name in the table and in a child's `--mode` (`enc:air`).
 fn air_name(air: Option<AirTransport>) -> &'static str {
     match air {
-        Some(AirTransport::Ring) => "ring",
         Some(AirTransport::Iceoryx2) => "iceoryx2",
         None => "-",
     }
@@ -120,9 +120,8 @@ fn warm_for(ticks: u64) -> u64 {
     (ticks / 10).max(10)
 }
 
-fn scenario(robots: u32, size: usize, air: AirTransport) -> Scenario {
+fn scenario(robots: u32, size: usize, _air: AirTransport) -> Scenario {
     let mut sc = Scenario::roam();
-    sc.radio.air = air;
     sc.run.robots = robots;
     sc.radio.max_message_bytes = size.max(64) as u32;
     sc.radio.max_messages_per_tick = 1;
@@ -259,7 +258,7 @@ fn one(
                     .collect::<Result<Vec<_>, _>>()?,
             )
         } else {
-            Radio::Medium(Box::new(WorldRadio::create(&node, &prefix, &sc, world)?))
+            Radio::Medium(Box::new(WorldRadio::create(&node, &sc, world)?))
         };
         let mut radio = radio;
         let extra = [
@@ -395,7 +394,6 @@ struct WorldRadio {
 impl WorldRadio {
     fn create(
         node: &Node<ipc::Service>,
-        prefix: &str,
         sc: &Scenario,
         copy: WorldCopy,
     ) -> BenchResult<WorldRadio> {
@@ -408,7 +406,7 @@ impl WorldRadio {
         }
         Ok(WorldRadio {
             acts,
-            air: transport::AirSink::create(node, prefix, sc)?,
+            air: transport::AirSink::create(node, sc)?,
             medium: Medium::new(sc, MediumParams::from_scenario(sc)),
             poses: (0..n)
                 .map(|i| {
@@ -431,7 +429,7 @@ impl WorldRadio {
         let n = self.poses.len();
         let len = swarm::air::air_len(due.as_ref(), n);
         let sent = self.sent.bytes();
-        self.air.publish(k, len, |out| {
+        self.air.publish(len, |out| {
             swarm::air::write_air_from(due.as_ref(), sent, n, k, out)
         })?;
         if let Some(a) = due {
@@ -583,11 +581,8 @@ fn data_len<M: Make>(size: usize) -> usize {
 }
 
 pub fn child(a: &ChildArgs) -> i32 {
-    let (enc, air) = a.mode.split_once(':').unwrap_or((a.mode.as_str(), "ring"));
-    let air = match air {
-        "iceoryx2" => AirTransport::Iceoryx2,
-        _ => AirTransport::Ring,
-    };
+    let enc = a.mode.split_once(':').map_or(a.mode.as_str(), |m| m.0);
+    let air = AirTransport::Iceoryx2;
     let r = match enc {
         "bytes" => child_run::<BytesBlob>(a, air),
         "blob" => child_run::<BlobMsg>(a, air),
@@ -612,7 +607,7 @@ fn child_run<M: Make>(a: &ChildArgs, air: AirTransport) -> BenchResult<()> {
     let node = transport::node(&config, &format!("bench-tput-{me}"))?;
     let act_svc = transport::act_service(&node, me, false)?;
     let act = transport::act_publisher(&act_svc, &sc)?;
-    let mut air = transport::AirSource::open(&node, &a.prefix, &sc, me)?;
+    let mut air = transport::AirSource::open(&node, &sc)?;
     let mut rt = AgentRuntime::new(
         &sc,
         me,
@@ -676,7 +671,7 @@ fn child_run<M: Make>(a: &ChildArgs, air: AirTransport) -> BenchResult<()> {
 /// is copied into an owned buffer (the `raw-copy` rows).
 fn child_raw(a: &ChildArgs, copy: bool) -> BenchResult<()> {
     let (n, me) = (a.robots, a.index);
-    let sc = scenario(n, a.size, AirTransport::Ring);
+    let sc = scenario(n, a.size, AirTransport::Iceoryx2);
     let barrier = TickBarrier::open(&a.prefix)?;
     let config = transport::run_config(&a.prefix)?;
     let node = transport::node(&config, &format!("bench-tput-{me}"))?;

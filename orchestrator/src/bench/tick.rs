@@ -18,7 +18,7 @@ use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 use swarm::barrier::{TickBarrier, Wake};
 use swarm::cleanup;
-use swarm::scenario::{ActTransport, BarrierKind, FrameTransport, Scenario};
+use swarm::scenario::{BarrierKind, Scenario};
 use swarm::transport::{self, EventCapacity, Reach, ServiceId, TransportError};
 use world::output::percentile;
 
@@ -30,14 +30,6 @@ pub struct Row {
     pub runtime_ticks_per_s: f64,
     pub runtime_p50_us: f64,
     pub runtime_p99_us: f64,
-    /// The runtime with `runtime.sense = "iceoryx2"` (the Sense frames through one iceoryx2
-    /// service per robot instead of the world's ring), same barrier, same run.
-    pub runtime_sense_iox2_ticks_per_s: f64,
-    pub runtime_sense_iox2_p50_us: f64,
-    /// The runtime with `runtime.acts = "iceoryx2"` (the actions through one iceoryx2
-    /// service per robot instead of the world's act cells), same barrier, same run.
-    pub runtime_acts_iox2_ticks_per_s: f64,
-    pub runtime_acts_iox2_p50_us: f64,
     /// The runtime with `runtime.barrier = "iox2-event"`.
     pub runtime_ev_ticks_per_s: f64,
     pub runtime_ev_p50_us: f64,
@@ -78,16 +70,12 @@ fn opt(v: Option<f64>) -> String {
 pub fn print_table(rows: &[Row]) {
     println!("lock-step tick (roam scenario, configs/roam.toml, for the runtime; no work for the others)");
     println!(
-        "{:>6} {:>6} | {:>10} {:>8} {:>8} | {:>10} {:>8} | {:>10} {:>8} | {:>10} {:>8} | {:>6} {:>9} {:>8} | {:>10} {:>8} {:>8} | {:>10} {:>8} {:>8} | {:>9} {:>9}",
+        "{:>6} {:>6} | {:>10} {:>8} {:>8} | {:>10} {:>8} | {:>6} {:>9} {:>8} | {:>10} {:>8} {:>8} | {:>10} {:>8} {:>8} | {:>9} {:>9}",
         "robots",
         "ticks",
         "runtime/s",
         "p50 us",
         "p99 us",
-        "rt-sx/s",
-        "p50 us",
-        "rt-ax/s",
-        "p50 us",
         "rt-ev/s",
         "p50 us",
         "ticks",
@@ -104,16 +92,12 @@ pub fn print_table(rows: &[Row]) {
     );
     for r in rows {
         println!(
-            "{:>6} {:>6} | {:>10.0} {:>8.0} {:>8.0} | {:>10.0} {:>8.0} | {:>10.0} {:>8.0} | {:>10.0} {:>8.0} | {:>6} {:>9} {:>8} | {:>10.0} {:>8.0} {:>8.0} | {:>10.0} {:>8.0} {:>8.0} | {:>8.2}x {:>8.2}x",
+            "{:>6} {:>6} | {:>10.0} {:>8.0} {:>8.0} | {:>10.0} {:>8.0} | {:>6} {:>9} {:>8} | {:>10.0} {:>8.0} {:>8.0} | {:>10.0} {:>8.0} {:>8.0} | {:>8.2}x {:>8.2}x",
             r.robots,
             r.ticks,
             r.runtime_ticks_per_s,
             r.runtime_p50_us,
             r.runtime_p99_us,
-            r.runtime_sense_iox2_ticks_per_s,
-            r.runtime_sense_iox2_p50_us,
-            r.runtime_acts_iox2_ticks_per_s,
-            r.runtime_acts_iox2_p50_us,
             r.runtime_ev_ticks_per_s,
             r.runtime_ev_p50_us,
             opt(r.search_ticks.map(|t| t as f64)),
@@ -129,7 +113,7 @@ pub fn print_table(rows: &[Row]) {
             r.futex_rounds_per_s / r.runtime_ticks_per_s,
         );
     }
-    println!("runtime = the runtime with its default futex barrier, Sense frames in the world's ring and actions in the world's act cells; rt-sx = the same with runtime.sense = \"iceoryx2\" (a Sense service per robot); rt-ax = with runtime.acts = \"iceoryx2\" (an act service per robot); rt-ev = with runtime.barrier = \"iox2-event\".");
+    println!("runtime = the runtime with its default futex barrier, the Sense frames, the air and the actions through their iceoryx2 services (world/sense, radio/air, robot/<i>/act); rt-ev = with runtime.barrier = \"iox2-event\".");
     println!("search = the runtime on the default scenario (search BT, futex barrier) until every target is found: ticks run, ticks/s, p50.");
     println!("rt/iox2 = runtime tick time / raw iceoryx2 round time (mean); below 1 means faster than the raw round.");
 }
@@ -149,17 +133,8 @@ pub fn bench_tick(sizes: &[u32], ticks: u64) -> BenchResult<Vec<Row>> {
     let mut rows = Vec::new();
     for &n in sizes {
         let ticks = ticks_for(n, ticks);
-        let (ring, cells) = (FrameTransport::Ring, ActTransport::Cells);
-        let rt = runtime(n, ticks, BarrierKind::Futex, ring, cells)?;
-        let rt_sx = runtime(
-            n,
-            ticks,
-            BarrierKind::Futex,
-            FrameTransport::Iceoryx2,
-            cells,
-        )?;
-        let rt_ax = runtime(n, ticks, BarrierKind::Futex, ring, ActTransport::Iceoryx2)?;
-        let rt_ev = runtime(n, ticks, BarrierKind::Iox2Event, ring, cells)?;
+        let rt = runtime(n, ticks, BarrierKind::Futex)?;
+        let rt_ev = runtime(n, ticks, BarrierKind::Iox2Event)?;
         let search = if n <= SEARCH_MAX_ROBOTS {
             let mut sc = Scenario::default();
             sc.run.robots = n;
@@ -177,10 +152,6 @@ pub fn bench_tick(sizes: &[u32], ticks: u64) -> BenchResult<Vec<Row>> {
             runtime_ticks_per_s: rt.per_s,
             runtime_p50_us: rt.p50_us,
             runtime_p99_us: rt.p99_us,
-            runtime_sense_iox2_ticks_per_s: rt_sx.per_s,
-            runtime_sense_iox2_p50_us: rt_sx.p50_us,
-            runtime_acts_iox2_ticks_per_s: rt_ax.per_s,
-            runtime_acts_iox2_p50_us: rt_ax.p50_us,
             runtime_ev_ticks_per_s: rt_ev.per_s,
             runtime_ev_p50_us: rt_ev.p50_us,
             search_ticks: search.as_ref().map(|s| s.0),
@@ -202,18 +173,10 @@ pub fn bench_tick(sizes: &[u32], ticks: u64) -> BenchResult<Vec<Row>> {
 const SEARCH_MAX_ROBOTS: u32 = 200;
 
 /// The runtime itself: the roam scenario with N robots for `ticks` ticks (+ warm-up).
-fn runtime(
-    n: u32,
-    ticks: u64,
-    barrier: BarrierKind,
-    sense: FrameTransport,
-    acts: ActTransport,
-) -> BenchResult<Stats> {
+fn runtime(n: u32, ticks: u64, barrier: BarrierKind) -> BenchResult<Stats> {
     let mut sc = Scenario::roam();
     sc.run.robots = n;
     sc.runtime.barrier = barrier;
-    sc.runtime.sense = sense;
-    sc.runtime.acts = acts;
     let warmup = (ticks / 20).max(10);
     sc.run.max_ticks = ticks + warmup;
     run_stats(&sc).map(|(_, s)| s)

@@ -1,12 +1,11 @@
-//! The air's two transports (`radio.air`), as the world writes it and as an agent reads it:
-//! the world's ring of shared-memory slots (`swarm::air_ring`, the default) or one iceoryx2
-//! publish-subscribe service. Both carry the same bytes (`swarm::air::write_air`), so what a
-//! robot hears does not depend on the choice.
+//! The air, as the world writes it and as an agent reads it: one iceoryx2 publish-subscribe
+//! service (`radio/air`), the world its one publisher, every agent a subscriber, with
+//! `AllocationStrategy::Static` slots of the scenario's largest air
+//! ([`super::air_max_len`]). The bytes are `swarm::air::write_air`'s layout.
 
 use super::{air_publisher, air_service, AirSample, ServiceId, TransportError, TransportResult};
-use crate::air_ring::{AirRead, AirReader, AirWriter};
 use crate::frames::AirHeader;
-use crate::scenario::{AirTransport, Scenario};
+use crate::scenario::Scenario;
 use crate::wire::Received;
 use iceoryx2::port::publisher::Publisher;
 use iceoryx2::port::subscriber::Subscriber;
@@ -16,144 +15,106 @@ use std::sync::atomic::AtomicUsize;
 use std::sync::Arc;
 
 /// The world's side of the air.
-pub enum AirSink {
-    Ring(AirWriter),
-    Iceoryx2 {
-        publisher: Publisher<ipc::Service, [u8], AirHeader>,
-        _service: super::AirService,
-    },
+pub struct AirSink {
+    publisher: Publisher<ipc::Service, [u8], AirHeader>,
+    /// The largest air a slot holds.
+    max_len: usize,
+    _service: super::AirService,
 }
 
 impl AirSink {
-    /// Makes the run's air (`radio.air`) for `sc.run.robots` agents.
-    pub fn create(node: &Node<ipc::Service>, prefix: &str, sc: &Scenario) -> TransportResult<Self> {
-        Ok(match sc.radio.air {
-            AirTransport::Ring => AirSink::Ring(AirWriter::create(
-                prefix,
-                sc.run.robots,
-                super::air_held(sc) as u32,
-            )?),
-            AirTransport::Iceoryx2 => {
-                let service = air_service(node, sc, true)?;
-                AirSink::Iceoryx2 {
-                    publisher: air_publisher(&service, sc)?,
-                    _service: service,
-                }
-            }
+    /// Makes the run's air for `sc.run.robots` agents.
+    pub fn create(node: &Node<ipc::Service>, sc: &Scenario) -> TransportResult<Self> {
+        let service = air_service(node, sc, true)?;
+        Ok(AirSink {
+            publisher: air_publisher(&service, sc)?,
+            max_len: super::air_max_len(sc),
+            _service: service,
         })
     }
 
-    /// Publishes an air of `len` bytes due at `tick`; `fill` writes all of them and returns
-    /// the header.
+    /// Publishes an air of `len` bytes; `fill` writes all of them and returns the header
+    /// (which names the tick it is due at). An air longer than a slot cannot happen (the slot is the scenario's worst
+    /// case); it is refused as [`TransportError::AirTooLong`], never written past the slot.
     pub fn publish(
         &mut self,
-        tick: u64,
         len: usize,
         fill: impl FnOnce(&mut [u8]) -> AirHeader,
     ) -> TransportResult<()> {
-        match self {
-            AirSink::Ring(w) => Ok(w.publish(tick, len, fill)?),
-            AirSink::Iceoryx2 { publisher, .. } => {
-                let sample =
-                    publisher
-                        .loan_slice_uninit(len)
-                        .map_err(|source| TransportError::Loan {
-                            service: ServiceId::Air,
-                            source,
-                        })?;
-                // SAFETY: the slot is shared memory of the publisher's data segment, mapped
-                // from tmpfs: its bytes are always initialised, and every u8 value is valid;
-                // `fill` writes all `len` of them.
-                let mut sample = unsafe { sample.assume_init() };
-                let h = fill(sample.payload_mut());
-                *sample.user_header_mut() = h;
-                sample.send().map_err(|source| TransportError::Send {
+        if len > self.max_len {
+            return Err(TransportError::AirTooLong {
+                len,
+                max: self.max_len,
+            });
+        }
+        let sample =
+            self.publisher
+                .loan_slice_uninit(len)
+                .map_err(|source| TransportError::Loan {
                     service: ServiceId::Air,
                     source,
                 })?;
-                Ok(())
-            }
-        }
-    }
-
-    /// Robot `robot`'s agent is dead or replaced: what it held of the air is free again
-    /// (the ring's hold cells; iceoryx2 reclaims a dead node's samples itself).
-    pub fn release_robot(&self, robot: u32) {
-        if let AirSink::Ring(w) = self {
-            w.release_robot(robot);
-        }
+        // SAFETY: the slot is shared memory of the publisher's data segment, mapped from
+        // tmpfs: its bytes are always initialised, and every u8 value is valid; `fill` writes
+        // all `len` of them.
+        let mut sample = unsafe { sample.assume_init() };
+        let h = fill(sample.payload_mut());
+        *sample.user_header_mut() = h;
+        sample.send().map_err(|source| TransportError::Send {
+            service: ServiceId::Air,
+            source,
+        })?;
+        Ok(())
     }
 }
 
 /// An agent's side of the air.
-pub enum AirSource {
-    Ring(AirReader),
-    Iceoryx2 {
-        subscriber: Subscriber<ipc::Service, [u8], AirHeader>,
-        _service: super::AirService,
-    },
+pub struct AirSource {
+    subscriber: Subscriber<ipc::Service, [u8], AirHeader>,
+    _service: super::AirService,
 }
 
-/// One air as an agent got it.
-pub enum AirGot {
-    Ring(AirRead),
-    Iceoryx2(AirSample),
-}
+/// One air as an agent got it: the iceoryx2 sample, read in place.
+pub struct AirGot(AirSample);
 
 impl AirSource {
-    /// Opens the run's air (`radio.air`) for robot `robot`'s agent.
-    pub fn open(
-        node: &Node<ipc::Service>,
-        prefix: &str,
-        sc: &Scenario,
-        robot: u32,
-    ) -> TransportResult<Self> {
-        Ok(match sc.radio.air {
-            AirTransport::Ring => AirSource::Ring(AirReader::open(prefix, robot)?),
-            AirTransport::Iceoryx2 => {
-                let service = air_service(node, sc, false)?;
-                let subscriber = service
-                    .subscriber_builder()
-                    .buffer_size(1)
-                    .create()
-                    .map_err(|source| TransportError::Subscriber {
-                        service: ServiceId::Air,
-                        source,
-                    })?;
-                AirSource::Iceoryx2 {
-                    subscriber,
-                    _service: service,
-                }
-            }
+    /// Opens the run's air for an agent.
+    pub fn open(node: &Node<ipc::Service>, sc: &Scenario) -> TransportResult<Self> {
+        let service = air_service(node, sc, false)?;
+        let subscriber = service
+            .subscriber_builder()
+            .buffer_size(1)
+            .create()
+            .map_err(|source| TransportError::Subscriber {
+                service: ServiceId::Air,
+                source,
+            })?;
+        Ok(AirSource {
+            subscriber,
+            _service: service,
         })
     }
 
-    /// The newest air: the ring's published slot (the same one again until the world
-    /// publishes the next), or iceoryx2's unread sample (buffer 1: none if already taken).
+    /// The newest air not received yet (buffer 1: none if already taken).
     pub fn receive(&mut self) -> TransportResult<Option<AirGot>> {
-        match self {
-            AirSource::Ring(r) => Ok(r.read()?.map(AirGot::Ring)),
-            AirSource::Iceoryx2 { subscriber, .. } => Ok(subscriber
-                .receive()
-                .map_err(|source| TransportError::Receive {
-                    service: ServiceId::Air,
-                    source,
-                })?
-                .map(AirGot::Iceoryx2)),
-        }
+        Ok(self
+            .subscriber
+            .receive()
+            .map_err(|source| TransportError::Receive {
+                service: ServiceId::Air,
+                source,
+            })?
+            .map(AirGot))
     }
 }
 
 impl AirGot {
     /// The tick the air is due at.
     pub fn tick(&self) -> u64 {
-        match self {
-            AirGot::Ring(a) => a.tick,
-            AirGot::Iceoryx2(s) => s.user_header().tick,
-        }
+        self.0.user_header().tick
     }
 
-    /// Robot `robot`'s inbox from it ([`super::air_inbox`], [`super::ring_inbox`]).
+    /// Robot `robot`'s inbox from it ([`super::air_inbox`]).
     pub fn inbox<M: DeserializeOwned>(
         self,
         robot: u32,
@@ -162,9 +123,6 @@ impl AirGot {
         held_limit: usize,
         inbox: &mut Vec<Received<M>>,
     ) -> u32 {
-        match self {
-            AirGot::Ring(a) => super::ring_inbox(a, robot, zero_copy, live, held_limit, inbox),
-            AirGot::Iceoryx2(s) => super::air_inbox(s, robot, zero_copy, live, held_limit, inbox),
-        }
+        super::air_inbox(self.0, robot, zero_copy, live, held_limit, inbox)
     }
 }

@@ -138,12 +138,10 @@ pub enum TransportError {
         service: ServiceId,
         source: ListenerWaitError,
     },
-    /// The world's air ring (`radio.air = "ring"`) could not be made, opened or read.
-    #[error(transparent)]
-    AirRing(#[from] crate::air_ring::AirRingError),
-    /// The agents' act cells (`runtime.acts = "cells"`) could not be made or opened.
-    #[error(transparent)]
-    ActCells(#[from] crate::air_ring::acts::ActCellsError),
+    /// An air longer than the air service's slots (the scenario's worst case,
+    /// `transport::air_max_len`): refused, never written past the slot.
+    #[error("radio/air: an air of {len} bytes exceeds the slot of {max} bytes")]
+    AirTooLong { len: usize, max: usize },
 }
 
 impl TransportError {
@@ -166,11 +164,10 @@ impl TransportError {
             | Receive { service, .. }
             | Notify { service, .. }
             | Wait { service, .. } => Some(service),
-            AirRing(_) => {
+            AirTooLong { .. } => {
                 static AIR: ServiceId = ServiceId::Air;
                 Some(&AIR)
             }
-            ActCells(_) => None,
         }
     }
 

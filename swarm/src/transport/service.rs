@@ -18,11 +18,14 @@ pub type EventService = iceoryx2::service::port_factory::event::PortFactory<ipc:
 pub const STATUS_NAME: &str = "world/state";
 pub const CONTROL_NAME: &str = "run/control";
 pub const AIR_NAME: &str = "radio/air";
+pub const SENSES_NAME: &str = "world/sense";
 
 /// One iceoryx2 service of a run.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub enum ServiceId {
-    /// `robot/<i>/sense`: the world's Sense frames for robot i.
+    /// `world/sense`: every robot's Sense record of a tick, in one sample.
+    Senses,
+    /// `robot/<i>/sense`: one robot's Sense frame (the latency benchmark's one hop).
     Sense(u32),
     /// `robot/<i>/act`: robot i's Action frames.
     Act(u32),
@@ -43,6 +46,7 @@ impl ServiceId {
             ServiceId::Sense(r) => format!("robot/{r}/sense"),
             ServiceId::Act(r) => format!("robot/{r}/act"),
             ServiceId::Air => AIR_NAME.to_string(),
+            ServiceId::Senses => SENSES_NAME.to_string(),
             ServiceId::Status => STATUS_NAME.to_string(),
             ServiceId::Control => CONTROL_NAME.to_string(),
             ServiceId::Named(n) => n.clone(),
@@ -85,6 +89,8 @@ impl From<&str> for ServiceId {
             ServiceId::Act(r)
         } else if name == AIR_NAME {
             ServiceId::Air
+        } else if name == SENSES_NAME {
+            ServiceId::Senses
         } else if name == STATUS_NAME {
             ServiceId::Status
         } else if name == CONTROL_NAME {
@@ -254,6 +260,7 @@ mod tests {
             ServiceId::Sense(3),
             ServiceId::Act(12),
             ServiceId::Air,
+            ServiceId::Senses,
             ServiceId::Status,
             ServiceId::Control,
             ServiceId::from("lat/down"),

@@ -203,7 +203,7 @@ impl World {
             .transmit_lent(k, sent, bytes, &self.poses, &[true, true]);
         let due = self.medium.due(k + 1);
         let len = swarm::air::air_len(due.as_ref(), 2);
-        self.air.publish(k + 1, len, |out| {
+        self.air.publish(len, |out| {
             swarm::air::write_air_from(due.as_ref(), bytes, 2, k + 1, out)
         })?;
         if let Some(a) = due {
@@ -245,12 +245,12 @@ pub(super) fn parent<M: Payload>(p: &Parent) -> BenchResult<Vec<u64>> {
                 service: ServiceId::Act(1),
                 source,
             })?,
-        air: transport::AirSink::create(&node, p.prefix, &sc)?,
+        air: transport::AirSink::create(&node, &sc)?,
         medium: Medium::new(&sc, MediumParams::from_scenario(&sc)),
         poses: vec![[0.0, 0.0, 0.0], [10.0, 0.0, 0.0]],
         entries: Vec::new(),
     };
-    let mut sub = transport::AirSource::open(&node, p.prefix, &sc, 0)?;
+    let mut sub = transport::AirSource::open(&node, &sc)?;
     let child = p.spawn()?;
     let fire = Rc::new(Cell::new(false));
     let recv_at = Rc::new(Cell::new(0));
@@ -344,7 +344,7 @@ pub(super) fn child<M: Payload>(a: &ChildArgs, mode: Mode) -> BenchResult<()> {
     let node = transport::node(&config, "bench-lat-1")?;
     let act_svc = transport::act_service(&node, 1, false)?;
     let act = transport::act_publisher(&act_svc, &sc)?;
-    let mut sub = transport::AirSource::open(&node, &a.prefix, &sc, 1)?;
+    let mut sub = transport::AirSource::open(&node, &sc)?;
     let mut rt = AgentRuntime::new(
         &sc,
         1,

@@ -1,14 +1,14 @@
-//! The world's air ring (`radio.air = "ring"`, the default) with real processes: agents that
-//! keep zero-copy views of the air between ticks are SIGKILLed (and restarted) more times than
-//! the ring has slots, and the run goes on (their holds are cleared by the world, never
-//! leaked); and the ring and the iceoryx2 air record the same ticks.
+//! The air through iceoryx2 (`radio/air`, static slots) with real processes: agents that keep
+//! zero-copy `Blob` views of the air between ticks are SIGKILLed (and restarted) twenty
+//! times; the run goes on, what each killed agent held is reclaimed with its dead node (the
+//! run's files in /dev/shm do not grow with the kills), and nothing is left at the end.
 
 use e2e::*;
 use std::path::PathBuf;
 
 /// The roam scenario run by `keeper` robots: 1,000-byte bulk beacons received in place, each
 /// robot keeping its last tick's beacons (views of that tick's air) until its next tick.
-fn keeper_scenario(tag: &str, air: &str) -> PathBuf {
+fn keeper_scenario(tag: &str) -> PathBuf {
     let dir = tmp_dir(&format!("{tag}-sc"));
     std::fs::create_dir_all(&dir).unwrap();
     let roam_sc = std::fs::read_to_string(roam()).unwrap();
@@ -22,9 +22,7 @@ fn keeper_scenario(tag: &str, air: &str) -> PathBuf {
                 // Every robot in range of every other wherever they roam (the arena's
                 // diagonal is below 2,000), so the radio's end-of-run check does not depend
                 // on where restarts leave the robots.
-                &format!(
-                    "max_message_bytes = 2048\nzero_copy_held = 2\nair = {air:?}\ncomm_radius = 2000.0"
-                ),
+                "max_message_bytes = 2048\nzero_copy_held = 2\ncomm_radius = 2000.0",
             )
             + "\n[roam]\npayload_bytes = 1000\n",
     )
@@ -39,22 +37,25 @@ fn ticks(dir: &std::path::Path) -> Vec<swarm::recording::TickRecord> {
         .1
 }
 
-/// The air ring's data files of a run (`<prefix>air.<slot>.<generation>`).
-fn ring_files(run_id: &str) -> usize {
-    shm_of_run(run_id)
-        .iter()
-        .filter(|f| f.contains("_air."))
-        .count()
+/// Every sample of `count` taken every 5 ms while `child` runs.
+fn samples_while_running(child: &mut std::process::Child, count: impl Fn() -> usize) -> Vec<usize> {
+    let mut v = Vec::new();
+    while child.try_wait().unwrap().is_none() {
+        v.push(count());
+        std::thread::sleep(std::time::Duration::from_millis(5));
+    }
+    v
 }
 
 #[test]
-fn agents_killed_while_holding_the_air_never_exhaust_the_ring() {
+fn agents_killed_while_holding_air_samples_leak_nothing() {
     let _g = serial();
     const ROBOTS: u32 = 4;
     const HELD: u32 = 2;
-    // The ring has 2 + robots x (held + 1) slots; more kills than that, each of an agent
-    // keeping views of the last tick's air (so its hold cells are in use when it dies).
-    let slots = 2 + ROBOTS * (HELD + 1);
+    // More kills than the air service has samples for the robots' holds (robots x (held +
+    // 1)), each of an agent keeping views of the last tick's air (so it holds samples when it
+    // dies).
+    let slots = ROBOTS * (HELD + 1);
     let kills: Vec<(u64, u32)> = (0..20u64)
         .map(|j| (20 + 12 * j, 1 + (j % 3) as u32))
         .collect();
@@ -64,9 +65,9 @@ fn agents_killed_while_holding_the_air_never_exhaust_the_ring() {
         .map(|(t, r)| format!("{t}:{r}"))
         .collect::<Vec<_>>()
         .join(",");
-    let sc = keeper_scenario("ring-kill", "ring");
-    let out = tmp_dir("ring-kill");
-    let id = own_run_id("ring-kill");
+    let sc = keeper_scenario("held-kill");
+    let out = tmp_dir("held-kill");
+    let id = own_run_id("held-kill");
     let max_ticks = 300u64;
     let mut child = spawn_up_as(
         &[
@@ -91,14 +92,22 @@ fn agents_killed_while_holding_the_air_never_exhaust_the_ring() {
         &out,
         Some(&id),
     );
-    // While it runs: the ring never has more data files than the slots in use at once (the
-    // published air, the one being written, the air the agents keep; a leaked hold would pin
-    // one more slot per kill).
-    let most = most_while_running(&mut child, || ring_files(&id));
+    // While it runs: the run's files in /dev/shm (iceoryx2's segments and node files) do not
+    // grow with the kills: each dead agent's node, its connections and what it held are
+    // cleaned before its replacement attaches (a leak would add files with every one of
+    // the 20 kills).
+    let counts = samples_while_running(&mut child, || shm_of_run(&id).len());
     let o = child.wait_with_output().unwrap();
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
-    assert!(most >= 2, "the ring was seen: {most} data files");
-    assert!(most <= 4, "{most} data files: holds were leaked");
+    let running: Vec<usize> = counts.into_iter().filter(|&c| c > 0).collect();
+    let mut sorted = running.clone();
+    sorted.sort_unstable();
+    let (median, most) = (sorted[sorted.len() / 2], sorted[sorted.len() - 1]);
+    eprintln!("files of the run while it ran: median {median}, most {most}");
+    assert!(
+        most <= median + 2 * ROBOTS as usize,
+        "{most} files at most against a median of {median}: the kills leaked"
+    );
     let s = summary(&out);
     assert_eq!(s["ticks"].as_u64(), Some(max_ticks), "{s}");
     assert_eq!(s["end"], "completed", "{s}");
@@ -129,41 +138,4 @@ fn agents_killed_while_holding_the_air_never_exhaust_the_ring() {
     // Nothing of this run is left in /dev/shm (only this run's files are judged).
     assert!(shm_of_run(&id).is_empty(), "{:?}", shm_of_run(&id));
     assert_left_nothing(&out);
-}
-
-#[test]
-fn the_ring_and_the_iceoryx2_air_record_the_same_ticks() {
-    let _g = serial();
-    // Bulk beacons kept as views, a radio delay (airs held past the hold limit arrive as
-    // copies) and loss: what the robots hear, and so the whole run, must not depend on the
-    // air's transport.
-    let mut dirs = Vec::new();
-    for air in ["ring", "iceoryx2"] {
-        let sc = keeper_scenario(&format!("ring-same-{air}"), air);
-        let out = tmp_dir(&format!("ring-same-{air}"));
-        let o = up(
-            &[
-                "--scenario",
-                sc.to_str().unwrap(),
-                "--robots",
-                "8",
-                "--max-ticks",
-                "200",
-                "--loss",
-                "0.2",
-                "--delay",
-                "1",
-            ],
-            &out,
-        );
-        assert!(o.status.success(), "{air}: {}", stderr(&o));
-        dirs.push(out);
-    }
-    let (a, b) = (ticks(&dirs[0]), ticks(&dirs[1]));
-    assert_eq!(a.len(), 200);
-    assert!(a == b, "the air's transport changed the run");
-    assert!(a.iter().map(|r| r.radio.delivered).sum::<u64>() > 2000);
-    for d in &dirs {
-        assert_left_nothing(d);
-    }
 }

@@ -1,14 +1,10 @@
-//! Every robot's Sense frame of a tick, packed into one publication of a ring beside the air
-//! (`runtime.sense = "ring"`, the default; issue 15, the tick target).
-//!
-//! With one iceoryx2 service per robot the world makes N publishes and the agents N receives
-//! a tick, each a handful of iceoryx2 port operations (BENCHMARKS 11: ~27 % of either side's
-//! samples at N = 50 are port operations). Here the world packs every live robot's frame into
-//! one buffer and publishes it once through a ring of its own ([`super::AirWriter`] named
-//! [`SENSE_RING`]: the same hold-cell protocol as the air, so a SIGKILLed agent leaks nothing
-//! and a restarted one opens the ring again); each agent reads its own record and copies it
-//! into its frame (the used part only: the fixed fields and the lists up to their counts, a
-//! few hundred bytes for most robots, where a whole frame is 14,920).
+//! Every robot's Sense frame of a tick, packed into one sample of the `world/sense` service
+//! (`swarm::transport::SenseSink`). With one iceoryx2 service per robot the world made N
+//! publishes and the agents N receives a tick, each a handful of iceoryx2 port operations
+//! (BENCHMARKS 11); here the world packs every live robot's frame into one buffer and
+//! publishes it once; each agent copies its own record into its frame (the used part only:
+//! the fixed fields and the lists up to their counts, a few hundred bytes for most robots,
+//! where a whole frame is 14,920).
 //!
 //! # Layout
 //!
@@ -23,9 +19,6 @@ use crate::frames::{
     Entity, Nearby, Sense, MAX_ENTITIES, MAX_NEARBY, MAX_OBSTACLE_POINTS, SENSE_FIXED_BYTES,
 };
 use std::mem::{offset_of, size_of};
-
-/// The Sense frames' ring (`/dev/shm/<prefix>sense` and its data files).
-pub const SENSE_RING: &str = "sense";
 
 /// Bytes before the index.
 const HEAD: usize = 8;
@@ -78,6 +71,16 @@ fn counts(s: &Sense) -> (usize, usize, usize) {
         (s.n_entities as usize).min(MAX_ENTITIES),
         (s.n_nearby as usize).min(MAX_NEARBY),
     )
+}
+
+/// Bytes of the largest record: a whole frame, every list full.
+const MAX_RECORD: usize =
+    SENSE_FIXED_BYTES + MAX_OBSTACLE_POINTS * POINT + MAX_ENTITIES * ENTITY + MAX_NEARBY * NEARBY;
+
+/// Bytes of the largest packed tick of `robots` robots: the index, and every robot's record
+/// with every list full, each 8-byte aligned.
+pub fn max_len(robots: u32) -> usize {
+    HEAD + robots as usize * (ENTRY + MAX_RECORD.next_multiple_of(8))
 }
 
 fn u32_at(b: &[u8], at: usize) -> u32 {
@@ -246,6 +249,8 @@ mod tests {
         assert_eq!(u32_at(b, 32), 352);
         assert_eq!(u32_at(b, 36) as usize, size_of::<Sense>());
         assert_eq!(b.len(), 352 + size_of::<Sense>());
+        assert!(b.len() <= max_len(4));
+        assert_eq!(MAX_RECORD, size_of::<Sense>());
         for f in &frames {
             let mut out = Sense::zeroed();
             assert_eq!(unpack_into(b, f.robot, &mut out), Ok(true));
