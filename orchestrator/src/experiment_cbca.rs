@@ -5,7 +5,7 @@
 //!    MATLAB runs): the temporary groups, the coalitions beside the thesis's, the idle robots,
 //!    consensus rounds, messages and bytes, every method scored alike, and each robot's utility
 //!    against time (Figs. 4.3, 4.5) as `utility-example1.svg` / `utility-example2.svg`.
-//! 2. **Examples 1 and 2 in the hunt world** (the `cbca` behaviour, in-process: the same
+//! 2. **Examples 1 and 2 in the hunt world** (the `cbca` behaviour, with `--executor`: the same
 //!    recording as the processes): who captured what, when, and the coalition changes.
 //! 3. **Figs. 4.6-4.7 as tables** (and `fig-4.6a.svg` ... `fig-4.7b.svg`): average system
 //!    utility and average completion time, CBCA against the three baselines and the ablation
@@ -16,6 +16,9 @@
 //!    (one sweep point, every level), and the hunt world under loss, with 20 % of the robots
 //!    killed, and the ablations (loyalty off, grouping off), `variant_seeds` seeds a variant.
 
+use crate::experiment::runner::{
+    parse_file, tag_of, Context, Report, Row, SeedSpec, DEFAULT_FIRST_SEED,
+};
 use agent::behaviours::cbca::Section;
 use agent::cbca::compare::{replanned_utility_curve, run_cbca, run_method, Method, MethodRun};
 use agent::cbca::grouping::{temporary_groups, PriorInfo};
@@ -38,8 +41,12 @@ pub struct CbcaExperiment {
     pub example1: PathBuf,
     /// Example 2 as a runnable hunt (configs/hunt-cbca-example2-hunt.toml).
     pub example2: PathBuf,
-    /// Seeds a point of the sweeps (the issue: 30).
-    pub seeds: u64,
+    /// The seeds of a point of the sweeps (the issue: 30): a count (from `first_seed`), a
+    /// range "A..B" or a list. `--seeds` / `--runs` override it and `variant_seeds`.
+    pub seeds: SeedSpec,
+    /// The first seed of a count.
+    #[serde(default = "first_seed")]
+    pub first_seed: u64,
     /// Fig. 4.6: n_e fixed, n_r varied (the thesis gives no values).
     pub sweep_robots: Vec<usize>,
     pub sweep_robots_evaders: usize,
@@ -58,8 +65,9 @@ pub struct CbcaExperiment {
     /// `utility_horizon`.
     pub utility_horizon: f64,
     pub utility_step: f64,
-    /// Hunt-world runs of Example 1 per variant (seeds 1..=variant_seeds).
-    pub variant_seeds: u64,
+    /// The seeds of the hunt-world runs of Example 1 per variant (a count from `first_seed`,
+    /// a range or a list).
+    pub variant_seeds: SeedSpec,
     pub variants: Vec<crate::experiment::Variant>,
     /// Run the hunt-world sections (Examples 1 and 2 in the hunt world, the variants). Default
     /// true; configs/cbca-rounds.toml (round runs only) sets false.
@@ -80,17 +88,14 @@ pub struct CbcaExperiment {
     /// Example 2 re-planned with motion (Fig. 4.5) at these radio radii (km); empty: skip.
     #[serde(default)]
     pub moving_radii: Vec<f64>,
-    /// The results file's name in the output directory. Default "results.md".
-    #[serde(default = "results_md")]
-    pub results_file: String,
 }
 
 fn yes() -> bool {
     true
 }
 
-fn results_md() -> String {
-    "results.md".into()
+fn first_seed() -> u64 {
+    DEFAULT_FIRST_SEED
 }
 
 #[path = "experiment_cbca_fair.rs"]
@@ -321,79 +326,60 @@ Conflict merge {} (CBCA, `merge_on_conflict`): shared {}; the groups meet at t =
     Ok(())
 }
 
-/// Utility curves as an SVG: one polyline per robot against time.
+/// Utility curves as a chart (`charts::write`): one line per robot against time.
 fn write_curves_svg(
     title: &str,
     times: &[f64],
     series: &[(String, Vec<f64>)],
     path: &Path,
 ) -> Result<(), String> {
-    let (w, h, pad, right) = (720.0, 420.0, 55.0, 60.0);
-    let tmax = times.last().copied().unwrap_or(1.0).max(1e-9);
-    let ymax = series
-        .iter()
-        .flat_map(|s| s.1.iter().copied())
-        .fold(1.0, f64::max);
-    let ymin = series
-        .iter()
-        .flat_map(|s| s.1.iter().copied())
-        .fold(0.0, f64::min);
-    let x = |t: f64| pad + (w - pad - right) * t / tmax;
-    let y = |u: f64| h - pad - (h - 2.0 * pad) * (u - ymin) / ((ymax - ymin) * 1.05);
-    let colours = [
-        "#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#9467bd", "#8c564b", "#e377c2", "#17becf",
-        "#7f7f7f", "#bcbd22",
-    ];
-    let mut svg = format!(
-        "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{w}\" height=\"{h}\"><rect width=\"100%\" height=\"100%\" fill=\"white\"/>\
-         <text x=\"{pad}\" y=\"22\" font-size=\"14\">{title}</text>\
-         <line x1=\"{pad}\" y1=\"{0}\" x2=\"{1}\" y2=\"{0}\" stroke=\"black\"/><line x1=\"{pad}\" y1=\"{pad}\" x2=\"{pad}\" y2=\"{2}\" stroke=\"black\"/>\
-         <text x=\"{3}\" y=\"{4}\" font-size=\"13\">time (CBCA time units)</text><text x=\"6\" y=\"{5}\" font-size=\"13\">utility</text>",
-        y(0.0).min(h - pad),
-        w - right,
-        h - pad,
-        w / 2.0 - 60.0,
-        h - 14.0,
-        pad - 12.0
-    );
-    for k in 0..=4 {
-        let u = ymin + (ymax - ymin) * k as f64 / 4.0;
-        let _ = write!(
-            svg,
-            "<text x=\"4\" y=\"{:.1}\" font-size=\"11\">{u:.0}</text>",
-            y(u) + 4.0
-        );
-        let t = tmax * k as f64 / 4.0;
-        let _ = write!(
-            svg,
-            "<text x=\"{:.1}\" y=\"{:.1}\" font-size=\"11\">{t:.1}</text>",
-            x(t) - 8.0,
-            h - pad + 16.0
-        );
-    }
-    for (k, (label, us)) in series.iter().enumerate() {
-        let c = colours[k % colours.len()];
-        let pts: Vec<String> = times
+    use crate::export::charts::{write, Chart, Point, Series};
+    let chart = Chart {
+        title: title.to_string(),
+        x_label: "time (CBCA time units)".into(),
+        y_label: "utility".into(),
+        series: series
             .iter()
-            .zip(us)
-            .map(|(t, u)| format!("{:.1},{:.1}", x(*t), y(*u)))
-            .collect();
-        let _ = write!(
-            svg,
-            "<polyline fill=\"none\" stroke=\"{c}\" stroke-width=\"2\" points=\"{}\"/><text x=\"{:.1}\" y=\"{:.1}\" fill=\"{c}\" font-size=\"11\">{label}</text>",
-            pts.join(" "),
-            w - right + 4.0 + 22.0 * (k % 2) as f64,
-            y(*us.last().unwrap_or(&0.0)) + 4.0
-        );
-    }
-    svg.push_str("</svg>\n");
-    std::fs::write(path, svg).map_err(|e| format!("{}: {e}", path.display()))
+            .map(|(label, us)| Series {
+                label: label.clone(),
+                points: times
+                    .iter()
+                    .zip(us)
+                    .map(|(&x, &u)| Point {
+                        x,
+                        mean: u,
+                        lo: u,
+                        hi: u,
+                    })
+                    .collect(),
+                reference: false,
+            })
+            .collect(),
+    };
+    write(&chart, path)
 }
 
-/// Runs a scenario in-process and returns its summary as JSON.
-fn run_one(sc: &Scenario, tag: &str) -> Result<serde_json::Value, String> {
-    let s = crate::inprocess::run(sc, None, tag, 1, &mut |_| {}).map_err(|e| e.to_string())?;
-    serde_json::to_value(&s).map_err(|e| e.to_string())
+/// A hunt-world run as results.csv has it (the capture time empty when not every evader was
+/// captured: censored).
+fn hunt_row(variant: &str, sc: &Scenario, s: &serde_json::Value) -> Row {
+    let m = &s["mission"]["hunt"];
+    let first = m["coalition_changes"]
+        .as_array()
+        .and_then(|c| c.iter().filter_map(|c| c["tick"].as_u64()).min());
+    Row::new(variant, "cbca (hunt world)", sc.run.robots, sc.run.seed)
+        .with("evaders", sc.hunt.evaders.len())
+        .with("captured", m["captured"].as_f64())
+        .with("all_captured", m["all_captured_minutes"].is_number())
+        .with("all_captured_minutes", m["all_captured_minutes"].as_f64())
+        .with("ticks", s["ticks"].as_u64())
+        .with("first_commitment_tick", first)
+        .with("messages_offered", s["messages"]["offered"].as_u64())
+        .with("messages_delivered", s["messages"]["delivered"].as_u64())
+        .with("bytes_delivered", s["message_bytes"]["delivered"].as_u64())
+        .with(
+            "robots_killed",
+            s["faults"].as_array().map_or(0, |f| f.len()),
+        )
 }
 
 fn ids(v: &serde_json::Value) -> String {
@@ -409,13 +395,24 @@ fn ids(v: &serde_json::Value) -> String {
     format!("{{{}}}", names.join(", "))
 }
 
-fn example_hunt(n: u32, sc: &Scenario, md: &mut String) -> Result<(), String> {
-    let s = run_one(sc, &format!("cbca-example{n}"))?;
+fn example_hunt(
+    n: u32,
+    sc: &Scenario,
+    ctx: &Context,
+    md: &mut String,
+    rows: &mut Vec<Row>,
+) -> Result<(), String> {
+    let s = ctx.run(sc, &format!("cbca-example{n}"))?;
+    rows.push(hunt_row(&format!("example {n} (hunt world)"), sc, &s));
     let m = &s["mission"]["hunt"];
     let dt = sc.hunt.params.minutes_per_tick;
     let _ = writeln!(
         md,
-        "## Example {n} in the hunt world (the `cbca` behaviour, in-process, seed {})\n",
+        "## Example {n} in the hunt world (the `cbca` behaviour, {}, seed {})\n",
+        match ctx.executor {
+            crate::up::Executor::Inprocess => "in-process",
+            crate::up::Executor::Processes => "with real processes",
+        },
         sc.run.seed
     );
     let _ = writeln!(
@@ -478,9 +475,11 @@ struct PointResult {
 fn sweep_point(
     n_r: usize,
     n_e: usize,
-    seeds: u64,
+    seeds: &[u64],
     ip: &InstanceParams,
     params: &CbcaParams,
+    figure: &str,
+    rows: &mut Vec<Row>,
 ) -> PointResult {
     let k = Method::ALL.len();
     let mut p = PointResult {
@@ -493,10 +492,23 @@ fn sweep_point(
         censored: [0; 2],
         deadlocked: [0; 2],
     };
-    for seed in 1..=seeds {
+    for &seed in seeds {
         let inst = random_instance(n_r, n_e, seed, ip, params);
         for (mi, &m) in Method::ALL.iter().enumerate() {
             let r = run_method(m, &inst.robots, &inst.tasks, &Radio::perfect(), params);
+            let (e, c) = (r.evaluation.as_ref(), r.consensus.as_ref());
+            rows.push(
+                Row::new(figure, m.label(), n_r as u32, seed)
+                    .with("targets", n_e)
+                    .with("deadlocked", e.is_none())
+                    .with("system_utility", e.map(|e| e.system_utility))
+                    .with("mean_completion", e.map(|e| e.mean_completion))
+                    .with("hunted", e.map(|e| e.hunted as f64))
+                    .with("consensus_rounds", c.map(|c| c.rounds as f64))
+                    .with("converged", c.map(|c| f64::from(u8::from(c.converged))))
+                    .with("bytes", c.map(|c| c.bytes as f64))
+                    .with("delivered", c.map(|c| c.delivered as f64)),
+            );
             if let Some(s) = &r.consensus {
                 p.rounds[mi].push(s.rounds as f64);
                 p.bytes[mi].push(s.bytes as f64);
@@ -532,14 +544,16 @@ type Fig<'a> = (&'a str, Vec<(usize, usize)>, bool);
 
 fn sweeps(
     x: &CbcaExperiment,
+    seeds: &[u64],
     params: &CbcaParams,
-    out: &Path,
+    ctx: &Context,
     md: &mut String,
+    rows: &mut Vec<Row>,
 ) -> Result<(), String> {
     let _ = writeln!(
         md,
         "## Figs. 4.6-4.7 as tables ({} seeds a point, mean ± sd; random instances of `agent::cbca::instance`, perfect radio)\n",
-        x.seeds
+        seeds.len()
     );
     let _ = writeln!(md, "System utility: (4.1) with (4.12) taken at each task's realised start (the joint schedule: a task starts when its last member arrives), less the path costs (4.14); a target without L_j members earns nothing. Completion: the mean start time over the hunted targets (time units, 1 km of travel each). A CBCA run whose detectors did not all converge within `max_iterations` is censored: counted in its column, scored as it stood.\n");
     let figs: [Fig; 2] = [
@@ -564,7 +578,17 @@ fn sweeps(
     for (fig, points, by_robots) in figs {
         let results: Vec<PointResult> = points
             .iter()
-            .map(|&(n_r, n_e)| sweep_point(n_r, n_e, x.seeds, &x.instance, params))
+            .map(|&(n_r, n_e)| {
+                sweep_point(
+                    n_r,
+                    n_e,
+                    seeds,
+                    &x.instance,
+                    params,
+                    &format!("fig {fig}"),
+                    rows,
+                )
+            })
             .collect();
         let header: Vec<&str> = Method::ALL.iter().map(|m| m.label()).collect();
         let xs = |i: usize| -> f64 {
@@ -641,7 +665,7 @@ fn sweeps(
                 let file = format!("fig-{fig}{}.svg", if pick == 0 { "a" } else { "b" });
                 write(
                     &Chart {
-                        title: format!("Fig. {fig}{}", &what[..3]),
+                        title: format!("Fig. {fig}{}: {}", &what[..3], &what[4..]),
                         x_label: if by_robots { "n_r" } else { "n_e" }.into(),
                         y_label: if pick == 0 {
                             "system utility"
@@ -651,7 +675,7 @@ fn sweeps(
                         .into(),
                         series,
                     },
-                    &out.join(&file),
+                    &ctx.out_file(&file)?,
                 )?;
                 let _ = writeln!(md, "\n![Fig. {fig}{}]({file})\n", &what[..3]);
             } else {
@@ -741,12 +765,18 @@ fn sweeps(
     Ok(())
 }
 
-fn loss_sweep(x: &CbcaExperiment, params: &CbcaParams, md: &mut String) {
+fn loss_sweep(
+    x: &CbcaExperiment,
+    seeds: &[u64],
+    params: &CbcaParams,
+    md: &mut String,
+    rows: &mut Vec<Row>,
+) {
     let [n_r, n_e] = x.loss_point;
     let _ = writeln!(
         md,
         "## Consensus under radio loss (kernels; n_r = {n_r}, n_e = {n_e}, {} seeds a level, delays of up to {} rounds when lossy)\n",
-        x.seeds, x.loss_max_delay
+        seeds.len(), x.loss_max_delay
     );
     let _ = writeln!(md, "| setup | loss | converged | rounds | kB broadcast | system utility | targets hunted |\n|---|---|---|---|---|---|---|");
     for (name, prior) in [
@@ -759,7 +789,7 @@ fn loss_sweep(x: &CbcaExperiment, params: &CbcaParams, md: &mut String) {
             let mut kb = Vec::new();
             let mut util = Vec::new();
             let mut hunted = Vec::new();
-            for seed in 1..=x.seeds {
+            for &seed in seeds {
                 let inst = random_instance(n_r, n_e, seed, &x.instance, params);
                 let radio = Radio {
                     loss,
@@ -775,16 +805,35 @@ fn loss_sweep(x: &CbcaExperiment, params: &CbcaParams, md: &mut String) {
                     messages: s.broadcasts,
                 };
                 let book = inst.tasks.iter().map(|t| (t.id, t.clone())).collect();
-                if let Ok(e) = agent::cbca::baselines::evaluate(&inst.robots, &book, &alloc, params)
-                {
+                let e = agent::cbca::baselines::evaluate(&inst.robots, &book, &alloc, params).ok();
+                if let Some(e) = &e {
                     util.push(e.system_utility);
                     hunted.push(e.hunted as f64);
                 }
+                rows.push(
+                    Row::new(
+                        format!(
+                            "radio loss, (2.6) {}",
+                            if params.enforce_coverage { "on" } else { "off" }
+                        ),
+                        format!("CBCA, {name}"),
+                        n_r as u32,
+                        seed,
+                    )
+                    .with("targets", n_e)
+                    .with("loss", loss)
+                    .with("converged", s.converged)
+                    .with("consensus_rounds", s.rounds as f64)
+                    .with("bytes", s.bytes as f64)
+                    .with("deadlocked", e.is_none())
+                    .with("system_utility", e.as_ref().map(|e| e.system_utility))
+                    .with("hunted", e.map(|e| e.hunted as f64)),
+                );
             }
             let _ = writeln!(
                 md,
                 "| {name} | {loss} | {conv} of {} | {} | {} | {} | {} |",
-                x.seeds,
+                seeds.len(),
                 fmt_ms(&rounds, 1),
                 fmt_ms(&kb, 0),
                 fmt_ms(&util, 0),
@@ -798,18 +847,31 @@ fn loss_sweep(x: &CbcaExperiment, params: &CbcaParams, md: &mut String) {
 fn variants(
     x: &CbcaExperiment,
     base: &Scenario,
-    file: &str,
-    dir: &Path,
+    seeds: &[u64],
+    ctx: &Context,
     md: &mut String,
+    rows: &mut Vec<Row>,
 ) -> Result<(), String> {
     let _ = writeln!(
         md,
-        "## `example1` ({}) in the hunt world under each variant ({} seeds a variant, in-process)\n",
+        "## `example1` ({}) in the hunt world under each variant ({} seeds a variant)\n",
         x.example1.display(),
-        x.variant_seeds
+        seeds.len()
     );
     let _ = writeln!(md, "A run that does not capture every evader by `run.max_ticks` ({}) is censored: it counts in 'runs capturing all' and its time is left out of the mean (the column says how many runs the mean has).\n", base.run.max_ticks);
     let _ = writeln!(md, "| variant | runs | captured (mean of {}) | runs capturing all | time to the last capture, min (mean ± sd, n) | first commitment, tick (mean) | messages offered | delivered | kB delivered | robots killed |\n|---|---|---|---|---|---|---|---|---|---|", base.hunt.evaders.len());
+    // Every run's scenario first (all validated before any runs), then `--jobs` at a time.
+    let mut jobs = Vec::new();
+    for v in &x.variants {
+        for &seed in seeds {
+            let mut sc = v.scenario(base, &ctx.dir)?;
+            sc.run.seed = seed;
+            v.apply(&mut sc);
+            crate::prepare::prepare_from(&mut sc, &ctx.name()).map_err(|e| e.to_string())?;
+            jobs.push((sc, tag_of(&format!("cbca-{}-{seed}", v.name))));
+        }
+    }
+    let mut summaries = ctx.run_all(&jobs).into_iter().zip(&jobs);
     for v in &x.variants {
         let mut captured = Vec::new();
         let mut all = 0;
@@ -819,12 +881,10 @@ fn variants(
         let mut delivered = Vec::new();
         let mut kb = Vec::new();
         let mut killed = Vec::new();
-        for seed in 1..=x.variant_seeds {
-            let mut sc = v.scenario(base, dir)?;
-            sc.run.seed = seed;
-            v.apply(&mut sc);
-            crate::prepare::prepare_from(&mut sc, file).map_err(|e| e.to_string())?;
-            let s = run_one(&sc, &format!("cbca-{}-{seed}", v.name))?;
+        for _ in seeds {
+            let (s, (sc, _)) = summaries.next().expect("a summary a job");
+            let s = s?;
+            rows.push(hunt_row(&v.name, sc, &s));
             let m = &s["mission"]["hunt"];
             captured.push(m["captured"].as_f64().unwrap_or(0.0));
             if let Some(t) = m["all_captured_minutes"].as_f64() {
@@ -846,7 +906,7 @@ fn variants(
             md,
             "| {} | {} | {:.2} | {all} | {} | {:.1} | {:.0} | {:.0} | {:.0} | {:.1} |",
             v.name,
-            x.variant_seeds,
+            seeds.len(),
             mean_sd(&captured).0,
             if times.is_empty() {
                 "-".to_string()
@@ -872,38 +932,26 @@ fn variants(
     Ok(())
 }
 
-pub fn run(file: &Path, out: Option<&Path>) -> Result<i32, String> {
-    let text = std::fs::read_to_string(file)
-        .map_err(|e| format!("{}: cannot read: {e}", file.display()))?;
-    let x: CbcaExperiment =
-        toml::from_str(&text).map_err(|e| format!("{}: {}", file.display(), e.message()))?;
+pub fn run(ctx: &Context) -> Result<Report, String> {
+    let x: CbcaExperiment = parse_file(&ctx.file)?;
     if x.kind != "cbca" {
-        return Err(format!(
-            "{}: kind = {:?}, not \"cbca\"",
-            file.display(),
-            x.kind
-        ));
+        return Err(format!("{}: kind = {:?}, not \"cbca\"", ctx.name(), x.kind));
     }
-    let dir = file.parent().unwrap_or(Path::new(".")).to_path_buf();
-    let name = file.display().to_string();
+    let seeds = ctx.seeds(&x.seeds, x.first_seed)?;
+    let variant_seeds = ctx.seeds(&x.variant_seeds, x.first_seed)?;
+    let name = ctx.name();
     let load = |p: &Path| -> Result<Scenario, String> {
-        let mut sc = Scenario::load(&dir.join(p)).map_err(|e| e.to_string())?;
+        let mut sc = Scenario::load(&ctx.dir.join(p)).map_err(|e| e.to_string())?;
         crate::prepare::prepare_from(&mut sc, &name).map_err(|e| e.to_string())?;
         Ok(sc)
     };
     let ex1 = load(&x.example1)?;
     let ex2 = load(&x.example2)?;
-    let out = out.map_or_else(
-        || Path::new("runs").join(format!("experiment-{}", crate::runid::new_run_id())),
-        Path::to_path_buf,
-    );
-    std::fs::create_dir_all(&out).map_err(|e| format!("{}: {e}", out.display()))?;
-    let mut md = format!(
-        "# CBCA, thesis 003 chapter 4 (`orchestrator experiment {}`)\n\n",
-        file.display()
-    );
-    example_rounds(1, &ex1, &x, &out, &mut md)?;
-    example_rounds(2, &ex2, &x, &out, &mut md)?;
+    let out = ctx.out_dir()?;
+    let mut md = format!("# CBCA, thesis 003 chapter 4 (`orchestrator experiment {name}`)\n\n");
+    let mut rows = Vec::new();
+    example_rounds(1, &ex1, &x, out, &mut md)?;
+    example_rounds(2, &ex2, &x, out, &mut md)?;
     if !x.moving_radii.is_empty() {
         let (robots, tasks, params) = kernels_of(&ex2)?;
         // Our CBCA's start, then the thesis's first allocation (experiment_cbca_narrative.rs).
@@ -913,19 +961,19 @@ pub fn run(file: &Path, out: Option<&Path>) -> Result<i32, String> {
                 &tasks,
                 &params,
                 &x.moving_radii,
-                &out,
+                out,
                 &mut md,
                 &write_curves_svg,
             )?;
         }
     }
     if x.hunt_world {
-        example_hunt(1, &ex1, &mut md)?;
-        example_hunt(2, &ex2, &mut md)?;
+        example_hunt(1, &ex1, ctx, &mut md, &mut rows)?;
+        example_hunt(2, &ex2, ctx, &mut md, &mut rows)?;
     }
     let (_, _, params) = kernels_of(&ex1)?;
     if x.legacy_sweeps {
-        sweeps(&x, &params, &out, &mut md)?;
+        sweeps(&x, &seeds, &params, ctx, &mut md, &mut rows)?;
     }
     if x.fair {
         let robots_points: Vec<(usize, usize)> = x
@@ -939,12 +987,13 @@ pub fn run(file: &Path, out: Option<&Path>) -> Result<i32, String> {
             .map(|&n_e| (x.sweep_evaders_robots, n_e))
             .collect();
         fair::fair_sweeps(
-            x.seeds,
+            &seeds,
             &robots_points,
             &evaders_points,
             &x.instance,
             &params,
             &mut md,
+            &mut rows,
         );
     }
     for cover in [false, true] {
@@ -957,10 +1006,10 @@ pub fn run(file: &Path, out: Option<&Path>) -> Result<i32, String> {
             "(The next section with (2.6) {}.)\n",
             if cover { "on" } else { "off" }
         );
-        loss_sweep(&x, &p, &mut md);
+        loss_sweep(&x, &seeds, &p, &mut md, &mut rows);
         if x.kill_fraction > 0.0 {
             fair::kill_sweep(
-                x.seeds,
+                &seeds,
                 x.loss_point,
                 &x.losses,
                 x.loss_max_delay,
@@ -968,6 +1017,7 @@ pub fn run(file: &Path, out: Option<&Path>) -> Result<i32, String> {
                 &x.instance,
                 &p,
                 &mut md,
+                &mut rows,
             );
         }
         if !x.fair {
@@ -975,10 +1025,11 @@ pub fn run(file: &Path, out: Option<&Path>) -> Result<i32, String> {
         }
     }
     if x.hunt_world {
-        variants(&x, &ex1, &name, &dir, &mut md)?;
+        variants(&x, &ex1, &variant_seeds, ctx, &mut md, &mut rows)?;
     }
-    std::fs::write(out.join(&x.results_file), &md).map_err(|e| e.to_string())?;
-    println!("{md}");
-    println!("results: {}", out.join(&x.results_file).display());
-    Ok(0)
+    Ok(Report {
+        md,
+        rows,
+        ..Report::default()
+    })
 }

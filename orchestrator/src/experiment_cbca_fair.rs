@@ -20,6 +20,7 @@ use std::fmt::Write as _;
 use std::path::Path;
 
 use crate::experiment::mean_sd;
+use crate::experiment::runner::Row;
 
 fn fmt_ms(v: &[f64], digits: usize) -> String {
     if v.is_empty() {
@@ -50,14 +51,47 @@ struct Cell {
     censored: usize,
 }
 
-fn point(n_r: usize, n_e: usize, seeds: u64, ip: &InstanceParams, p: &CbcaParams) -> Vec<Cell> {
+/// The runs of one point; a row each (`figure`: the rows' variant).
+fn point(
+    n_r: usize,
+    n_e: usize,
+    seeds: &[u64],
+    ip: &InstanceParams,
+    p: &CbcaParams,
+    figure: &str,
+    rows: &mut Vec<Row>,
+) -> Vec<Cell> {
     let mut cells = vec![Cell::default(); Information::ALL.len() * Algorithm::ALL.len()];
-    for seed in 1..=seeds {
+    for &seed in seeds {
         let inst = random_instance(n_r, n_e, seed, ip, p);
         for (ii, &info) in Information::ALL.iter().enumerate() {
             for (ai, &a) in Algorithm::ALL.iter().enumerate() {
                 let r = run_fair(a, info, &inst.robots, &inst.tasks, &Radio::perfect(), p);
                 let c = &mut cells[ii * Algorithm::ALL.len() + ai];
+                let info_name = if info == Information::Local {
+                    "local"
+                } else {
+                    "global"
+                };
+                let e = r.evaluation.as_ref();
+                let s = r.consensus.as_ref();
+                rows.push(
+                    Row::new(
+                        figure,
+                        format!("{}, {info_name}", a.label()),
+                        n_r as u32,
+                        seed,
+                    )
+                    .with("targets", n_e)
+                    .with("deadlocked", e.is_none())
+                    .with("system_utility", e.map(|e| e.system_utility))
+                    .with("mean_completion", e.map(|e| e.mean_completion))
+                    .with("hunted", e.map(|e| e.hunted as f64))
+                    .with("consensus_rounds", s.map(|s| s.rounds as f64))
+                    .with("converged", s.map(|s| f64::from(u8::from(s.converged))))
+                    .with("bytes", s.map(|s| s.bytes as f64))
+                    .with("delivered", s.map(|s| s.delivered as f64)),
+                );
                 match &r.evaluation {
                     Some(e) => {
                         c.utility.push(e.system_utility);
@@ -80,16 +114,18 @@ fn point(n_r: usize, n_e: usize, seeds: u64, ip: &InstanceParams, p: &CbcaParams
 
 /// Figs. 4.6-4.7 as tables, every algorithm under both informations, with (2.6) off and on.
 pub fn fair_sweeps(
-    seeds: u64,
+    seeds: &[u64],
     robots_points: &[(usize, usize)],
     evaders_points: &[(usize, usize)],
     ip: &InstanceParams,
     base: &CbcaParams,
     md: &mut String,
+    rows: &mut Vec<Row>,
 ) {
     let _ = writeln!(
         md,
-        "## Figs. 4.6-4.7, the fair comparison ({seeds} seeds a point, mean ± sd, perfect radio)\n"
+        "## Figs. 4.6-4.7, the fair comparison ({} seeds a point, mean ± sd, perfect radio)\n",
+        seeds.len()
     );
     let _ = writeln!(md, "Every algorithm under the same information and the same constraints. *Local*: the 1.5 km temporary groups, each knowing its members' detections (1.2 km) plus the undetected targets they are nearest to; groups that claim a common target merge and plan again (CBCA: `merge_on_conflict`; baselines: `agent::cbca::baselines::local`). *Global*: every robot hears every other and knows every target (CBCA without grouping; Sujit et al. with its range limit lifted). (2.6) *on*: CBCA enforces it in Algorithms 1 and 2, a baseline's full coalition that does not cover E_j is shelved. Scored alike (`baselines::evaluate`). Instances and seeds as the sweeps above.\n");
     let labels: Vec<String> = Information::ALL
@@ -116,7 +152,11 @@ pub fn fair_sweeps(
         for (fig, points) in [("4.6", robots_points), ("4.7", evaders_points)] {
             let results: Vec<Vec<Cell>> = points
                 .iter()
-                .map(|&(n_r, n_e)| point(n_r, n_e, seeds, ip, &p))
+                .map(|&(n_r, n_e)| {
+                    let figure =
+                        format!("fair fig {fig}, (2.6) {}", if cover { "on" } else { "off" });
+                    point(n_r, n_e, seeds, ip, &p, &figure, rows)
+                })
                 .collect();
             for (what, pick, digits) in [
                 ("(a) average system utility", 0usize, 0usize),
@@ -228,7 +268,7 @@ pub fn fair_sweeps(
 /// graph without them; convergence and the targets hunted by the survivors.
 #[allow(clippy::too_many_arguments)]
 pub fn kill_sweep(
-    seeds: u64,
+    seeds: &[u64],
     point: [usize; 2],
     losses: &[f64],
     max_delay: u64,
@@ -236,10 +276,11 @@ pub fn kill_sweep(
     ip: &InstanceParams,
     params: &CbcaParams,
     md: &mut String,
+    rows: &mut Vec<Row>,
 ) {
     let [n_r, n_e] = point;
     let k = ((n_r as f64) * fraction).round() as usize;
-    let _ = writeln!(md, "## Round runs with {k} of {n_r} robots ({:.0} %) killed after convergence (n_e = {n_e}, {seeds} seeds a row, delays of up to {max_delay} rounds when lossy)\n", fraction * 100.0);
+    let _ = writeln!(md, "## Round runs with {k} of {n_r} robots ({:.0} %) killed after convergence (n_e = {n_e}, {} seeds a row, delays of up to {max_delay} rounds when lossy)\n", fraction * 100.0, seeds.len());
     let _ = writeln!(md, "The killed robots (a seeded draw) are forgotten by the survivors (`CbcaRobot::forget_robot`) and consensus runs again on the survivors' radio graph (grouped: the 1.5 km graph at the start positions, plus the conflict merges' links; global: complete). Targets hunted = targets whose survivors' coalition is full.\n");
     let _ = writeln!(md, "| setup | loss | converged before / after | rounds after | targets hunted before | after | system utility after |\n|---|---|---|---|---|---|---|");
     for (name, prior) in [
@@ -251,8 +292,19 @@ pub fn kill_sweep(
             let mut rounds = Vec::new();
             let mut hunted = [Vec::new(), Vec::new()];
             let mut util = Vec::new();
-            for seed in 1..=seeds {
+            for &seed in seeds {
                 let inst = random_instance(n_r, n_e, seed, ip, params);
+                let mut row = Row::new(
+                    format!(
+                        "{k} killed after convergence, (2.6) {}",
+                        if params.enforce_coverage { "on" } else { "off" }
+                    ),
+                    format!("CBCA, {name}"),
+                    n_r as u32,
+                    seed,
+                )
+                .with("targets", n_e)
+                .with("loss", loss);
                 let radio = Radio {
                     loss,
                     max_delay: if loss > 0.0 { max_delay } else { 0 },
@@ -262,9 +314,13 @@ pub fn kill_sweep(
                 conv[0] += usize::from(s.converged);
                 let book = inst.tasks.iter().map(|t| (t.id, t.clone())).collect();
                 let paths: Vec<Vec<TaskId>> = cbca.iter().map(|r| r.plan().path.clone()).collect();
-                if let Ok(e) = evaluate(&inst.robots, &book, paths, params) {
+                let before = evaluate(&inst.robots, &book, paths, params).ok();
+                if let Some(e) = &before {
                     hunted[0].push(e.hunted as f64);
                 }
+                row = row
+                    .with("converged_before", s.converged)
+                    .with("hunted_before", before.map(|e| e.hunted as f64));
                 let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0x6b11);
                 let mut ids: Vec<RobotId> = (0..n_r).collect();
                 ids.shuffle(&mut rng);
@@ -305,16 +361,24 @@ pub fn kill_sweep(
                 for r in &survivors {
                     paths[r.id()] = r.plan().path.clone();
                 }
-                if let Ok(e) = evaluate(&inst.robots, &book, paths, params) {
+                let after = evaluate(&inst.robots, &book, paths, params).ok();
+                if let Some(e) = &after {
                     hunted[1].push(e.hunted as f64);
                     util.push(e.system_utility);
                 }
+                rows.push(
+                    row.with("converged_after", s2.converged)
+                        .with("rounds_after", s2.rounds as f64)
+                        .with("hunted_after", after.as_ref().map(|e| e.hunted as f64))
+                        .with("system_utility_after", after.map(|e| e.system_utility)),
+                );
             }
             let _ = writeln!(
                 md,
-                "| {name} | {loss} | {} / {} of {seeds} | {} | {} | {} | {} |",
+                "| {name} | {loss} | {} / {} of {} | {} | {} | {} | {} |",
                 conv[0],
                 conv[1],
+                seeds.len(),
                 fmt_ms(&rounds, 1),
                 fmt_ms(&hunted[0], 1),
                 fmt_ms(&hunted[1], 1),

@@ -13,16 +13,14 @@
 //!
 //! T is reported as simulated time K tau (the paper's T is unexplained wall time, spec 4.6).
 
-use crate::inprocess;
+use crate::experiment::runner::{parse_file, Context, Report, Row, SeedSpec, DEFAULT_FIRST_SEED};
 use agent::behaviours::formation::parse_params;
 use agent::formation::constraints::PatternConstraints;
 use agent::formation::optimise::optimise_in;
 use agent::formation::{Template, Transform};
 use serde::{Deserialize, Serialize};
 use std::fmt::Write as _;
-use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicUsize, Ordering};
-use std::sync::Mutex;
+use std::path::PathBuf;
 use swarm::geometry::Vec2;
 use swarm::scenario::Scenario;
 use swarm::sections::formation::{PatternChoice, Reassignment};
@@ -37,10 +35,12 @@ pub struct FormationExperiment {
     pub table: String,
     /// Base scenario, relative to the experiment file.
     pub scenario: PathBuf,
-    /// Scenario 2 / one-shot / table 2: seeds first_seed .. first_seed + seeds.
-    #[serde(default = "ten")]
-    pub seeds: u32,
-    #[serde(default = "one")]
+    /// Scenario 2 / one-shot: the seeds (a count from `first_seed`, a range "A..B" or a list;
+    /// `--seeds` / `--runs` override it). Scenario 1 and table 3 use the first; table 2 the
+    /// first [`TABLE2_GROUPS`].
+    #[serde(default = "ten_seeds")]
+    pub seeds: SeedSpec,
+    #[serde(default = "first_seed")]
     pub first_seed: u64,
     /// Scenario 1: the template turned by k * 360 / placements degrees, k = 0 .. placements.
     #[serde(default = "ten")]
@@ -48,28 +48,33 @@ pub struct FormationExperiment {
     /// Table 3: the scenarios of the letters (relative to the file).
     #[serde(default)]
     pub letters: Vec<PathBuf>,
-    /// Where results go (relative to the working directory): results/formation-<table>.md.
-    #[serde(default = "results")]
-    pub results: PathBuf,
 }
+
+/// The paper's run count for its scenario 2 and section 3.2 (10 seeds), and for scenario 1
+/// (10 orientations).
+const PAPER_RUNS: u32 = 10;
+/// Table 2's start groups (the paper has 3).
+const TABLE2_GROUPS: usize = 3;
 
 fn ten() -> u32 {
-    10
+    PAPER_RUNS
 }
-fn one() -> u64 {
-    1
+fn ten_seeds() -> SeedSpec {
+    SeedSpec::Count(PAPER_RUNS as u64)
 }
-fn results() -> PathBuf {
-    PathBuf::from("results")
+fn first_seed() -> u64 {
+    DEFAULT_FIRST_SEED
 }
 
-/// Whether `path` is a formation experiment file (`kind = "formation"`).
 /// One run's figures.
 #[derive(Debug, Clone, Serialize)]
 pub struct FormationRun {
     pub label: String,
     pub group: String,
+    pub robots: u32,
     pub seed: u64,
+    /// Scenario 1: the template's turn, degrees.
+    pub orientation_deg: Option<f64>,
     pub formed: bool,
     pub k: Option<u64>,
     pub t: Option<f64>,
@@ -87,33 +92,38 @@ pub struct FormationRun {
 struct Job {
     label: String,
     group: String,
+    orientation_deg: Option<f64>,
     sc: Scenario,
 }
 
-fn run_all(jobs: Vec<Job>, quiet: bool) -> Result<Vec<FormationRun>, String> {
-    let next = AtomicUsize::new(0);
-    let out: Mutex<Vec<(usize, Result<FormationRun, String>)>> = Mutex::new(Vec::new());
-    let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
-    let id = crate::runid::new_run_id();
-    std::thread::scope(|s| {
-        for _ in 0..threads {
-            s.spawn(|| loop {
-                let i = next.fetch_add(1, Ordering::SeqCst);
-                let Some(job) = jobs.get(i) else { break };
-                let r = inprocess::run(&job.sc, None, &format!("{id}-f{i}"), 1, &mut |_| {})
-                    .map_err(|e| e.to_string())
-                    .and_then(|s| serde_json::to_value(&s).map_err(|e| e.to_string()))
-                    .map(|s| figures(job, &s));
-                if !quiet {
-                    eprintln!("run {}/{}: {} {}", i + 1, jobs.len(), job.group, job.label);
-                }
-                out.lock().expect("lock").push((i, r));
-            });
-        }
-    });
-    let mut v = out.into_inner().expect("lock");
-    v.sort_by_key(|x| x.0);
-    v.into_iter().map(|x| x.1).collect()
+/// Runs the jobs (`--jobs` at a time) and reads each one's figures.
+fn run_all(jobs: Vec<Job>, ctx: &Context) -> Result<Vec<FormationRun>, String> {
+    let runs: Vec<(Scenario, String)> = jobs
+        .iter()
+        .enumerate()
+        .map(|(i, j)| (j.sc.clone(), format!("f{i}")))
+        .collect();
+    ctx.run_all(&runs)
+        .into_iter()
+        .zip(&jobs)
+        .map(|(s, job)| s.map(|s| figures(job, &s)))
+        .collect()
+}
+
+/// A run as results.csv has it: K, T empty when it did not form.
+fn row_of(r: &FormationRun) -> Row {
+    Row::new(&r.label, &r.group, r.robots, r.seed)
+        .with("orientation_deg", r.orientation_deg)
+        .with("formed", r.formed)
+        .with("K", r.k)
+        .with("T", r.t)
+        .with("L", r.l)
+        .with("reassignments", r.reassignments)
+        .with("overlapping_pairs", r.overlapping_pairs)
+        .with("min_robot_clearance", r.min_robot_clearance)
+        .with("min_obstacle_clearance", r.min_obstacle_clearance)
+        .with("optimiser_seconds", r.optimiser_seconds)
+        .with("optimiser_gap", r.optimiser_gap)
 }
 
 fn figures(job: &Job, s: &serde_json::Value) -> FormationRun {
@@ -122,7 +132,9 @@ fn figures(job: &Job, s: &serde_json::Value) -> FormationRun {
     FormationRun {
         label: job.label.clone(),
         group: job.group.clone(),
+        robots: job.sc.run.robots,
         seed: job.sc.run.seed,
+        orientation_deg: job.orientation_deg,
         formed: f["formed"].as_bool().unwrap_or(false),
         k: f["iterations"].as_u64(),
         t: f["simulated_time"].as_f64(),
@@ -149,20 +161,47 @@ fn series_of(v: &serde_json::Value) -> Option<Vec<Vec<f64>>> {
     )
 }
 
-fn mean(v: impl Iterator<Item = f64>) -> f64 {
+/// The mean; None for no values (never the -0.0 an empty sum gives).
+fn mean(v: impl Iterator<Item = f64>) -> Option<f64> {
     let v: Vec<f64> = v.collect();
-    v.iter().sum::<f64>() / v.len().max(1) as f64
+    (!v.is_empty()).then(|| v.iter().sum::<f64>() / v.len() as f64)
 }
 
-/// Mean K, T, L over the formed runs, and how many formed.
-fn kt_l(runs: &[&FormationRun]) -> (f64, f64, f64, usize) {
+/// Mean K, T, L over the formed runs (None: none formed), and how many formed of how many.
+struct Formed {
+    k: Option<f64>,
+    t: Option<f64>,
+    l: Option<f64>,
+    formed: usize,
+    runs: usize,
+}
+
+fn kt_l(runs: &[&FormationRun]) -> Formed {
     let done: Vec<&&FormationRun> = runs.iter().filter(|r| r.formed).collect();
-    (
-        mean(done.iter().filter_map(|r| r.k.map(|k| k as f64))),
-        mean(done.iter().filter_map(|r| r.t)),
-        mean(done.iter().map(|r| r.l)),
-        done.len(),
-    )
+    Formed {
+        k: mean(done.iter().filter_map(|r| r.k.map(|k| k as f64))),
+        t: mean(done.iter().filter_map(|r| r.t)),
+        l: mean(done.iter().map(|r| r.l)),
+        formed: done.len(),
+        runs: runs.len(),
+    }
+}
+
+impl Formed {
+    /// "formed/runs (rate)".
+    fn completion(&self) -> String {
+        format!(
+            "{}/{} ({:.0} %)",
+            self.formed,
+            self.runs,
+            100.0 * self.formed as f64 / self.runs.max(1) as f64
+        )
+    }
+}
+
+/// A mean as the tables print it: "-" when no run formed.
+fn fmt_opt(v: Option<f64>, digits: usize) -> String {
+    v.map_or("-".into(), |v| format!("{v:.digits$}"))
 }
 
 fn pct(ours: f64, base: f64) -> f64 {
@@ -186,38 +225,35 @@ fn starts(sc: &Scenario) -> Result<Vec<Vec2>, String> {
     Ok(w.start.iter().map(|p| Vec2::new(p[0], p[1])).collect())
 }
 
-pub fn run(file: &Path, quiet: bool) -> Result<i32, String> {
-    let text = std::fs::read_to_string(file).map_err(|e| format!("{}: {e}", file.display()))?;
-    let mut x: FormationExperiment =
-        toml::from_str(&text).map_err(|e| format!("{}: {}", file.display(), e.message()))?;
-    let dir = file.parent().unwrap_or(Path::new(".")).to_path_buf();
-    x.scenario = dir.join(&x.scenario);
+pub fn run(ctx: &Context) -> Result<Report, String> {
+    let mut x: FormationExperiment = parse_file(&ctx.file)?;
+    x.scenario = ctx.dir.join(&x.scenario);
     let base = Scenario::load(&x.scenario).map_err(|e| e.to_string())?;
+    let seeds = ctx.seeds(&x.seeds, x.first_seed)?;
     let (md, runs) = match x.table.as_str() {
-        "table1" => table1(&x, &base, quiet)?,
-        "table2" => table2(&x, &base, quiet)?,
-        "table3" => table3(&x, &dir, quiet)?,
-        "one-shot" => one_shot(&x, &base, quiet)?,
-        t => return Err(format!("{}: table = {t:?} is unknown: allowed \"table1\", \"table2\", \"table3\", \"one-shot\"", file.display())),
+        "table1" => table1(&x, &base, &seeds, ctx)?,
+        "table2" => table2(&base, &seeds, ctx)?,
+        "table3" => table3(&x, &seeds, ctx)?,
+        "one-shot" => one_shot(&base, &seeds, ctx)?,
+        t => return Err(format!("{}: table = {t:?} is unknown: allowed \"table1\", \"table2\", \"table3\", \"one-shot\"", ctx.name())),
     };
     let bad: u64 = runs.iter().map(|r| r.overlapping_pairs).sum();
     let md = format!(
-        "{md}\nRuns: {}, formed: {}, overlapping robot pairs summed over every run and tick: {bad}.\nMade by `orchestrator experiment {}`.\n",
+        "{md}\nRuns: {}, formed: {}, overlapping robot pairs summed over every run and tick: {bad}.\nMade by `orchestrator experiment {}` (seeds {}).\n",
         runs.len(),
         runs.iter().filter(|r| r.formed).count(),
-        file.display()
+        ctx.name(),
+        seeds.iter().map(u64::to_string).collect::<Vec<_>>().join(", ")
     );
-    print!("{md}");
-    std::fs::create_dir_all(&x.results).map_err(|e| e.to_string())?;
-    let stem = format!("formation-{}", x.table);
-    std::fs::write(x.results.join(format!("{stem}.md")), &md).map_err(|e| e.to_string())?;
-    std::fs::write(
-        x.results.join(format!("{stem}.json")),
-        serde_json::to_string_pretty(&runs).map_err(|e| e.to_string())?,
-    )
-    .map_err(|e| e.to_string())?;
-    println!("written: {}/{stem}.md, {stem}.json", x.results.display());
-    Ok(0)
+    let mut json = serde_json::Map::new();
+    json.insert("experiment".into(), serde_json::json!(x));
+    json.insert("runs".into(), serde_json::json!(runs));
+    Ok(Report {
+        md,
+        rows: runs.iter().map(row_of).collect(),
+        json,
+        failed: false,
+    })
 }
 
 fn rotated(points: &[[f64; 2]], angle: f64) -> Vec<[f64; 2]> {
@@ -228,10 +264,15 @@ fn rotated(points: &[[f64; 2]], angle: f64) -> Vec<[f64; 2]> {
         .collect()
 }
 
+/// The algorithms of Table 1: ours (with rotation) and ref. [10] (no rotation).
+const OURS: &str = "ours";
+const BASELINE: &str = "baseline [10]";
+
 fn table1(
     x: &FormationExperiment,
     base: &Scenario,
-    quiet: bool,
+    seeds: &[u64],
+    ctx: &Context,
 ) -> Result<(String, Vec<FormationRun>), String> {
     let n = base.run.robots as usize;
     let template = base
@@ -241,8 +282,8 @@ fn table1(
         .template_points(n)?;
     let mut jobs = Vec::new();
     for (method, pattern) in [
-        ("ours", PatternChoice::Optimise),
-        ("baseline [10]", PatternChoice::NoRotation),
+        (OURS, PatternChoice::Optimise),
+        (BASELINE, PatternChoice::NoRotation),
     ] {
         for k in 0..x.placements {
             let angle = std::f64::consts::TAU * k as f64 / x.placements as f64;
@@ -250,73 +291,108 @@ fn table1(
             jobs.push(Job {
                 label: method.into(),
                 group: "scenario 1".into(),
+                orientation_deg: Some(angle.to_degrees()),
                 sc: with(base, |s| {
-                    s.run.seed = x.first_seed;
+                    s.run.seed = seeds[0];
                     let f = section(s);
                     f.pattern = pattern;
                     f.template = t.clone();
                 })?,
             });
         }
-        for seed in 0..x.seeds as u64 {
+        for &seed in seeds {
             jobs.push(Job {
                 label: method.into(),
                 group: "scenario 2".into(),
+                orientation_deg: None,
                 sc: with(base, |s| {
-                    s.run.seed = x.first_seed + seed;
+                    s.run.seed = seed;
                     section(s).pattern = pattern;
                 })?,
             });
         }
     }
-    let runs = run_all(jobs, quiet)?;
+    let runs = run_all(jobs, ctx)?;
+    Ok((table1_report(&runs, x.placements, seeds), runs))
+}
+
+/// Table 1 over the runs. A run that never formed (the baseline often finds no feasible
+/// pattern among obstacles) is counted in "formed", never averaged; the reductions compare
+/// the runs both algorithms formed (the same starts and orientation), and say "n/a" when
+/// there are none.
+fn table1_report(runs: &[FormationRun], placements: u32, seeds: &[u64]) -> String {
     let pick = |g: &str, l: &str| -> Vec<&FormationRun> {
         runs.iter()
             .filter(|r| r.group == g && r.label == l)
             .collect()
     };
-    let mut md = String::from(
+    let mut md = format!(
         "# Formation, Table 1: ours (with rotation) vs ref. [10] (no rotation)\n\n\
-         Scenario 1: the same starts (seed first_seed), the template given in 10 orientations \
-         (\"different desired pattern positions\"). Scenario 2: the same template, 10 seeded starts. \
+         Scenario 1: the same starts (seed {}), the template given in {placements} orientations \
+         (\"different desired pattern positions\"). Scenario 2: the same template, {} seeded starts. \
          K = ticks to completion (2 of them gathering the starts over the radio), T = K tau \
-         (simulated, tau = 0.25 s), L = sum of path lengths. Means over the formed runs.\n\n\
+         (simulated, tau = 0.25 s), L = sum of path lengths. Means over the formed runs; a run \
+         that never formed (no feasible pattern found, or max_ticks reached) is censored: counted \
+         in \"formed\", left out of the means (\"-\": none formed).\n\n\
          | scenario | algorithm | formed | K | T (s) | L | paper K | paper T | paper L |\n|---|---|---|---|---|---|---|---|---|\n",
+        seeds[0],
+        seeds.len()
     );
     let paper = [
-        ("scenario 1", "ours", [41.3, 12.73, 35.02]),
-        ("scenario 1", "baseline [10]", [45.7, 15.34, 37.89]),
-        ("scenario 2", "ours", [39.5, 11.35, 33.72]),
-        ("scenario 2", "baseline [10]", [43.2, 13.63, 36.30]),
+        ("scenario 1", OURS, [41.3, 12.73, 35.02]),
+        ("scenario 1", BASELINE, [45.7, 15.34, 37.89]),
+        ("scenario 2", OURS, [39.5, 11.35, 33.72]),
+        ("scenario 2", BASELINE, [43.2, 13.63, 36.30]),
     ];
     for (g, l, p) in paper {
-        let rs = pick(g, l);
-        let (k, t, len, done) = kt_l(&rs);
+        let f = kt_l(&pick(g, l));
         let _ = writeln!(
             md,
-            "| {g} | {l} | {done}/{} | {k:.1} | {t:.2} | {len:.2} | {} | {} | {} |",
-            rs.len(),
+            "| {g} | {l} | {} | {} | {} | {} | {} | {} | {} |",
+            f.completion(),
+            fmt_opt(f.k, 1),
+            fmt_opt(f.t, 2),
+            fmt_opt(f.l, 2),
             p[0],
             p[1],
             p[2]
         );
     }
-    md.push_str("\n| scenario | K reduction | T reduction | L reduction | paper K | paper T | paper L |\n|---|---|---|---|---|---|---|\n");
+    md.push_str("\nReductions, (baseline - ours) / baseline, of the means over the runs both algorithms formed (the same starts and orientation):\n\n| scenario | runs both formed | K reduction | T reduction | L reduction | paper K | paper T | paper L |\n|---|---|---|---|---|---|---|---|\n");
     for (g, pk, pt, pl) in [
         ("scenario 1", 9.6, 17.0, 7.6),
         ("scenario 2", 8.6, 16.7, 7.1),
     ] {
-        let (k1, t1, l1, _) = kt_l(&pick(g, "ours"));
-        let (k0, t0, l0, _) = kt_l(&pick(g, "baseline [10]"));
+        let (ours, theirs) = (pick(g, OURS), pick(g, BASELINE));
+        let same = |a: &FormationRun, b: &FormationRun| {
+            a.seed == b.seed && a.orientation_deg == b.orientation_deg
+        };
+        let pairs: Vec<(&FormationRun, &FormationRun)> = ours
+            .iter()
+            .filter(|o| o.formed)
+            .filter_map(|o| {
+                theirs
+                    .iter()
+                    .find(|b| b.formed && same(o, b))
+                    .map(|b| (*o, *b))
+            })
+            .collect();
+        let both = format!("{} of {}", pairs.len(), ours.len().max(theirs.len()));
+        let (o, b): (Vec<&FormationRun>, Vec<&FormationRun>) = pairs.into_iter().unzip();
+        let (f1, f0) = (kt_l(&o), kt_l(&b));
+        let red = |a: Option<f64>, z: Option<f64>| match (a, z) {
+            (Some(a), Some(z)) if z > 0.0 => format!("{:.1} %", pct(a, z)),
+            _ => "n/a".into(),
+        };
         let _ = writeln!(
             md,
-            "| {g} | {:.1} % | {:.1} % | {:.1} % | {pk} % | {pt} % | {pl} % |",
-            pct(k1, k0),
-            pct(t1, t0),
-            pct(l1, l0)
+            "| {g} | {both} | {} | {} | {} | {pk} % | {pt} % | {pl} % |",
+            red(f1.k, f0.k),
+            red(f1.t, f0.t),
+            red(f1.l, f0.l)
         );
     }
-    Ok((md, runs))
+    md
 }
 
 /// Table 2's perturbations of the optimum (alpha, d_1, d_2, theta), after the paper's rows
@@ -356,14 +432,13 @@ fn objective(starts: &[Vec2], targets: &[Vec2]) -> f64 {
 }
 
 fn table2(
-    x: &FormationExperiment,
     base: &Scenario,
-    quiet: bool,
+    seeds: &[u64],
+    ctx: &Context,
 ) -> Result<(String, Vec<FormationRun>), String> {
     let mut jobs = Vec::new();
     let mut rows: Vec<(String, String, [f64; 4], f64)> = Vec::new();
-    for g in 0..3u64 {
-        let seed = x.first_seed + g;
+    for (g, &seed) in seeds.iter().take(TABLE2_GROUPS).enumerate() {
         let sc = with(base, |s| s.run.seed = seed)?;
         let p = parse_params(&sc)?.kernels;
         let f = sc.formation.clone().unwrap_or_default();
@@ -415,6 +490,7 @@ fn table2(
             jobs.push(Job {
                 label,
                 group: format!("group {}", g + 1),
+                orientation_deg: None,
                 sc: with(&sc, |s| {
                     let f = section(s);
                     f.pattern = PatternChoice::Fixed;
@@ -423,10 +499,10 @@ fn table2(
             });
         }
     }
-    let runs = run_all(jobs, quiet)?;
-    let mut md = String::from(
+    let runs = run_all(jobs, ctx)?;
+    let mut md = format!(
         "# Formation, Table 2: the optimum against perturbed feasible parameters\n\n\
-         Three start groups (seeds first_seed ..); in each, the optimal (alpha, d, theta) of eq. (14) \
+         {} start groups (seeds {:?}); in each, the optimal (alpha, d, theta) of eq. (14) \
          and up to 3 feasible perturbations of it (the paper's rows perturb alpha by 0.03-0.13, d by \
          0.03-0.2, theta by 0.04-0.07), each run with its Hungarian assignment and per-step \
          reassignment. The paper's groups have other starts, obstacles and template, so only the \
@@ -434,6 +510,8 @@ fn table2(
          The objective is eq. (1) at the start positions (sum of squared distances, the \
          Hungarian assignment): the optimum's is the least, by construction.\n\n\
          | group | parameters | alpha | d | theta | objective | K | T (s) | L |\n|---|---|---|---|---|---|---|---|---|\n",
+        seeds.len().min(TABLE2_GROUPS),
+        &seeds[..seeds.len().min(TABLE2_GROUPS)]
     );
     for (r, (_, _, q, cost)) in runs.iter().zip(&rows) {
         let _ = writeln!(
@@ -456,8 +534,8 @@ fn table2(
 
 fn table3(
     x: &FormationExperiment,
-    dir: &Path,
-    quiet: bool,
+    seeds: &[u64],
+    ctx: &Context,
 ) -> Result<(String, Vec<FormationRun>), String> {
     let mut md = String::from(
         "# Formation, Table 3: letters n and r with theta restricted\n\n\
@@ -467,8 +545,8 @@ fn table3(
     let mut jobs = Vec::new();
     let mut solved = Vec::new();
     for path in &x.letters {
-        let sc = Scenario::load(&dir.join(path)).map_err(|e| e.to_string())?;
-        let sc = with(&sc, |s| s.run.seed = x.first_seed)?;
+        let sc = Scenario::load(&ctx.dir.join(path)).map_err(|e| e.to_string())?;
+        let sc = with(&sc, |s| s.run.seed = seeds[0])?;
         let p = parse_params(&sc)?.kernels;
         let f = sc.formation.clone().unwrap_or_default();
         let template = Template {
@@ -482,10 +560,11 @@ fn table3(
         jobs.push(Job {
             label: f.template_name.clone(),
             group: "table 3".into(),
+            orientation_deg: None,
             sc,
         });
     }
-    let runs = run_all(jobs, quiet)?;
+    let runs = run_all(jobs, ctx)?;
     for (i, ((name, range, best), r)) in solved.iter().zip(&runs).enumerate() {
         let _ = writeln!(
             md,
@@ -506,38 +585,41 @@ fn table3(
 }
 
 fn one_shot(
-    x: &FormationExperiment,
     base: &Scenario,
-    quiet: bool,
+    seeds: &[u64],
+    ctx: &Context,
 ) -> Result<(String, Vec<FormationRun>), String> {
     let mut jobs = Vec::new();
     for (label, mode) in [
         ("per-step", Reassignment::PerStep),
         ("one-shot", Reassignment::OneShot),
     ] {
-        for seed in 0..x.seeds as u64 {
+        for &seed in seeds {
             jobs.push(Job {
                 label: label.into(),
                 group: "section 3.2".into(),
+                orientation_deg: None,
                 sc: with(base, |s| {
-                    s.run.seed = x.first_seed + seed;
+                    s.run.seed = seed;
                     section(s).reassignment = mode;
                 })?,
             });
         }
     }
-    let runs = run_all(jobs, quiet)?;
+    let runs = run_all(jobs, ctx)?;
     let mut md = String::from(
         "# Formation, section 3.2: the assignment every step against once\n\n\
          | assignment | formed | mean K | mean L | reassignments (total) | least robot clearance |\n|---|---|---|---|---|---|\n",
     );
     for label in ["per-step", "one-shot"] {
         let rs: Vec<&FormationRun> = runs.iter().filter(|r| r.label == label).collect();
-        let (k, _, l, done) = kt_l(&rs);
+        let f = kt_l(&rs);
         let _ = writeln!(
             md,
-            "| {label} | {done}/{} | {k:.1} | {l:.2} | {} | {:.4} |",
-            rs.len(),
+            "| {label} | {} | {} | {} | {} | {:.4} |",
+            f.completion(),
+            fmt_opt(f.k, 1),
+            fmt_opt(f.l, 2),
             rs.iter().map(|r| r.reassignments).sum::<u64>(),
             rs.iter()
                 .map(|r| r.min_robot_clearance)
@@ -551,66 +633,41 @@ fn one_shot(
         .find(|r| r.label == "per-step")
         .and_then(|r| r.series.clone())
     {
-        std::fs::create_dir_all(&x.results).map_err(|e| e.to_string())?;
-        let path = x.results.join("formation-fig9.svg");
-        std::fs::write(&path, fig9(&series)).map_err(|e| e.to_string())?;
-        let _ = writeln!(
-            md,
-            "\nFig. 9 analogue: {} (seed {}).",
-            path.display(),
-            x.first_seed
-        );
+        let file = "fig9.svg";
+        crate::export::charts::write(&fig9(&series, seeds[0]), &ctx.out_file(file)?)?;
+        let _ = writeln!(md, "\n![Fig. 9 analogue]({file}) (seed {}).", seeds[0]);
     }
     Ok((md, runs))
 }
 
-/// Each robot's distance to its slot against k, as a plain SVG.
-fn fig9(series: &[Vec<f64>]) -> String {
-    let (w, h, m) = (640.0, 400.0, 50.0);
-    let kmax = series.iter().map(|s| s.len()).max().unwrap_or(1).max(2) as f64;
-    let ymax = series
-        .iter()
-        .flatten()
-        .filter(|v| v.is_finite())
-        .fold(1e-9f64, |a, b| a.max(*b));
-    let mut s = format!(
-        "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{w}\" height=\"{h}\" font-family=\"sans-serif\" font-size=\"12\">\n<rect width=\"{w}\" height=\"{h}\" fill=\"white\"/>\n\
-         <text x=\"{}\" y=\"20\" text-anchor=\"middle\">Fig. 9 analogue: distance of each robot to its slot</text>\n\
-         <line x1=\"{m}\" y1=\"{}\" x2=\"{}\" y2=\"{}\" stroke=\"black\"/>\n<line x1=\"{m}\" y1=\"{m}\" x2=\"{m}\" y2=\"{}\" stroke=\"black\"/>\n\
-         <text x=\"{}\" y=\"{}\" text-anchor=\"middle\">k (ticks, 0 .. {})</text>\n<text x=\"12\" y=\"{}\" transform=\"rotate(-90 12 {})\" text-anchor=\"middle\">distance (0 .. {ymax:.1})</text>\n",
-        w / 2.0,
-        h - m,
-        w - m,
-        h - m,
-        h - m,
-        w / 2.0,
-        h - 15.0,
-        kmax as u64 - 1,
-        h / 2.0,
-        h / 2.0
-    );
-    for (i, robot) in series.iter().enumerate() {
-        let hue = 360.0 * i as f64 / series.len().max(1) as f64;
-        let pts: Vec<String> = robot
+/// Fig. 9: each robot's distance to its slot against k (the ticks before it had a slot
+/// left out).
+fn fig9(series: &[Vec<f64>], seed: u64) -> crate::export::charts::Chart {
+    use crate::export::charts::{Chart, Point, Series};
+    Chart {
+        title: format!("Fig. 9 analogue: each robot's distance to its slot (seed {seed})"),
+        x_label: "k (ticks)".into(),
+        y_label: "distance to slot".into(),
+        series: series
             .iter()
             .enumerate()
-            .filter(|(_, v)| v.is_finite())
-            .map(|(k, v)| {
-                format!(
-                    "{:.1},{:.1}",
-                    m + (w - 2.0 * m) * k as f64 / (kmax - 1.0),
-                    h - m - (h - 2.0 * m) * v / ymax
-                )
+            .map(|(i, robot)| Series {
+                label: format!("R{}", i + 1),
+                points: robot
+                    .iter()
+                    .enumerate()
+                    .filter(|(_, v)| v.is_finite())
+                    .map(|(k, &v)| Point {
+                        x: k as f64,
+                        mean: v,
+                        lo: v,
+                        hi: v,
+                    })
+                    .collect(),
+                reference: false,
             })
-            .collect();
-        let _ = writeln!(
-            s,
-            "<polyline fill=\"none\" stroke=\"hsl({hue:.0},70%,45%)\" stroke-width=\"1.5\" points=\"{}\"/>",
-            pts.join(" ")
-        );
+            .collect(),
     }
-    s.push_str("</svg>\n");
-    s
 }
 
 #[cfg(test)]
@@ -623,15 +680,83 @@ mod tests {
         let s = series_of(&v).expect("a series with nulls is read");
         assert!(s[0][0].is_nan() && s[1][1].is_nan());
         assert_eq!((s[0][3], s[1][2]), (1.0, 4.0));
-        let svg = fig9(&s);
-        assert_eq!(svg.matches("<polyline").count(), 2);
-        // Robot 0 has 3 points, robot 1 has 2 (the nulls left out).
-        let points: Vec<usize> = svg
-            .lines()
-            .filter(|l| l.starts_with("<polyline"))
-            .map(|l| l.split("points=\"").nth(1).unwrap().split(' ').count())
+        let chart = fig9(&s, 1);
+        assert_eq!(chart.series.len(), 2);
+        // Robot 0 has 3 points, robot 1 has 2 (the nulls left out), at their ticks.
+        let xs: Vec<Vec<f64>> = chart
+            .series
+            .iter()
+            .map(|s| s.points.iter().map(|p| p.x).collect())
             .collect();
-        assert_eq!(points, vec![3, 2]);
+        assert_eq!(xs, vec![vec![1.0, 2.0, 3.0], vec![2.0, 3.0]]);
         assert!(series_of(&serde_json::json!("not a series")).is_none());
+    }
+
+    fn run(label: &str, seed: u64, k: Option<u64>) -> FormationRun {
+        FormationRun {
+            label: label.into(),
+            group: "scenario 2".into(),
+            robots: 12,
+            seed,
+            orientation_deg: None,
+            formed: k.is_some(),
+            k,
+            t: k.map(|k| k as f64 * 0.25),
+            l: if k.is_some() { 30.0 } else { 12.0 },
+            reassignments: 0,
+            overlapping_pairs: 0,
+            min_robot_clearance: 0.1,
+            min_obstacle_clearance: 0.1,
+            optimiser_seconds: 0.0,
+            optimiser_gap: 0.0,
+            series: None,
+        }
+    }
+
+    /// Issue 39: with 12 robots the baseline formed in 5 of 20 runs or none, and the table
+    /// printed K = -0.0 and an "inf %" reduction. A baseline that never forms is reported as
+    /// censored (0/2 formed, "-" means, "n/a" reductions); one that formed in some runs is
+    /// compared over the runs both formed only.
+    #[test]
+    fn a_baseline_that_never_forms_is_reported_as_censored_not_as_inf() {
+        let runs = vec![
+            run(OURS, 1, Some(40)),
+            run(OURS, 2, Some(44)),
+            run(BASELINE, 1, None),
+            run(BASELINE, 2, None),
+        ];
+        let md = table1_report(&runs, 10, &[1, 2]);
+        assert!(
+            !md.contains("inf") && !md.contains("NaN") && !md.contains("-0.0"),
+            "{md}"
+        );
+        assert!(
+            md.contains("| scenario 2 | baseline [10] | 0/2 (0 %) | - | - | - |"),
+            "{md}"
+        );
+        assert!(
+            md.contains("| scenario 2 | ours | 2/2 (100 %) | 42.0 | 10.50 | 30.00 |"),
+            "{md}"
+        );
+        assert!(
+            md.contains("| scenario 2 | 0 of 2 | n/a | n/a | n/a |"),
+            "{md}"
+        );
+        // The baseline formed seed 2 only: the reduction is over seed 2 alone (44 vs 50).
+        let runs = vec![
+            run(OURS, 1, Some(40)),
+            run(OURS, 2, Some(44)),
+            run(BASELINE, 1, None),
+            run(BASELINE, 2, Some(50)),
+        ];
+        let md = table1_report(&runs, 10, &[1, 2]);
+        assert!(
+            md.contains("| scenario 2 | baseline [10] | 1/2 (50 %) | 50.0 |"),
+            "{md}"
+        );
+        assert!(
+            md.contains("| scenario 2 | 1 of 2 | 12.0 % | 12.0 % | 0.0 % |"),
+            "{md}"
+        );
     }
 }

@@ -15,6 +15,9 @@
 //!    under each variant (radio loss, robots killed): C and Y of the auctions as made,
 //!    messages and bytes (the medium's counts), auction rounds, capture rate and time.
 
+use crate::experiment::runner::{
+    parse_file, run_scenario, tag_of, Context, Report, Row, SeedSpec, DEFAULT_FIRST_SEED,
+};
 use agent::hunt::auction::run_auction;
 use agent::hunt::instance::{random_instance, InstanceParams};
 use agent::hunt::parallel_auction::run_parallel_auction;
@@ -22,7 +25,7 @@ use agent::hunt::scenario::HuntKernels;
 use serde::Deserialize;
 use serde_json::Value;
 use std::fmt::Write as _;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use swarm::scenario::Scenario;
 use swarm::sections::hunt::AuctionKind;
 
@@ -34,16 +37,20 @@ pub struct HuntExperiment {
     pub kind: String,
     /// Example 3-A's scenario, relative to the file.
     pub scenario: PathBuf,
-    /// Seeds a point of the sweeps (the issue: 30).
-    pub seeds: u64,
+    /// The seeds of a point of the sweeps (the issue: 30): a count (from `first_seed`), a
+    /// range "A..B" or a list. `--seeds` / `--runs` override it and `variant_seeds`.
+    pub seeds: SeedSpec,
+    /// The first seed of a count.
+    #[serde(default = "first_seed")]
+    pub first_seed: u64,
     /// Fig. 3.7-3.8: n_e fixed, n_r varied.
     pub sweep_robots: Vec<usize>,
     pub sweep_robots_evaders: usize,
     /// Fig. 3.9-3.10: n_r fixed, n_e varied.
     pub sweep_evaders: Vec<usize>,
     pub sweep_evaders_robots: usize,
-    /// Runs a variant of the scenario (seeds 1..=variant_seeds).
-    pub variant_seeds: u64,
+    /// The seeds a variant of the scenario runs (a count from `first_seed`, a range or a list).
+    pub variant_seeds: SeedSpec,
     pub variants: Vec<crate::experiment::Variant>,
     /// The live auctions every variant runs with (`hunt.params.auction`); default: the
     /// scenario's own only.
@@ -51,51 +58,13 @@ pub struct HuntExperiment {
     pub auctions: Vec<AuctionKind>,
 }
 
-/// How the experiment's runs are made: the executor, and the run id the processes' run ids
-/// are made from (one a run, so each has its own /dev/shm names).
-struct Runner {
-    executor: crate::up::Executor,
-    base_id: String,
-    made: std::cell::Cell<u32>,
+fn first_seed() -> u64 {
+    DEFAULT_FIRST_SEED
 }
 
-impl Runner {
-    /// Runs the scenario and returns its summary as JSON.
-    fn run(&self, sc: &Scenario, tag: &str) -> Result<Value, String> {
-        match self.executor {
-            crate::up::Executor::Inprocess => in_process(sc, tag),
-            crate::up::Executor::Processes => {
-                self.made.set(self.made.get() + 1);
-                let id = format!("{}-h{}", self.base_id, self.made.get());
-                with_processes(sc, &id)
-            }
-        }
-    }
-}
-
-fn in_process(sc: &Scenario, tag: &str) -> Result<Value, String> {
-    let s = crate::inprocess::run(sc, None, tag, 1, &mut |_| {}).map_err(|e| e.to_string())?;
-    serde_json::to_value(&s).map_err(|e| e.to_string())
-}
-
-/// One OS process per agent (the auctioneer too) and the world, as `orchestrator up` runs
-/// them; the summary is read back from the run folder, which is then removed.
-fn with_processes(sc: &Scenario, run_id: &str) -> Result<Value, String> {
-    let dir = std::env::temp_dir().join(format!("swarm-hunt-{run_id}"));
-    let summary = crate::processes::run(crate::processes::ProcessRun {
-        sc,
-        run_id,
-        run_dir: &dir,
-        live: false,
-        on_status: &mut |_| {},
-    })
-    .and_then(|_| {
-        let text = std::fs::read_to_string(dir.join("summary.json"));
-        text.map_err(|e| format!("{}: {e}", dir.display()))
-    })
-    .and_then(|t| serde_json::from_str(&t).map_err(|e| e.to_string()));
-    let _ = std::fs::remove_dir_all(&dir);
-    summary
+/// Auction names as the tables and rows give them.
+fn auction_name(a: AuctionKind) -> String {
+    format!("{a:?}").to_lowercase()
 }
 
 /// What a run's summary says that must not depend on the executor (not the timings, the
@@ -151,8 +120,14 @@ fn set(v: &[u64]) -> String {
     format!("{{{}}}", names.join(", "))
 }
 
-fn example_3a(sc: &Scenario, run: &Runner, out: &Path, md: &mut String) -> Result<(), String> {
-    let s = run.run(sc, "hunt-example-3a")?;
+fn example_3a(
+    sc: &Scenario,
+    ctx: &Context,
+    md: &mut String,
+    rows: &mut Vec<Row>,
+) -> Result<(), String> {
+    let s = ctx.run(sc, "hunt-example-3a")?;
+    rows.push(live_row("example 3-A", sc, &s));
     let m = &s["mission"]["hunt"];
     let t5 = sc
         .hunt
@@ -172,7 +147,7 @@ fn example_3a(sc: &Scenario, run: &Runner, out: &Path, md: &mut String) -> Resul
             .rfind(|m| !m.is_empty())
     };
     let _ = writeln!(md, "## Example 3-A (`{}`)\n", sc.run.behaviour);
-    let how = match run.executor {
+    let how = match ctx.executor {
         crate::up::Executor::Inprocess => "in-process",
         crate::up::Executor::Processes => {
             "with real processes (one a robot, the auctioneer, the world)"
@@ -186,8 +161,9 @@ fn example_3a(sc: &Scenario, run: &Runner, out: &Path, md: &mut String) -> Resul
         s["ticks"],
         s["ticks"].as_f64().unwrap_or(0.0) * sc.hunt.params.minutes_per_tick
     );
-    if run.executor == crate::up::Executor::Processes {
-        let again = in_process(sc, "hunt-example-3a-inprocess")?;
+    if ctx.executor == crate::up::Executor::Processes {
+        let id = format!("{}-hunt-example-3a-inprocess", ctx.id);
+        let again = run_scenario(sc, crate::up::Executor::Inprocess, &id)?;
         let (a, b) = (outcome_of(&s), outcome_of(&again));
         let differ: Vec<&String> = a
             .as_object()
@@ -298,55 +274,79 @@ fn example_3a(sc: &Scenario, run: &Runner, out: &Path, md: &mut String) -> Resul
         }
         series.push((t.id, zs));
     }
-    write_reward_svg(&series, &out.join("reward-iterations.svg"))?;
+    crate::export::charts::write(
+        &reward_chart(&series),
+        &ctx.out_file("reward-iterations.svg")?,
+    )?;
     let _ = writeln!(md, "\n![reward iterations](reward-iterations.svg)\n");
     Ok(())
 }
 
-/// Fig. 3.6 as an SVG: one polyline a task, reward against round.
-fn write_reward_svg(series: &[(u32, Vec<f64>)], path: &Path) -> Result<(), String> {
-    let (w, h, pad) = (640.0, 400.0, 50.0);
-    let rounds = series.iter().map(|s| s.1.len()).max().unwrap_or(1).max(2);
-    let zmax = series
-        .iter()
-        .flat_map(|s| s.1.iter().copied())
-        .fold(1.0, f64::max);
-    let x = |r: usize| pad + (w - 2.0 * pad) * r as f64 / (rounds - 1) as f64;
-    let y = |z: f64| h - pad - (h - 2.0 * pad) * z / (zmax * 1.05);
-    let colours = ["#dc2828", "#2878dc", "#1ea03c", "#e68c00", "#963cc8"];
-    let mut svg = format!(
-        "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{w}\" height=\"{h}\"><rect width=\"100%\" height=\"100%\" fill=\"white\"/>\
-         <line x1=\"{pad}\" y1=\"{}\" x2=\"{}\" y2=\"{}\" stroke=\"black\"/><line x1=\"{pad}\" y1=\"{pad}\" x2=\"{pad}\" y2=\"{}\" stroke=\"black\"/>\
-         <text x=\"{}\" y=\"{}\" font-size=\"13\">auction round</text><text x=\"8\" y=\"{}\" font-size=\"13\">z_j</text>",
-        h - pad, w - pad, h - pad, h - pad, w / 2.0 - 40.0, h - 12.0, pad - 10.0
-    );
-    for (k, (id, zs)) in series.iter().enumerate() {
-        let c = colours[k % colours.len()];
-        let pts: Vec<String> = zs
+/// Fig. 3.6: each task's reward z_j against the auction round.
+fn reward_chart(series: &[(u32, Vec<f64>)]) -> crate::export::charts::Chart {
+    use crate::export::charts::{Chart, Point, Series};
+    Chart {
+        title: "Fig. 3.6 analogue: reward z_j of each task, round by round (initial auction)"
+            .into(),
+        x_label: "auction round".into(),
+        y_label: "reward z_j".into(),
+        series: series
             .iter()
-            .enumerate()
-            .map(|(r, z)| format!("{:.1},{:.1}", x(r), y(*z)))
-            .collect();
-        let _ = write!(
-            svg,
-            "<polyline fill=\"none\" stroke=\"{c}\" stroke-width=\"2\" points=\"{}\"/><text x=\"{}\" y=\"{}\" fill=\"{c}\" font-size=\"13\">T{id}</text>",
-            pts.join(" "),
-            w - pad + 5.0,
-            y(*zs.last().unwrap_or(&0.0)) + 4.0
-        );
+            .map(|(id, zs)| Series {
+                label: format!("T{id}"),
+                points: zs
+                    .iter()
+                    .enumerate()
+                    .map(|(r, &z)| Point {
+                        x: (r + 1) as f64,
+                        mean: z,
+                        lo: z,
+                        hi: z,
+                    })
+                    .collect(),
+                reference: false,
+            })
+            .collect(),
     }
-    svg.push_str("</svg>\n");
-    std::fs::write(path, svg).map_err(|e| format!("{}: {e}", path.display()))
 }
 
-/// One point of a sweep: (C, Y) of both auctions over the seeds.
-fn sweep_point(n_e: usize, n_r: usize, seeds: u64, p: &agent::hunt::HuntParams) -> [Vec<f64>; 6] {
+/// One point of a sweep: (C, Y) of both auctions over the seeds, and a row per auction run.
+fn sweep_point(
+    n_e: usize,
+    n_r: usize,
+    seeds: &[u64],
+    p: &agent::hunt::HuntParams,
+    figure: &str,
+    rows: &mut Vec<Row>,
+) -> [Vec<f64>; 6] {
     let ip = InstanceParams::default();
     let mut out: [Vec<f64>; 6] = Default::default();
-    for seed in 1..=seeds {
+    for &seed in seeds {
         let (tasks, robots) = random_instance(n_e, n_r, seed, &ip);
         let a = run_auction(&tasks, &robots, p);
         let b = run_parallel_auction(&tasks, &robots, p);
+        for (name, cost, utility, coalitions) in [
+            (
+                "improved",
+                a.auctioneer_cost,
+                a.total_utility,
+                a.coalitions.len(),
+            ),
+            (
+                "parallel",
+                b.auctioneer_cost,
+                b.total_utility,
+                b.coalitions.len(),
+            ),
+        ] {
+            rows.push(
+                Row::new(figure, name, n_r as u32, seed)
+                    .with("evaders", n_e)
+                    .with("C", cost)
+                    .with("Y", utility)
+                    .with("coalitions", coalitions),
+            );
+        }
         out[0].push(a.auctioneer_cost);
         out[1].push(b.auctioneer_cost);
         out[2].push(a.total_utility);
@@ -357,20 +357,31 @@ fn sweep_point(n_e: usize, n_r: usize, seeds: u64, p: &agent::hunt::HuntParams) 
     out
 }
 
-fn sweeps(x: &HuntExperiment, p: &agent::hunt::HuntParams, md: &mut String) {
+fn sweeps(
+    x: &HuntExperiment,
+    seeds: &[u64],
+    p: &agent::hunt::HuntParams,
+    md: &mut String,
+    rows: &mut Vec<Row>,
+) {
     let _ = writeln!(
         md,
         "## Figs. 3.7-3.10 as tables (improved vs parallel auction, {} seeds a point, mean ± sd)\n",
-        x.seeds
+        seeds.len()
     );
     let mut table = |title: &str, points: Vec<(usize, usize)>, varied_robots: bool| {
+        let figure = if varied_robots {
+            "figs 3.7-3.8"
+        } else {
+            "figs 3.9-3.10"
+        };
         let _ = writeln!(md, "### {title}\n");
         let _ = writeln!(md, "| n_e | n_r | C improved | C parallel | Y improved | Y parallel | tasks filled (impr. / par.) |\n|---|---|---|---|---|---|---|");
         let mut c_lower = 0;
         let mut y_higher = 0;
         let mut gaps = Vec::new();
         for (n_e, n_r) in &points {
-            let r = sweep_point(*n_e, *n_r, x.seeds, p);
+            let r = sweep_point(*n_e, *n_r, seeds, p, figure, rows);
             let s: Vec<(f64, f64)> = r.iter().map(|v| mean_sd(v)).collect();
             let _ = writeln!(
                 md,
@@ -460,12 +471,48 @@ impl LiveRow {
     }
 }
 
+/// A live run as results.csv has it (the capture time empty when not every evader was
+/// captured: censored).
+fn live_row(variant: &str, sc: &Scenario, s: &Value) -> Row {
+    let m = &s["mission"]["hunt"];
+    let paid: f64 = m["per_evader"]
+        .as_array()
+        .into_iter()
+        .flatten()
+        .filter_map(|e| e["reward_paid"].as_f64())
+        .sum();
+    Row::new(
+        variant,
+        auction_name(sc.hunt.params.auction),
+        sc.run.robots,
+        sc.run.seed,
+    )
+    .with("evaders", sc.hunt.evaders.len())
+    .with("captured", m["captured"].as_f64())
+    .with("all_captured", m["all_captured_minutes"].is_number())
+    .with("all_captured_minutes", m["all_captured_minutes"].as_f64())
+    .with("ticks", s["ticks"].as_u64())
+    .with("C", m["auction_cost"].as_f64())
+    .with("Y", m["auction_utility"].as_f64())
+    .with("reward_paid", paid)
+    .with("messages_offered", s["messages"]["offered"].as_u64())
+    .with("messages_delivered", s["messages"]["delivered"].as_u64())
+    .with("bytes_offered", s["message_bytes"]["offered"].as_u64())
+    .with("bytes_delivered", s["message_bytes"]["delivered"].as_u64())
+    .with("auction_rounds", m["auction_rounds"].as_u64())
+    .with(
+        "robots_killed",
+        s["faults"].as_array().map_or(0, |f| f.len()),
+    )
+}
+
 fn variants(
     x: &HuntExperiment,
     base: &Scenario,
-    file: &str,
-    run: &Runner,
+    seeds: &[u64],
+    ctx: &Context,
     md: &mut String,
+    rows: &mut Vec<Row>,
 ) -> Result<(), String> {
     let auctions = if x.auctions.is_empty() {
         vec![base.hunt.params.auction]
@@ -475,24 +522,34 @@ fn variants(
     let _ = writeln!(
         md,
         "## Live: the auctions over the radio, with radio loss and robots killed ({} seeds a row, the scenario above)\n",
-        x.variant_seeds
+        seeds.len()
     );
     let _ = writeln!(md, "C and Y are those of the auctioneer's auctions as it made the awards (3.13, 3.14; all its auctions: the initial one and the new target's). Reward paid: the sum over the tasks of the last z_j the auctioneer reported (assistance raises it).\n");
     let _ = writeln!(md, "| auction | variant | runs | captured (mean of {}) | all captured | time to the last capture, min (mean over runs that captured all) | C | Y | reward paid | messages offered | delivered | kB offered | kB delivered | bytes a delivered message | auction rounds | robots killed |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|", base.hunt.evaders.len());
+    // Every run's scenario first (all validated before any runs), then `--jobs` at a time.
+    let mut jobs = Vec::new();
     for auction in &auctions {
         for v in &x.variants {
-            let mut row = LiveRow::default();
-            for seed in 1..=x.variant_seeds {
+            for &seed in seeds {
                 let mut sc = base.clone();
                 sc.run.seed = seed;
                 sc.hunt.params.auction = *auction;
                 v.apply(&mut sc);
-                crate::prepare::prepare_from(&mut sc, file).map_err(|e| e.to_string())?;
-                let tag: String = format!("hunt-{auction:?}-{}-{seed}", v.name)
-                    .chars()
-                    .map(|c| if c.is_ascii_alphanumeric() { c } else { '-' })
-                    .collect();
-                row.add(&run.run(&sc, &tag)?);
+                crate::prepare::prepare_from(&mut sc, &ctx.name()).map_err(|e| e.to_string())?;
+                let tag = tag_of(&format!("hunt-{auction:?}-{}-{seed}", v.name));
+                jobs.push((sc, tag));
+            }
+        }
+    }
+    let mut summaries = ctx.run_all(&jobs).into_iter().zip(&jobs);
+    for auction in &auctions {
+        for v in &x.variants {
+            let mut row = LiveRow::default();
+            for _ in seeds {
+                let (s, (sc, _)) = summaries.next().expect("a summary a job");
+                let s = s?;
+                rows.push(live_row(&v.name, sc, &s));
+                row.add(&s);
             }
             let ms = |v: &[f64]| {
                 if v.is_empty() {
@@ -506,7 +563,7 @@ fn variants(
                 md,
                 "| {auction:?} | {} | {} | {:.2} | {} | {} | {} | {} | {} | {:.0} | {:.0} | {:.0} | {:.0} | {:.1} | {:.1} | {:.1} |",
                 v.name,
-                x.variant_seeds,
+                seeds.len(),
                 mean_sd(&row.captured).0,
                 row.all,
                 if row.times.is_empty() {
@@ -534,51 +591,27 @@ fn variants(
     Ok(())
 }
 
-pub fn run(
-    file: &Path,
-    out: Option<&Path>,
-    executor: crate::up::Executor,
-    runs: Option<u32>,
-) -> Result<i32, String> {
-    let text = std::fs::read_to_string(file)
-        .map_err(|e| format!("{}: cannot read: {e}", file.display()))?;
-    let mut x: HuntExperiment =
-        toml::from_str(&text).map_err(|e| format!("{}: {}", file.display(), e.message()))?;
+pub fn run(ctx: &Context) -> Result<Report, String> {
+    let mut x: HuntExperiment = parse_file(&ctx.file)?;
     if x.kind != "hunt" {
-        return Err(format!(
-            "{}: kind = {:?}, not \"hunt\"",
-            file.display(),
-            x.kind
-        ));
+        return Err(format!("{}: kind = {:?}, not \"hunt\"", ctx.name(), x.kind));
     }
-    // `--runs N`: N seeds a sweep point and a live row instead of the file's.
-    if let Some(n) = runs {
-        x.seeds = n.into();
-        x.variant_seeds = n.into();
-    }
-    x.scenario = file.parent().unwrap_or(Path::new(".")).join(&x.scenario);
+    let seeds = ctx.seeds(&x.seeds, x.first_seed)?;
+    let variant_seeds = ctx.seeds(&x.variant_seeds, x.first_seed)?;
+    x.scenario = ctx.dir.join(&x.scenario);
     let mut base = Scenario::load(&x.scenario).map_err(|e| e.to_string())?;
-    let name = file.display().to_string();
-    crate::prepare::prepare_from(&mut base, &name).map_err(|e| e.to_string())?;
-    let out = out.map_or_else(
-        || Path::new("runs").join(format!("experiment-{}", crate::runid::new_run_id())),
-        Path::to_path_buf,
-    );
-    std::fs::create_dir_all(&out).map_err(|e| format!("{}: {e}", out.display()))?;
+    crate::prepare::prepare_from(&mut base, &ctx.name()).map_err(|e| e.to_string())?;
     let mut md = format!(
         "# Hunting, thesis 003 chapter 3 (`orchestrator experiment {}`)\n\n",
-        file.display()
+        ctx.name()
     );
-    let run = Runner {
-        executor,
-        base_id: crate::runid::new_run_id(),
-        made: std::cell::Cell::new(0),
-    };
-    example_3a(&base, &run, &out, &mut md)?;
-    sweeps(&x, &base.hunt.params, &mut md);
-    variants(&x, &base, &name, &run, &mut md)?;
-    std::fs::write(out.join("results.md"), &md).map_err(|e| e.to_string())?;
-    println!("{md}");
-    println!("results: {}", out.join("results.md").display());
-    Ok(0)
+    let mut rows = Vec::new();
+    example_3a(&base, ctx, &mut md, &mut rows)?;
+    sweeps(&x, &seeds, &base.hunt.params, &mut md, &mut rows);
+    variants(&x, &base, &variant_seeds, ctx, &mut md, &mut rows)?;
+    Ok(Report {
+        md,
+        rows,
+        ..Report::default()
+    })
 }
