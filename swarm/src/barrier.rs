@@ -599,6 +599,28 @@ mod tests {
         unlink(&prefix);
     }
 
+    /// The layouts docs/protocol.md section 4 gives.
+    #[test]
+    fn the_protocol_documents_the_barriers_layout() {
+        use std::mem::{offset_of, size_of};
+        assert_eq!(size_of::<Header>(), 40);
+        assert_eq!(
+            [
+                offset_of!(Header, robots),
+                offset_of!(Header, world_pid),
+                offset_of!(Header, release),
+                offset_of!(Header, shutdown),
+                offset_of!(Header, released_tick),
+                offset_of!(Header, expected),
+            ],
+            [8, 12, 16, 20, 24, 32]
+        );
+        assert_eq!(size_of::<AckHeader>(), 8);
+        assert_eq!(offset_of!(AckHeader, ready), 4);
+        assert_eq!((CTL_SLOT_BYTES, ACK_SLOT_BYTES), (16, 16));
+        assert_eq!(MAGIC.to_be_bytes(), *b"SWARMTK4");
+    }
+
     /// An agent maps the world's segment read-only (its release, shutdown and kill-order
     /// words cannot be written through it) and the agents' segment read-write.
     #[test]
