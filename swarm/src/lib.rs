@@ -23,6 +23,7 @@ pub mod mailbox;
 pub mod radio;
 pub mod recording;
 pub mod scenario;
+pub mod scenario_shape;
 pub mod sections;
 pub mod streams;
 pub mod toml_u64;

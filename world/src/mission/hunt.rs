@@ -35,6 +35,7 @@ pub const ENTRY: MissionEntry = MissionEntry {
     name: "hunt",
     progress_label: "evaders captured",
     implied_by: &["hunt"],
+    sections: &["hunt"],
     validate,
     new,
 };
@@ -50,7 +51,7 @@ const LIVE_TRAIL_SAMPLES: usize = 20;
 /// Checks the `[hunt]` section against the rest of the scenario.
 fn validate(sc: &Scenario, c: &Check) -> Result<(), ConfigError> {
     let h = &sc.hunt;
-    h.validate().map_err(|e| c.err("hunt", e.to_string()))?;
+    h.validate(c)?;
     if h.robots.is_empty() || h.evaders.is_empty() {
         return Err(c.err(
             "hunt",
