@@ -26,7 +26,10 @@ fn segments(key: &str) -> Vec<Seg> {
             Some(i) => (&part[..i], &part[i..]),
             None => (part, ""),
         };
-        if !name.is_empty() {
+        if name == "\"\"" {
+            // The empty key, written `""`.
+            out.push(Seg::Key(String::new()));
+        } else if !name.is_empty() {
             out.push(Seg::Key(name.to_string()));
         }
         while let Some(end) = rest.find(']') {
@@ -134,7 +137,7 @@ fn default_line(key: &str) -> Option<usize> {
 
 /// Names where `key` of a scenario read from `source` (whose text is `text`) is written:
 /// `source:LINE` when the text holds it, else the default's line (`embedded default
-/// scenario:LINE (not set in SOURCE)`), else `source` alone.
+/// scenario:LINE (not set in SOURCE)`), else `source` saying that neither sets it.
 pub fn locate_in(source: &str, text: &str, key: &str) -> String {
     if key.is_empty() {
         return source.to_string();
@@ -147,7 +150,10 @@ pub fn locate_in(source: &str, text: &str, key: &str) -> String {
             format!("{DEFAULT_SOURCE}:{line} (not set in {source})")
         }
         Some(line) => format!("{DEFAULT_SOURCE}:{line}"),
-        None => source.to_string(),
+        // Neither text writes it: the value is the program's own default, which is said
+        // (rather than a line no text has).
+        None if source == DEFAULT_SOURCE => format!("{source} (not set: built-in default)"),
+        None => format!("{source} (not set there nor in the {DEFAULT_SOURCE}: built-in default)"),
     }
 }
 
@@ -249,6 +255,7 @@ kernels.bsoa.l_b = 50.0
         assert_eq!(key_at_line(text, 5).as_deref(), Some("formation.kernels.x"));
         assert_eq!(key_at_line(text, 4), None);
         assert_eq!(key_at_line("seed = 1\n", 1).as_deref(), Some("seed"));
+        assert_eq!(line_of("a = 1\n\"\" = 2\n", "\"\""), Some(2));
     }
 
     #[test]

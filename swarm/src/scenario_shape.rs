@@ -100,6 +100,12 @@ fn join(path: &str, key: &str) -> String {
 
 fn walk_table(t: &toml::Table, path: &str, err: Err) -> Result<(), ConfigError> {
     for (k, v) in t {
+        if k.is_empty() {
+            return Err(err(
+                &join(path, "\"\""),
+                "is an empty key: no scenario key is empty".into(),
+            ));
+        }
         if k.len() > MAX_KEY_BYTES {
             let at = if path.is_empty() { "the top level" } else { path };
             return Err(err(

@@ -84,7 +84,9 @@ fn names_where(err: &str, file: Option<&Path>) -> bool {
     };
     let backquoted_key = err.matches('`').count() >= 2;
     let flag = err.contains("'--") || err.contains(" --") || err.starts_with("error: --");
-    (backquoted_key && (has_line(err) || flag))
+    // A key neither the file nor the default writes: its built-in default, said so.
+    let built_in = err.contains("(not set there nor in the embedded default");
+    (backquoted_key && (has_line(err) || flag || built_in))
         || (err.contains("not valid TOML") && has_line(err))
         || (err.contains("cannot read scenario file"))
         || (flag
