@@ -105,7 +105,8 @@ pub fn key_at_line(text: &str, line: usize) -> Option<String> {
     }
     let table = lines[..line - 1].iter().rev().find_map(|l| {
         let l = l.trim();
-        l.starts_with('[').then(|| l.trim_matches(|c| c == '[' || c == ']').trim())
+        l.starts_with('[')
+            .then(|| l.trim_matches(|c| c == '[' || c == ']').trim())
     });
     Some(match table {
         Some(t) if !t.is_empty() => format!("{t}.{key}"),

@@ -689,15 +689,20 @@ impl Scenario {
             );
             e
         })?;
-        c.range_u("arena.discs", self.arena.discs.len() as u64, 0, MAX_DISCS as u64)
-            .map_err(|mut e| {
-                e.message = format!(
-                    "has {} entries: at most {MAX_DISCS} discs (MAX_DISCS: each is a constraint \
+        c.range_u(
+            "arena.discs",
+            self.arena.discs.len() as u64,
+            0,
+            MAX_DISCS as u64,
+        )
+        .map_err(|mut e| {
+            e.message = format!(
+                "has {} entries: at most {MAX_DISCS} discs (MAX_DISCS: each is a constraint \
                      of every robot in the pattern optimiser and in ORCA)",
-                    self.arena.discs.len()
-                );
-                e
-            })?;
+                self.arena.discs.len()
+            );
+            e
+        })?;
         c.range_f(
             "arena.boundary_spacing",
             self.arena.boundary_spacing,
@@ -1037,7 +1042,10 @@ impl Scenario {
         if !(f.kill_fraction.is_finite() && (0.0..=1.0).contains(&f.kill_fraction)) {
             return Err(e(
                 "faults.kill_fraction",
-                format!("= {} is out of range: allowed [0, 1]", number(f.kill_fraction)),
+                format!(
+                    "= {} is out of range: allowed [0, 1]",
+                    number(f.kill_fraction)
+                ),
             ));
         }
         let [t0, t1] = f.kill_window;

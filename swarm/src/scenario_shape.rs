@@ -107,7 +107,11 @@ fn walk_table(t: &toml::Table, path: &str, err: Err) -> Result<(), ConfigError> 
             ));
         }
         if k.len() > MAX_KEY_BYTES {
-            let at = if path.is_empty() { "the top level" } else { path };
+            let at = if path.is_empty() {
+                "the top level"
+            } else {
+                path
+            };
             return Err(err(
                 path,
                 format!(
@@ -170,11 +174,17 @@ mod tests {
             vec!["1.0"; MAX_LIST_ENTRIES + 1].join(", ")
         );
         let e = refused(&text);
-        assert_eq!((e.key.as_str(), e.source.as_str()), ("arena.discs[0].centre", "t.toml:6"));
+        assert_eq!(
+            (e.key.as_str(), e.source.as_str()),
+            ("arena.discs[0].centre", "t.toml:6")
+        );
         assert!(e.message.contains("100001 entries"), "{e}");
         let text = format!("[run]\nbehaviour = \"{}\"\n", "x".repeat(1 << 20));
         let e = refused(&text);
-        assert_eq!((e.key.as_str(), e.source.as_str()), ("run.behaviour", "t.toml:2"));
+        assert_eq!(
+            (e.key.as_str(), e.source.as_str()),
+            ("run.behaviour", "t.toml:2")
+        );
         assert!(e.message.len() < 200, "the string is not echoed whole: {e}");
         assert!(e.message.contains("1048576 bytes"), "{e}");
         let text = format!("[radio]\n{} = 1\n", "k".repeat(5000));
@@ -196,7 +206,10 @@ mod tests {
     fn shown_strings_are_cut() {
         assert_eq!(shown("BT"), "\"BT\"");
         let s = shown(&"é".repeat(1000));
-        assert!(s.ends_with("... (2000 bytes)") && s.chars().count() < 70, "{s}");
+        assert!(
+            s.ends_with("... (2000 bytes)") && s.chars().count() < 70,
+            "{s}"
+        );
     }
 
     #[test]

@@ -58,11 +58,7 @@ pub fn bases(configs: &Path) -> Vec<Base> {
                 .ok()
                 .and_then(|t| t.get("run")?.get("robots")?.as_integer());
             Base {
-                name: p
-                    .strip_prefix(configs)
-                    .unwrap_or(&p)
-                    .display()
-                    .to_string(),
+                name: p.strip_prefix(configs).unwrap_or(&p).display().to_string(),
                 text,
                 robots,
             }
@@ -324,9 +320,9 @@ fn flags(
                     "100000001:0",
                     "1:18446744073709551615",
                 ]
-                    .choose(rng)
-                    .unwrap()
-                    .to_string(),
+                .choose(rng)
+                .unwrap()
+                .to_string(),
             ),
             7 => (
                 "--kill-fraction",

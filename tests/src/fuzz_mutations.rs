@@ -212,7 +212,10 @@ pub fn text_mutation(rng: &mut ChaCha8Rng, text: &mut String) -> Option<String> 
             let mut l: Vec<String> = lines.iter().map(|s| s.to_string()).collect();
             let key = lines[i].split(" = ").next().unwrap_or("x").to_string();
             l[i] = format!("{key} = 99999999999999999999");
-            (l.join("\n"), format!("line {}: integer beyond 64 bits", i + 1))
+            (
+                l.join("\n"),
+                format!("line {}: integer beyond 64 bits", i + 1),
+            )
         }
     };
     *text = new + "\n";

@@ -162,10 +162,7 @@ fn run_case(c: &Case, dir: &Path) -> (Outcome, String) {
                 err.push_str("\n(a run folder was created for refused input)");
                 Outcome::OtherExit
             } else if err.len() > MAX_MESSAGE_BYTES
-                || file
-                    .as_deref()
-                    .and_then(|f| points_at_its_key(&err, f))
-                    == Some(false)
+                || file.as_deref().and_then(|f| points_at_its_key(&err, f)) == Some(false)
             {
                 Outcome::WrongPlace
             } else if names_where(&err, file.as_deref()) {
@@ -225,7 +222,12 @@ fn fuzzed_scenarios_and_flags_are_run_or_refused_with_where_never_crash() {
             println!(
                 "case {k} {o:?} {:?}: {}",
                 c.mutations,
-                err.lines().next().unwrap_or("").chars().take(300).collect::<String>()
+                err.lines()
+                    .next()
+                    .unwrap_or("")
+                    .chars()
+                    .take(300)
+                    .collect::<String>()
             );
         }
         *counts.entry(o).or_default() += 1;

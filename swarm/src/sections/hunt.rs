@@ -469,6 +469,9 @@ mod tests {
         assert_eq!(h.validate(&c).unwrap_err().key, "hunt.evaders[0].id");
         h.evaders[0].id = 3;
         h.evaders[0].appears_at = -1.0;
-        assert_eq!(h.validate(&c).unwrap_err().key, "hunt.evaders[0].appears_at");
+        assert_eq!(
+            h.validate(&c).unwrap_err().key,
+            "hunt.evaders[0].appears_at"
+        );
     }
 }

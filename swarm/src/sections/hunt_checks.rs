@@ -88,16 +88,28 @@ pub fn validate(h: &HuntSection, c: &Check) -> Result<(), ConfigError> {
         c.range_f(&key("reward_cap"), e.reward_cap, 0.0, MAX_AMOUNT, true)?;
         resources(c, &key("resources"), &e.resources)?;
         c.range_f(&key("speed"), e.speed, 0.0, MAX_RATE, true)?;
-        c.range_f(&key("min_robot_speed"), e.min_robot_speed, 0.0, MAX_RATE, false)?;
+        c.range_f(
+            &key("min_robot_speed"),
+            e.min_robot_speed,
+            0.0,
+            MAX_RATE,
+            false,
+        )?;
         c.range_f(&key("appears_at"), e.appears_at, 0.0, MAX_MINUTES, false)?;
     }
     let a = &h.auctioneer;
     finite_pair(c, "hunt.auctioneer.position", a.position)?;
-    c.range_f("hunt.auctioneer.radio_range", a.radio_range, 0.0, MAX_KM, false)
-        .map_err(|mut e| {
-            e.message += " km (0: global)";
-            e
-        })?;
+    c.range_f(
+        "hunt.auctioneer.radio_range",
+        a.radio_range,
+        0.0,
+        MAX_KM,
+        false,
+    )
+    .map_err(|mut e| {
+        e.message += " km (0: global)";
+        e
+    })?;
     params(&h.params, c)
 }
 
@@ -125,23 +137,71 @@ fn params(p: &HuntParams, c: &Check) -> Result<(), ConfigError> {
         ("m2", p.m2, 0.0, 1.0, false),
         ("m3", p.m3, 0.0, 1.0, false),
         ("alpha", p.alpha, 0.0, 1.0, true),
-        ("reward_feedback_step", p.reward_feedback_step, 0.0, 100.0, false),
-        ("reward_floor_fraction", p.reward_floor_fraction, 0.0, 1.0, false),
-        ("reward_tolerance", p.reward_tolerance, 0.0, MAX_AMOUNT, true),
+        (
+            "reward_feedback_step",
+            p.reward_feedback_step,
+            0.0,
+            100.0,
+            false,
+        ),
+        (
+            "reward_floor_fraction",
+            p.reward_floor_fraction,
+            0.0,
+            1.0,
+            false,
+        ),
+        (
+            "reward_tolerance",
+            p.reward_tolerance,
+            0.0,
+            MAX_AMOUNT,
+            true,
+        ),
         ("r_e_at_three", p.r_e_at_three, 0.0, MAX_KM, true),
         ("r_s", p.r_s, 0.0, MAX_KM, true),
         ("capture_tolerance", p.capture_tolerance, 0.0, MAX_KM, true),
         ("speed_gap_floor", p.speed_gap_floor, 0.0, MAX_RATE, true),
-        ("parallel_reward_fraction", p.parallel_reward_fraction, 0.0, 1.0, false),
+        (
+            "parallel_reward_fraction",
+            p.parallel_reward_fraction,
+            0.0,
+            1.0,
+            false,
+        ),
         ("k_a", p.k_a, 0.0, MAX_AMOUNT, false),
         ("k_r", p.k_r, 0.0, MAX_AMOUNT, false),
         ("d_o", p.d_o, 0.0, MAX_KM, true),
         ("n", p.n, 0.0, 100.0, false),
         ("speed_per_force", p.speed_per_force, 0.0, MAX_AMOUNT, true),
-        ("evader_sensing_radius", p.evader_sensing_radius, 0.0, MAX_KM, false),
-        ("assistance_timeout", p.assistance_timeout, 0.0, MAX_MINUTES, true),
-        ("minutes_per_tick", p.minutes_per_tick, 0.0, MAX_MINUTES, true),
-        ("evader_wall_margin", p.evader_wall_margin, 0.0, MAX_KM, false),
+        (
+            "evader_sensing_radius",
+            p.evader_sensing_radius,
+            0.0,
+            MAX_KM,
+            false,
+        ),
+        (
+            "assistance_timeout",
+            p.assistance_timeout,
+            0.0,
+            MAX_MINUTES,
+            true,
+        ),
+        (
+            "minutes_per_tick",
+            p.minutes_per_tick,
+            0.0,
+            MAX_MINUTES,
+            true,
+        ),
+        (
+            "evader_wall_margin",
+            p.evader_wall_margin,
+            0.0,
+            MAX_KM,
+            false,
+        ),
         (
             "hunting_point_wall_clearance",
             p.hunting_point_wall_clearance,
@@ -150,7 +210,13 @@ fn params(p: &HuntParams, c: &Check) -> Result<(), ConfigError> {
             false,
         ),
         ("detection_radius", p.detection_radius, 0.0, MAX_KM, false),
-        ("encirclement_slowdown", p.encirclement_slowdown, 0.0, MAX_SLOWDOWN, true),
+        (
+            "encirclement_slowdown",
+            p.encirclement_slowdown,
+            0.0,
+            MAX_SLOWDOWN,
+            true,
+        ),
     ];
     for (name, v, lo, hi, open) in floats {
         c.range_f(&key(name), v, lo, hi, open).map_err(|mut e| {
@@ -175,10 +241,30 @@ fn params(p: &HuntParams, c: &Check) -> Result<(), ConfigError> {
             MIN_BID_WINDOW_TICKS,
             MAX_PERIOD_TICKS,
         ),
-        ("status_period_ticks", p.status_period_ticks, 1, MAX_PERIOD_TICKS),
-        ("silent_dead_ticks", p.silent_dead_ticks, 1, MAX_PERIOD_TICKS),
-        ("replan_period_ticks", p.replan_period_ticks, 1, MAX_PERIOD_TICKS),
-        ("award_resend_ticks", p.award_resend_ticks, 1, MAX_PERIOD_TICKS),
+        (
+            "status_period_ticks",
+            p.status_period_ticks,
+            1,
+            MAX_PERIOD_TICKS,
+        ),
+        (
+            "silent_dead_ticks",
+            p.silent_dead_ticks,
+            1,
+            MAX_PERIOD_TICKS,
+        ),
+        (
+            "replan_period_ticks",
+            p.replan_period_ticks,
+            1,
+            MAX_PERIOD_TICKS,
+        ),
+        (
+            "award_resend_ticks",
+            p.award_resend_ticks,
+            1,
+            MAX_PERIOD_TICKS,
+        ),
     ];
     for (name, v, lo, hi) in ints {
         c.range_u(&key(name), v, lo, hi)?;
@@ -192,7 +278,12 @@ mod tests {
 
     fn check(h: &HuntSection) -> Result<(), ConfigError> {
         let source = |_: &str| "t.toml".to_string();
-        validate(h, &Check { key_source: &source })
+        validate(
+            h,
+            &Check {
+                key_source: &source,
+            },
+        )
     }
 
     #[test]
