@@ -1,7 +1,10 @@
 #!/usr/bin/env bash
 # The fuzz harness over thousands of cases (CI runs a few hundred, tests/tests/fuzz.rs):
-# mutated scenario files and flag sets, each through `orchestrator up`; fails on a panic, a
-# signal, a hang, an error that does not say where, or a run that leaves anything behind.
+# mutated scenario files (drawn from every file in configs/, with structural mutations) and
+# flag sets, each through `orchestrator up`; fails on a panic, a signal, a hang, an error that
+# does not name file, key path and line (or names a line that does not hold its key), a
+# message that echoes a huge input, or a run that leaves anything behind. 3,000 cases take
+# about 7 minutes on 2 cores.
 #   scripts/fuzz.sh [CASES] [SEED]        (default 3000 cases of seed 1)
 set -euo pipefail
 cd "$(dirname "$0")/.."

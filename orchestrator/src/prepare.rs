@@ -10,6 +10,15 @@ use swarm::scenario::{Check, ConfigError, Scenario};
 pub fn prepare(sc: &mut Scenario, key_source: &dyn Fn(&str) -> String) -> Result<(), ConfigError> {
     sc.validate(key_source)?;
     let c = Check { key_source };
+    // A section of another behaviour or mission is refused before anything reads it.
+    let mission = world::mission::entry_for(sc);
+    let mut used: Vec<&str> = agent::behaviours::sections(&sc.run.behaviour).to_vec();
+    used.extend(mission.map_or(&[][..], |m| m.sections));
+    used.sort_unstable();
+    used.dedup();
+    if agent::behaviours::BEHAVIOURS.contains(&sc.run.behaviour.as_str()) && mission.is_some() {
+        sc.check_sections_used(&used, mission.map_or("", |m| m.name), &c)?;
+    }
     world::limits::validate(sc, &c)?;
     // The mission first: its range checks name the key the user wrote (`search.signal_m =
     // nan`) before the behaviour compares its own copies with them.

@@ -281,9 +281,11 @@ pub fn resolve(a: &UpArgs) -> Result<Scenario, ConfigError> {
         };
     }
     crate::prepare::prepare(&mut sc, &|key: &str| {
+        // A flag's key, or an entry of it (`faults.kill_at[3]` came from --chaos-at).
+        let of = |k: &str| key == k || key.strip_prefix(k).is_some_and(|r| r.starts_with('['));
         FLAG_KEYS
             .iter()
-            .find(|(k, _)| *k == key && from_flag.contains(k))
+            .find(|(k, _)| of(k) && from_flag.contains(k))
             .map(|(_, f)| f.to_string())
             .unwrap_or_else(|| file.clone())
     })?;

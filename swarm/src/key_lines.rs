@@ -26,7 +26,10 @@ fn segments(key: &str) -> Vec<Seg> {
             Some(i) => (&part[..i], &part[i..]),
             None => (part, ""),
         };
-        if !name.is_empty() {
+        if name == "\"\"" {
+            // The empty key, written `""`.
+            out.push(Seg::Key(String::new()));
+        } else if !name.is_empty() {
             out.push(Seg::Key(name.to_string()));
         }
         while let Some(end) = rest.find(']') {
@@ -49,7 +52,13 @@ fn span_of(item: &Item, segs: &[Seg], outer: Option<Range<usize>>) -> Option<Ran
     match first {
         Seg::Key(k) => {
             let (key, child) = item.as_table_like()?.get_key_value(k)?;
-            let here = key.span().or_else(|| child.span()).or(outer);
+            // An implicit table (`[formation.kernels]` alone makes `formation`) has no span of
+            // its own: its first written entry's.
+            let here = key
+                .span()
+                .or_else(|| child.span())
+                .or_else(|| first_span(child))
+                .or(outer);
             if rest.is_empty() {
                 here
             } else {
@@ -70,6 +79,39 @@ fn span_of(item: &Item, segs: &[Seg], outer: Option<Range<usize>>) -> Option<Ran
             }
         }
     }
+}
+
+/// The earliest span written below `item` (for tables the text never names itself).
+fn first_span(item: &Item) -> Option<Range<usize>> {
+    let t = item.as_table_like()?;
+    t.iter()
+        .filter_map(|(k, v)| {
+            let (key, _) = t.get_key_value(k)?;
+            key.span().or_else(|| v.span()).or_else(|| first_span(v))
+        })
+        .min_by_key(|s| s.start)
+}
+
+/// The dotted key written on line `line` (1-based) of `text`, for errors the parser reports
+/// by line only (an integer beyond 64 bits): the last `[table]` header above it joined with
+/// the line's `key =`. None when the line holds no `key =`.
+pub fn key_at_line(text: &str, line: usize) -> Option<String> {
+    let lines: Vec<&str> = text.lines().collect();
+    let here = lines.get(line.checked_sub(1)?)?.trim();
+    let (key, _) = here.split_once('=')?;
+    let key = key.trim().trim_matches('"');
+    if key.is_empty() || key.starts_with('[') || key.starts_with('#') {
+        return None;
+    }
+    let table = lines[..line - 1].iter().rev().find_map(|l| {
+        let l = l.trim();
+        l.starts_with('[')
+            .then(|| l.trim_matches(|c| c == '[' || c == ']').trim())
+    });
+    Some(match table {
+        Some(t) if !t.is_empty() => format!("{t}.{key}"),
+        _ => key.to_string(),
+    })
 }
 
 /// 1-based line of byte `at` in `text`.
@@ -96,7 +138,7 @@ fn default_line(key: &str) -> Option<usize> {
 
 /// Names where `key` of a scenario read from `source` (whose text is `text`) is written:
 /// `source:LINE` when the text holds it, else the default's line (`embedded default
-/// scenario:LINE (not set in SOURCE)`), else `source` alone.
+/// scenario:LINE (not set in SOURCE)`), else `source` saying that neither sets it.
 pub fn locate_in(source: &str, text: &str, key: &str) -> String {
     if key.is_empty() {
         return source.to_string();
@@ -109,7 +151,10 @@ pub fn locate_in(source: &str, text: &str, key: &str) -> String {
             format!("{DEFAULT_SOURCE}:{line} (not set in {source})")
         }
         Some(line) => format!("{DEFAULT_SOURCE}:{line}"),
-        None => source.to_string(),
+        // Neither text writes it: the value is the program's own default, which is said
+        // (rather than a line no text has).
+        None if source == DEFAULT_SOURCE => format!("{source} (not set: built-in default)"),
+        None => format!("{source} (not set there nor in the {DEFAULT_SOURCE}: built-in default)"),
     }
 }
 
@@ -201,6 +246,17 @@ kernels.bsoa.l_b = 50.0
         assert_eq!(line_of(TEXT, "arena.height"), None);
         assert_eq!(line_of(TEXT, "arena.obstacles[2].points"), None);
         assert_eq!(line_of(TEXT, "radio.loss"), None);
+    }
+
+    #[test]
+    fn implicit_tables_and_keys_of_a_line() {
+        let text = "[run]\nrobots = 3\n\n[formation.kernels]\nx = 1\n";
+        assert_eq!(line_of(text, "formation"), Some(4));
+        assert_eq!(key_at_line(text, 2).as_deref(), Some("run.robots"));
+        assert_eq!(key_at_line(text, 5).as_deref(), Some("formation.kernels.x"));
+        assert_eq!(key_at_line(text, 4), None);
+        assert_eq!(key_at_line("seed = 1\n", 1).as_deref(), Some("seed"));
+        assert_eq!(line_of("a = 1\n\"\" = 2\n", "\"\""), Some(2));
     }
 
     #[test]

@@ -22,6 +22,7 @@ pub mod mailbox;
 pub mod radio;
 pub mod recording;
 pub mod scenario;
+pub mod scenario_shape;
 pub mod sections;
 pub mod sense_pack;
 pub mod streams;

@@ -360,6 +360,22 @@ pub struct FaultParams {
 /// Hard limits that come from the fixed-size frames.
 pub const MAX_ROBOTS: u32 = 4096;
 
+/// Longest run (`run.max_ticks`), and the last tick a kill may be scheduled at: 10^8 ticks is
+/// over a day at 1,000 ticks/s.
+pub const MAX_TICKS: u64 = 100_000_000;
+
+/// Most polygon obstacles (`[[arena.obstacles]]`): every robot's sensing and every occlusion
+/// test walks them (the maps of the papers have 5 to 9).
+pub const MAX_OBSTACLES: usize = 1024;
+
+/// Most corners of one polygon obstacle.
+pub const MAX_OBSTACLE_CORNERS: usize = 4096;
+
+/// Most disc obstacles (`[[arena.discs]]`): each is a constraint of every robot at every node
+/// of the formation's pattern optimiser and of every ORCA step (the paper has 2). 10,000
+/// discs kept the optimiser 12 minutes in one tick (issue 37).
+pub const MAX_DISCS: usize = 64;
+
 /// Slowest pacing, in ticks per second (one tick per 1,000 s): below it a tick's start time
 /// k / tick_hz no longer fits a `Duration` for long runs, and nobody watches a run that slow.
 pub const MIN_TICK_HZ: f64 = 1e-3;
@@ -441,13 +457,38 @@ impl Check<'_> {
     }
 }
 
-/// A number as an error shows it: plain, or in exponent form when tiny or huge (1e-300).
-fn number(v: f64) -> String {
+/// A number as an error shows it: plain, or in exponent form when tiny or huge (1e-300, a
+/// subnormal 5e-324 rather than its 324 digits).
+pub fn number(v: f64) -> String {
     if v != 0.0 && v.is_finite() && !(1e-4..1e15).contains(&v.abs()) {
         format!("{v:e}")
     } else {
         format!("{v}")
     }
+}
+
+/// Numbers as an error shows them: `[1, 5e-324]`.
+pub fn numbers(v: &[f64]) -> String {
+    let parts: Vec<String> = v.iter().map(|x| number(*x)).collect();
+    format!("[{}]", parts.join(", "))
+}
+
+/// Serde's "invalid value: integer `-1`, expected u32" with the allowed range appended, so
+/// that an overflow names its range as every other refusal does.
+fn with_integer_range(message: &str) -> String {
+    let ranges = [
+        ("u8", u8::MAX as u64),
+        ("u16", u16::MAX as u64),
+        ("u32", u32::MAX as u64),
+        ("u64", u64::MAX),
+        ("usize", usize::MAX as u64),
+    ];
+    for (ty, max) in ranges {
+        if message.trim_end().ends_with(&format!("expected {ty}")) {
+            return format!("{message}: allowed 0..={max}");
+        }
+    }
+    message.to_string()
 }
 
 impl Default for Scenario {
@@ -476,14 +517,20 @@ impl Scenario {
             message: format!("{e}"),
         })?;
         let user: toml::Table = text.parse().map_err(|e: toml::de::Error| {
-            // A syntax error: no key yet, but the parser knows where.
+            // A syntax error: the parser knows the line; the key written there, if any.
             let at = e.span().map(|s| s.start).unwrap_or(0);
+            let line = crate::key_lines::line_of_offset(text, at);
+            let mut message = format!("not valid TOML: {}", e.message().trim());
+            if message.contains("number too large") {
+                message += &format!(" (TOML integers are {}..={})", i64::MIN, i64::MAX);
+            }
             ConfigError {
-                source: format!("{source}:{}", crate::key_lines::line_of_offset(text, at)),
-                key: String::new(),
-                message: format!("not valid TOML: {}", e.message().trim()),
+                source: format!("{source}:{line}"),
+                key: crate::key_lines::key_at_line(text, line).unwrap_or_default(),
+                message,
             }
         })?;
+        crate::scenario_shape::check(&user, text, source)?;
         merge(&mut base, user);
         serde_path_to_error::deserialize(toml::Value::Table(base)).map_err(
             |e: serde_path_to_error::Error<toml::de::Error>| {
@@ -491,7 +538,7 @@ impl Scenario {
                 let key = if path == "." { String::new() } else { path };
                 ConfigError {
                     source: crate::key_lines::locate_in(source, text, &key),
-                    message: e.inner().message().to_string(),
+                    message: with_integer_range(e.inner().message()),
                     key,
                 }
             },
@@ -500,10 +547,10 @@ impl Scenario {
 
     pub fn load(path: &Path) -> Result<Scenario, ConfigError> {
         let source = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|e| ConfigError {
+        let text = crate::scenario_shape::read_bounded(path).map_err(|message| ConfigError {
             source: source.clone(),
             key: String::new(),
-            message: format!("cannot read scenario file: {e}"),
+            message,
         })?;
         Scenario::parse(&text, &source)
     }
@@ -539,7 +586,7 @@ impl Scenario {
             e.message += " (stations are among run.robots, and one robot at least has a body)";
             e
         })?;
-        c.range_u("run.max_ticks", self.run.max_ticks, 1, 100_000_000)?;
+        c.range_u("run.max_ticks", self.run.max_ticks, 1, MAX_TICKS)?;
         c.range_f("arena.width", self.arena.width, 0.0, 1e7, true)?;
         c.range_f("arena.height", self.arena.height, 0.0, 1e7, true)?;
         let [x0, y0, x1, y1] = self.arena.start_region;
@@ -549,11 +596,38 @@ impl Scenario {
             return Err(c.err(
                 "arena.start_region",
                 format!(
-                    "= {:?} must be [x0, y0, x1, y1] with 0 <= x0 < x1 <= width and 0 <= y0 < y1 <= height",
-                    self.arena.start_region
+                    "= {} must be [x0, y0, x1, y1] with 0 <= x0 < x1 <= width and 0 <= y0 < y1 <= height",
+                    numbers(&self.arena.start_region)
                 ),
             ));
         }
+        c.range_u(
+            "arena.obstacles",
+            self.arena.obstacles.len() as u64,
+            0,
+            MAX_OBSTACLES as u64,
+        )
+        .map_err(|mut e| {
+            e.message = format!(
+                "has {} entries: at most {MAX_OBSTACLES} polygons (MAX_OBSTACLES)",
+                self.arena.obstacles.len()
+            );
+            e
+        })?;
+        c.range_u(
+            "arena.discs",
+            self.arena.discs.len() as u64,
+            0,
+            MAX_DISCS as u64,
+        )
+        .map_err(|mut e| {
+            e.message = format!(
+                "has {} entries: at most {MAX_DISCS} discs (MAX_DISCS: each is a constraint \
+                     of every robot in the pattern optimiser and in ORCA)",
+                self.arena.discs.len()
+            );
+            e
+        })?;
         c.range_f(
             "arena.boundary_spacing",
             self.arena.boundary_spacing,
@@ -562,6 +636,17 @@ impl Scenario {
             true,
         )?;
         for (i, o) in self.arena.obstacles.iter().enumerate() {
+            if o.points.len() > MAX_OBSTACLE_CORNERS {
+                return Err(c.err(
+                    &format!("arena.obstacles[{i}].points"),
+                    format!(
+                        "(obstacle {}) has {} corners: at most {MAX_OBSTACLE_CORNERS} \
+                         (MAX_OBSTACLE_CORNERS)",
+                        crate::scenario_shape::shown(&o.name),
+                        o.points.len()
+                    ),
+                ));
+            }
             if o.points.len() < 3
                 || o.points
                     .iter()
@@ -570,8 +655,8 @@ impl Scenario {
                 return Err(c.err(
                     &format!("arena.obstacles[{i}].points"),
                     format!(
-                        "(obstacle {:?}) must hold at least 3 finite [x, y] points",
-                        o.name
+                        "(obstacle {}) must hold at least 3 finite [x, y] points",
+                        crate::scenario_shape::shown(&o.name)
                     ),
                 ));
             }
@@ -585,8 +670,11 @@ impl Scenario {
                 return Err(c.err(
                     &format!("arena.obstacles[{i}].points[{j}]"),
                     format!(
-                        "= {p:?} (obstacle {:?}) lies outside the arena [0, {w}] x [0, {h}]",
-                        o.name
+                        "= {} (obstacle {}) lies outside the arena [0, {}] x [0, {}]",
+                        numbers(p),
+                        crate::scenario_shape::shown(&o.name),
+                        number(w),
+                        number(h)
                     ),
                 ));
             }
@@ -599,8 +687,11 @@ impl Scenario {
                 return Err(c.err(
                     &format!("arena.discs[{i}].centre"),
                     format!(
-                        "= {:?} (disc {:?}) must be finite and inside the arena [0, {w}] x [0, {h}]",
-                        d.centre, d.name
+                        "= {} (disc {}) must be finite and inside the arena [0, {}] x [0, {}]",
+                        numbers(&d.centre),
+                        crate::scenario_shape::shown(&d.name),
+                        number(w),
+                        number(h)
                     ),
                 ));
             }
@@ -654,6 +745,7 @@ impl Scenario {
             true,
         )?;
         c.range_u("radio.delay_ticks", self.radio.delay_ticks as u64, 0, 1000)?;
+        let mut ranged = std::collections::BTreeSet::new();
         for (k, r) in self.radio.sender_ranges.iter().enumerate() {
             let key = format!("radio.sender_ranges[{k}]");
             c.range_u(
@@ -669,10 +761,8 @@ impl Scenario {
                 1e7,
                 false,
             )?;
-            if self.radio.sender_ranges[..k]
-                .iter()
-                .any(|q| q.agent == r.agent)
-            {
+            // (With the range check above this also bounds the list by run.robots.)
+            if !ranged.insert(r.agent) {
                 return Err(c.err(
                     &format!("{key}.agent"),
                     format!("= {}: this agent already has a range", r.agent),
@@ -776,6 +866,58 @@ impl Scenario {
         self.validate_faults(&|key, message| c.err(key, message))
     }
 
+    /// The sections of one behaviour or mission (`[roam]`, `[search]`, `[formation]`,
+    /// `[hunt]`, `[cbca]`) that this scenario sets: those that differ from the embedded
+    /// default's (so a resolved scenario.toml, which lists every section, reads back as its
+    /// run wrote it).
+    pub fn sections_set(&self) -> Vec<&'static str> {
+        let d = Scenario::default();
+        let mut out = Vec::new();
+        for (name, set) in [
+            ("roam", self.roam != d.roam),
+            ("search", self.search != d.search),
+            ("formation", self.formation.is_some()),
+            ("hunt", self.hunt != d.hunt),
+            ("cbca", !self.cbca.is_empty()),
+        ] {
+            if set {
+                out.push(name);
+            }
+        }
+        out
+    }
+
+    /// Refuses a section the run does not use (issue 37: a roam run took `[formation]
+    /// epsilon = -1` without a word): `used` are the sections of the run's behaviour and
+    /// mission, named in the error with them.
+    pub fn check_sections_used(
+        &self,
+        used: &[&str],
+        mission: &str,
+        c: &Check,
+    ) -> Result<(), ConfigError> {
+        match self.sections_set().into_iter().find(|s| !used.contains(s)) {
+            None => Ok(()),
+            Some(s) => Err(c.err(
+                s,
+                format!(
+                    "is a section this run does not use: its behaviour is {} and its mission \
+                     {mission:?}, which read {}; remove the section, or set run.behaviour to \
+                     the behaviour it is for",
+                    crate::scenario_shape::shown(&self.run.behaviour),
+                    if used.is_empty() {
+                        "no section of their own".to_string()
+                    } else {
+                        used.iter()
+                            .map(|u| format!("[{u}]"))
+                            .collect::<Vec<_>>()
+                            .join(" and ")
+                    }
+                ),
+            )),
+        }
+    }
+
     fn validate_faults(&self, e: &dyn Fn(&str, String) -> ConfigError) -> Result<(), ConfigError> {
         let f = &self.faults;
         if !(f.chaos_rate.is_finite() && (0.0..=100.0).contains(&f.chaos_rate)) {
@@ -783,13 +925,39 @@ impl Scenario {
                 "faults.chaos_rate",
                 format!(
                     "= {} is out of range: allowed [0, 100] kills per 100 ticks",
-                    f.chaos_rate
+                    number(f.chaos_rate)
                 ),
             ));
         }
-        if let Some([t, r]) = f.kill_at.iter().find(|k| k[1] >= self.run.robots as u64) {
+        // A kill past MAX_TICKS can never happen (and a tick above i64::MAX has no TOML
+        // integer for the resolved scenario: `--chaos-at 9223372036854775808:0` panicked).
+        if let Some((k, [t, _])) = f
+            .kill_at
+            .iter()
+            .enumerate()
+            .find(|(_, [t, _])| *t > MAX_TICKS)
+        {
             return Err(e(
-                "faults.kill_at",
+                &format!("faults.kill_at[{k}]"),
+                format!("names tick {t}: allowed ticks 0..={MAX_TICKS} (MAX_TICKS)"),
+            ));
+        }
+        for (i, t) in f.kill_window.iter().enumerate() {
+            if *t > MAX_TICKS {
+                return Err(e(
+                    &format!("faults.kill_window[{i}]"),
+                    format!("= {t} is out of range: allowed 0..={MAX_TICKS} (MAX_TICKS)"),
+                ));
+            }
+        }
+        if let Some((k, [t, r])) = f
+            .kill_at
+            .iter()
+            .enumerate()
+            .find(|(_, k)| k[1] >= self.run.robots as u64)
+        {
+            return Err(e(
+                &format!("faults.kill_at[{k}]"),
                 format!(
                     "names robot {r} (at tick {t}), but the run has robots 0..={}",
                     self.run.robots - 1
@@ -799,7 +967,10 @@ impl Scenario {
         if !(f.kill_fraction.is_finite() && (0.0..=1.0).contains(&f.kill_fraction)) {
             return Err(e(
                 "faults.kill_fraction",
-                format!("= {} is out of range: allowed [0, 1]", f.kill_fraction),
+                format!(
+                    "= {} is out of range: allowed [0, 1]",
+                    number(f.kill_fraction)
+                ),
             ));
         }
         let [t0, t1] = f.kill_window;

@@ -2,6 +2,7 @@
 //! nothing behind (no process, nothing in /dev/shm).
 
 pub mod fuzz;
+pub mod fuzz_mutations;
 
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Output, Stdio};

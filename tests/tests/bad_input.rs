@@ -211,3 +211,194 @@ fn the_open_files_limit_is_raised_or_the_run_refused() {
         assert_left_nothing(&out);
     }
 }
+
+/// Issue 37's bad inputs, each refused where it arises: exit 2 naming the file, the key path
+/// and its line (or the flag), nothing started.
+#[test]
+fn the_issue_37_inputs_are_refused_at_their_key_and_line() {
+    let _g = serial();
+    let dir = tmp_dir("bad-37");
+    std::fs::create_dir_all(&dir).unwrap();
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let config = |name: &str| root.join("configs").join(name).display().to_string();
+    let write = |name: &str, text: &str| {
+        let p = dir.join(name);
+        std::fs::write(&p, text).unwrap();
+        p.display().to_string()
+    };
+    // A kill tick above i64::MAX panicked (exit 101) writing the resolved scenario.
+    expect_rejected(
+        &["--robots", "3", "--chaos-at", "9223372036854775808:0"],
+        &["--chaos-at", "faults.kill_at[0]", "0..=100000000"],
+    );
+    // /dev/zero was read until the OOM killer.
+    expect_rejected(
+        &["--scenario", "/dev/zero"],
+        &["/dev/zero", "larger than 4 MiB"],
+    );
+    // 10,000 discs were accepted (and the optimiser spent minutes in one tick).
+    let discs: String = (0..10_000)
+        .map(|k| format!("[[arena.discs]]\nname = \"d{k}\"\ncentre = [5.0, 5.0]\nradius = 0.1\n"))
+        .collect();
+    let f = write("discs.toml", &format!("[run]\nrobots = 3\n\n{discs}"));
+    expect_rejected(
+        &["--scenario", &f],
+        &[
+            "discs.toml:4:",
+            "`arena.discs`",
+            "10000 entries",
+            "at most 64",
+        ],
+    );
+    // Hunt values: NaN, negative and zero slowdowns, NaN and negative auctioneer ranges.
+    let hunt = std::fs::read_to_string(config("hunt-auction.toml")).unwrap();
+    let line_of = |text: &str, starts: &str| {
+        1 + text
+            .lines()
+            .position(|l| l.starts_with(starts))
+            .expect("the line")
+    };
+    for (key, was, bad) in [
+        (
+            "encirclement_slowdown",
+            "encirclement_slowdown = 2.0",
+            "nan",
+        ),
+        (
+            "encirclement_slowdown",
+            "encirclement_slowdown = 2.0",
+            "-5.0",
+        ),
+        (
+            "encirclement_slowdown",
+            "encirclement_slowdown = 2.0",
+            "0.0",
+        ),
+        ("radio_range", "radio_range = 0.0", "nan"),
+        ("radio_range", "radio_range = 0.0", "-1.0"),
+    ] {
+        let text = hunt.replace(was, &format!("{key} = {bad}"));
+        let line = line_of(&text, &format!("{key} = {bad}"));
+        let f = write("hunt.toml", &text);
+        let section = if key == "radio_range" {
+            "hunt.auctioneer"
+        } else {
+            "hunt.params"
+        };
+        expect_rejected(
+            &["--scenario", &f, "--executor", "inprocess"],
+            &[&format!("hunt.toml:{line}:"), &format!("`{section}.{key}`")],
+        );
+    }
+    // A row's value is keyed at its row's line, not at the [hunt] header.
+    let text = hunt.replacen("\nspeed = 0.8", "\nspeed = -0.8", 1);
+    let line = line_of(&text, "speed = -0.8");
+    let f = write("hunt.toml", &text);
+    expect_rejected(
+        &["--scenario", &f, "--executor", "inprocess"],
+        &[&format!("hunt.toml:{line}:"), "`hunt.robots[0].speed`"],
+    );
+    // A section the run does not use: named, with its line and what the run uses.
+    let f = write(
+        "roam-formation.toml",
+        "[run]\nbehaviour = \"roam\"\n\n[formation]\nepsilon = -1.0\n",
+    );
+    expect_rejected(
+        &["--scenario", &f],
+        &[
+            "roam-formation.toml:4:",
+            "`formation`",
+            "\"roam\"",
+            "[roam]",
+        ],
+    );
+    expect_rejected(
+        &["--scenario", &config("hunt-cbca-example1.toml")],
+        &["hunt-cbca-example1.toml:18:", "`cbca`", "\"search\""],
+    );
+    // An experiment file given to `up`.
+    expect_rejected(
+        &["--scenario", &config("cbca-experiment.toml")],
+        &[
+            "cbca-experiment.toml:6:",
+            "`kind`",
+            "orchestrator experiment",
+        ],
+    );
+    // Integer overflow: key and range.
+    let f = write("big.toml", "[run]\nrobots = 99999999999999999999\n");
+    expect_rejected(
+        &["--scenario", &f],
+        &["big.toml:2:", "`run.robots`", "9223372036854775807"],
+    );
+    let f = write("u32.toml", "[run]\nrobots = 9999999999\n");
+    expect_rejected(
+        &["--scenario", &f],
+        &["u32.toml:2:", "`run.robots`", "0..=4294967295"],
+    );
+    // Subnormals in exponent form, not 324 digits; a 1 MB string not echoed back.
+    let f = write(
+        "sub.toml",
+        "[arena]\nstart_region = [5e-324, 0.0, 0.0, 1.0]\n",
+    );
+    expect_rejected(&["--scenario", &f], &["sub.toml:2:", "5e-324"]);
+    let f = write(
+        "long.toml",
+        &format!("[run]\nbehaviour = \"{}\"\n", "x".repeat(1 << 20)),
+    );
+    expect_rejected(
+        &["--scenario", &f],
+        &["long.toml:2:", "`run.behaviour`", "1048576 bytes"],
+    );
+    // A bad built-in letter is `formation.template_name`, not `formation.template`.
+    let formation = std::fs::read_to_string(config("formation.toml")).unwrap();
+    assert!(formation.contains("template_name = \"C\""));
+    let text = formation.replacen("template_name = \"C\"", "template_name = \"Z\"", 1);
+    let line = line_of(&text, "template_name = \"Z\"");
+    let f = write("letter.toml", &text);
+    expect_rejected(
+        &["--scenario", &f, "--executor", "inprocess"],
+        &[&format!("letter.toml:{line}:"), "`formation.template_name`"],
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Every error message of the cases above stays short: none echoes its input whole.
+#[test]
+fn refusals_do_not_echo_huge_inputs() {
+    let _g = serial();
+    let dir = tmp_dir("bad-37-echo");
+    std::fs::create_dir_all(&dir).unwrap();
+    for (name, text) in [
+        (
+            "key.toml",
+            format!("[radio]\n{} = 1\n", "k".repeat(1 << 20)),
+        ),
+        (
+            "mode.toml",
+            format!("[search]\nmode = \"{}\"\n", "é".repeat(100)),
+        ),
+        (
+            "name.toml",
+            format!(
+                "[[arena.obstacles]]\nname = \"{}\"\npoints = [[1.0, 1.0]]\n",
+                "n".repeat(200)
+            ),
+        ),
+    ] {
+        let p = dir.join(name);
+        std::fs::write(&p, text).unwrap();
+        let out = tmp_dir("bad-37-echo-run");
+        let o = up(&["--scenario", p.to_str().unwrap()], &out);
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(2), "{name}: {err}");
+        assert!(
+            err.len() < 1_000,
+            "{name}: {} bytes: {}",
+            err.len(),
+            &err[..300]
+        );
+        assert!(err.contains(&format!("{name}:")), "{name}: {err}");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

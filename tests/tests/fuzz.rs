@@ -1,13 +1,15 @@
-//! The fuzz harness (issue 14): mutated scenario files and flag sets from a seeded generator
-//! (`e2e::fuzz`), each run through `orchestrator up`, asserting for every case: exit 0 (its
-//! run left nothing in /dev/shm under its own prefix and no process), or exit 2 with the key
-//! (or flag) and where it is written named, and nothing started; never a panic (exit 101), a
-//! signal, another exit code, or a hang past the deadline.
+//! The fuzz harness (issues 14 and 37): mutated scenario files (from every file in configs/,
+//! with structural mutations) and flag sets from a seeded generator (`e2e::fuzz`), each run
+//! through `orchestrator up`, asserting for every case: exit 0 (its run left nothing in
+//! /dev/shm under its own prefix and no process), or exit 2 with the key (or flag) and the
+//! line it is written on named (the line that holds that key), a message of bounded length,
+//! and nothing started; never a panic (exit 101), a signal, another exit code, or a hang past
+//! the deadline.
 //!
 //! CI runs `FUZZ_CASES` cases (default 300) of seed `FUZZ_SEED` (default 14);
 //! `scripts/fuzz.sh` runs thousands. The figures (cases by outcome) are printed.
 
-use e2e::fuzz::{case, Case};
+use e2e::fuzz::{bases, case, Case};
 use e2e::*;
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -25,6 +27,9 @@ enum Outcome {
     Refused,
     /// Failures:
     RefusedWithoutWhere,
+    /// The error names a key and a line of the case's file, but that line does not hold
+    /// that key (or the message echoes kilobytes of the input).
+    WrongPlace,
     Panic,
     Signal,
     OtherExit,
@@ -37,6 +42,25 @@ fn env_u64(name: &str, default: u64) -> u64 {
         .ok()
         .and_then(|v| v.parse().ok())
         .unwrap_or(default)
+}
+
+/// Longest error message accepted: a message names a key, a line, a range and a reason; it
+/// never echoes a huge input back.
+const MAX_MESSAGE_BYTES: usize = 2_000;
+
+/// When the error is `FILE:LINE: `KEY` ...` for the case's own file and that file holds KEY,
+/// whether LINE is KEY's line (the same parser's spans, but this catches a key reported at a
+/// header or at another key's line); None when the error is not of that form.
+fn points_at_its_key(err: &str, file: &Path) -> Option<bool> {
+    let text = std::fs::read_to_string(file).ok()?;
+    let name = format!("{}:", file.display());
+    let rest = &err[err.find(&name)? + name.len()..];
+    let digits: String = rest.chars().take_while(|c| c.is_ascii_digit()).collect();
+    let line: usize = digits.parse().ok()?;
+    let rest = rest[digits.len()..].strip_prefix(": `")?;
+    let key = &rest[..rest.find('`')?];
+    let want = swarm::key_lines::line_of(&text, key)?;
+    Some(want == line)
 }
 
 /// Does the error say where: a key in backquotes with a `file:LINE` (or a flag), a syntax
@@ -60,7 +84,9 @@ fn names_where(err: &str, file: Option<&Path>) -> bool {
     };
     let backquoted_key = err.matches('`').count() >= 2;
     let flag = err.contains("'--") || err.contains(" --") || err.starts_with("error: --");
-    (backquoted_key && (has_line(err) || flag))
+    // A key neither the file nor the default writes: its built-in default, said so.
+    let built_in = err.contains("(not set there nor in the embedded default");
+    (backquoted_key && (has_line(err) || flag || built_in))
         || (err.contains("not valid TOML") && has_line(err))
         || (err.contains("cannot read scenario file"))
         || (flag
@@ -135,6 +161,10 @@ fn run_case(c: &Case, dir: &Path) -> (Outcome, String) {
             if out.exists() {
                 err.push_str("\n(a run folder was created for refused input)");
                 Outcome::OtherExit
+            } else if err.len() > MAX_MESSAGE_BYTES
+                || file.as_deref().and_then(|f| points_at_its_key(&err, f)) == Some(false)
+            {
+                Outcome::WrongPlace
             } else if names_where(&err, file.as_deref()) {
                 Outcome::Refused
             } else {
@@ -176,22 +206,28 @@ fn fuzzed_scenarios_and_flags_are_run_or_refused_with_where_never_crash() {
     let cases = env_u64("FUZZ_CASES", 300);
     let seed = env_u64("FUZZ_SEED", 14);
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
-    let default = std::fs::read_to_string(root.join("configs/default.toml")).unwrap();
-    let roam = std::fs::read_to_string(root.join("configs/roam.toml")).unwrap();
+    let bases = bases(&root.join("configs"));
+    assert!(bases.len() >= 30, "{} files in configs/", bases.len());
     let dir = tmp_dir("fuzz");
     std::fs::create_dir_all(&dir).unwrap();
     let mut counts: BTreeMap<Outcome, u64> = BTreeMap::new();
     let mut by_executor: BTreeMap<(&str, Outcome), u64> = BTreeMap::new();
+    let mut by_base: BTreeMap<(String, Outcome), u64> = BTreeMap::new();
     let mut failures = Vec::new();
     let t = Instant::now();
     for k in 0..cases {
-        let c = case(seed, k, &[&default, &roam]);
+        let c = case(seed, k, &bases);
         let (o, err) = run_case(&c, &dir);
         if std::env::var_os("FUZZ_SHOW").is_some() {
             println!(
                 "case {k} {o:?} {:?}: {}",
                 c.mutations,
-                err.lines().next().unwrap_or("")
+                err.lines()
+                    .next()
+                    .unwrap_or("")
+                    .chars()
+                    .take(300)
+                    .collect::<String>()
             );
         }
         *counts.entry(o).or_default() += 1;
@@ -201,13 +237,19 @@ fn fuzzed_scenarios_and_flags_are_run_or_refused_with_where_never_crash() {
             "inprocess"
         };
         *by_executor.entry((ex, o)).or_default() += 1;
+        *by_base.entry((c.base.clone(), o)).or_default() += 1;
         if !matches!(o, Outcome::Accepted | Outcome::Refused) {
             failures.push(format!(
-                "case {k} (seed {seed}) {o:?}: {:?} flags {:?}\n  file kept in {}\n  {}",
+                "case {k} (seed {seed}, from {}) {o:?}: {:?} flags {:?}\n  file kept in {}\n  {}",
+                c.base,
                 c.mutations,
                 c.flags,
                 dir.display(),
-                err.lines().take(6).collect::<Vec<_>>().join("\n  ")
+                err.lines()
+                    .take(6)
+                    .map(|l| l.chars().take(400).collect::<String>())
+                    .collect::<Vec<_>>()
+                    .join("\n  ")
             ));
         }
     }
@@ -216,6 +258,7 @@ fn fuzzed_scenarios_and_flags_are_run_or_refused_with_where_never_crash() {
         t.elapsed().as_secs_f64()
     );
     println!("fuzz by executor: {by_executor:?}");
+    println!("fuzz by base file: {by_base:?}");
     assert!(
         failures.is_empty(),
         "{} of {cases} cases failed:\n{}",

@@ -10,7 +10,7 @@ use swarm::{Behaviour, Command, Outbox, Received, Sense};
 pub const NAME: &str = "faulty";
 
 /// Roam's section and checks.
-pub use super::roam::{resolve, validate};
+pub use super::roam::{resolve, validate, SECTIONS};
 
 /// Calls `v` with the faulty robot's constructor.
 pub fn dispatch<V: crate::BehaviourVisitor>(sc: &Scenario, v: V) -> V::Out {

@@ -12,7 +12,7 @@ use swarm::{Behaviour, Command, Outbox, Received, Sense};
 pub const NAME: &str = "keeper";
 
 /// Roam's section and checks (`roam.payload_bytes` > 0 makes the views worth keeping).
-pub use super::roam::{resolve, validate};
+pub use super::roam::{resolve, validate, SECTIONS};
 
 /// Calls `v` with the keeper's constructor.
 pub fn dispatch<V: crate::BehaviourVisitor>(sc: &Scenario, v: V) -> V::Out {

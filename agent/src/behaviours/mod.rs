@@ -36,6 +36,14 @@ macro_rules! registry {
             ))
         }
 
+        /// The scenario sections behaviour `name` reads (none for an unknown one).
+        pub fn sections(name: &str) -> &'static [&'static str] {
+            $(if name == $m::NAME {
+                return $m::SECTIONS;
+            })*
+            &[]
+        }
+
         /// Writes every parameter of the behaviour into the scenario, defaults included, so
         /// the run's resolved scenario.toml lists each value the algorithms use.
         pub fn resolve_defaults(sc: &mut Scenario) -> Result<(), ConfigError> {

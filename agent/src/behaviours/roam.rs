@@ -65,6 +65,9 @@ const NEAREST_HEARD: usize = 2;
 /// The registry's name of this behaviour.
 pub const NAME: &str = "roam";
 
+/// The scenario sections it reads (a run refuses any other behaviour's or mission's section).
+pub const SECTIONS: &[&str] = &["roam"];
+
 /// Checks the `[roam]` section.
 pub fn validate(sc: &Scenario, c: &Check) -> Result<(), ConfigError> {
     super::require_holonomic(sc, c, &sc.run.behaviour)?;

@@ -151,12 +151,12 @@ pub(crate) mod tests {
         let text = format!("[hunt]\n{}{}", row(1, 0.8), row(1, 0.8));
         assert!(matches!(
             HuntSection::from_scenario_toml(&text),
-            Err(HuntConfigError::DuplicateRobot(1))
+            Err(HuntConfigError::Invalid(e)) if e.key == "hunt.robots[1].id"
         ));
         let text = format!("[hunt]\n{}", row(2, 0.0));
         assert!(matches!(
             HuntSection::from_scenario_toml(&text),
-            Err(HuntConfigError::OutOfRange { .. })
+            Err(HuntConfigError::Invalid(e)) if e.key == "hunt.robots[0].speed"
         ));
     }
 }

@@ -195,6 +195,16 @@ fn letter_c(n: usize) -> Vec<[f64; 2]> {
 }
 
 impl FormationSection {
+    /// The key [`Self::template_points`] reads, so that its error names what the user wrote:
+    /// `formation.template` when the points are given, else `formation.template_name`.
+    pub fn template_key(&self) -> &'static str {
+        if self.template.is_empty() {
+            "formation.template_name"
+        } else {
+            "formation.template"
+        }
+    }
+
     /// The template S for `n` robots: `template` when given, else the built-in letter.
     pub fn template_points(&self, n: usize) -> Result<Vec<[f64; 2]>, String> {
         if self.template.is_empty() {

@@ -11,7 +11,6 @@
 //! agent, id `run.robots - 1`, a station (`run.stations` = 1): no body, it only talks.
 
 use serde::{Deserialize, Serialize};
-use std::collections::BTreeSet;
 
 /// Resource types z (every experiment of the thesis uses 6, eq. 2.4).
 pub const N_RESOURCES: usize = 6;
@@ -58,19 +57,9 @@ pub const REPORT_AT_POINT: f64 = 2.0;
 pub enum HuntConfigError {
     #[error("hunt section does not parse: {0}")]
     Parse(#[from] toml::de::Error),
-    #[error("robot id {0} appears twice")]
-    DuplicateRobot(u32),
-    #[error("evader id {0} appears twice")]
-    DuplicateEvader(u32),
-    #[error("evader ids must be 1..=254 (a display state names the task): {0}")]
-    EvaderId(u32),
-    #[error("{what} {id}: {field} = {value} is out of range")]
-    OutOfRange {
-        what: &'static str,
-        id: u32,
-        field: &'static str,
-        value: f64,
-    },
+    /// A value out of its range (the key path names the row and field).
+    #[error("{0}")]
+    Invalid(#[from] crate::scenario::ConfigError),
 }
 
 /// One `[[hunt.robots]]` row (Table 3.2 plus the columns the thesis does not print).
@@ -189,58 +178,17 @@ impl HuntSection {
     /// validate it.
     pub fn from_scenario_toml(text: &str) -> Result<Self, HuntConfigError> {
         let f: File = toml::from_str(text)?;
-        f.hunt.validate()?;
+        let source = |_: &str| "hunt section".to_string();
+        f.hunt.validate(&crate::scenario::Check {
+            key_source: &source,
+        })?;
         Ok(f.hunt)
     }
 
-    /// Ids unique, speeds, caps and counts in range.
-    pub fn validate(&self) -> Result<(), HuntConfigError> {
-        let mut seen = BTreeSet::new();
-        for r in &self.robots {
-            if !seen.insert(r.id) {
-                return Err(HuntConfigError::DuplicateRobot(r.id));
-            }
-            positive("robot", r.id, "speed", r.speed)?;
-            positive("robot", r.id, "turn_rate", r.turn_rate)?;
-            if r.resources.iter().any(|x| *x < 0.0 || !x.is_finite())
-                || r.matching.iter().any(|g| !(0.0..=1.0).contains(g))
-                || r.position.iter().any(|x| !x.is_finite())
-            {
-                return Err(HuntConfigError::OutOfRange {
-                    what: "robot",
-                    id: r.id,
-                    field: "resources/matching/position",
-                    value: f64::NAN,
-                });
-            }
-        }
-        let mut seen = BTreeSet::new();
-        for e in &self.evaders {
-            if !seen.insert(e.id) {
-                return Err(HuntConfigError::DuplicateEvader(e.id));
-            }
-            if !(1..=254).contains(&e.id) {
-                return Err(HuntConfigError::EvaderId(e.id));
-            }
-            positive("evader", e.id, "speed", e.speed)?;
-            positive("evader", e.id, "reward_cap", e.reward_cap)?;
-            positive("evader", e.id, "required_robots", e.required_robots as f64)?;
-            if !(e.appears_at.is_finite() && e.appears_at >= 0.0) {
-                return Err(HuntConfigError::OutOfRange {
-                    what: "evader",
-                    id: e.id,
-                    field: "appears_at",
-                    value: e.appears_at,
-                });
-            }
-        }
-        positive(
-            "params",
-            0,
-            "minutes_per_tick",
-            self.params.minutes_per_tick,
-        )?;
-        Ok(())
+    /// Every value of the section in its range, ids unique (errors name the row and the
+    /// field: `hunt.robots[3].speed`): crate::sections::hunt_checks.
+    pub fn validate(&self, c: &crate::scenario::Check) -> Result<(), crate::scenario::ConfigError> {
+        super::hunt_checks::validate(self, c)
     }
 
     /// The fastest robot's speed in km per tick (robot.v_max must allow it).
@@ -260,24 +208,6 @@ fn six_resources<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Resources, D:
     Resources::try_from(v.as_slice()).map_err(|_| {
         serde::de::Error::invalid_length(v.len(), &"exactly 6 resource entries (eq. 2.4)")
     })
-}
-
-fn positive(
-    what: &'static str,
-    id: u32,
-    field: &'static str,
-    value: f64,
-) -> Result<(), HuntConfigError> {
-    if value > 0.0 && value.is_finite() {
-        Ok(())
-    } else {
-        Err(HuntConfigError::OutOfRange {
-            what,
-            id,
-            field,
-            value,
-        })
-    }
 }
 
 /// The live auction (`HuntParams::auction`).
@@ -494,7 +424,10 @@ mod tests {
         )
         .unwrap();
         let h = &sc.hunt;
-        h.validate().unwrap();
+        h.validate(&crate::scenario::Check {
+            key_source: &|_| "t".to_string(),
+        })
+        .unwrap();
         assert_eq!((h.robots.len(), h.evaders.len()), (15, 5));
         assert_eq!(h.auctioneer, AuctioneerSpec::default());
         // T5 at 5 min, 0.05 min a tick: tick 100.
@@ -529,15 +462,16 @@ mod tests {
             min_robot_speed: 0.0,
             appears_at: 0.0,
         });
-        assert!(matches!(h.validate(), Err(HuntConfigError::EvaderId(255))));
+        let source = |_: &str| "t".to_string();
+        let c = crate::scenario::Check {
+            key_source: &source,
+        };
+        assert_eq!(h.validate(&c).unwrap_err().key, "hunt.evaders[0].id");
         h.evaders[0].id = 3;
         h.evaders[0].appears_at = -1.0;
-        assert!(matches!(
-            h.validate(),
-            Err(HuntConfigError::OutOfRange {
-                field: "appears_at",
-                ..
-            })
-        ));
+        assert_eq!(
+            h.validate(&c).unwrap_err().key,
+            "hunt.evaders[0].appears_at"
+        );
     }
 }

@@ -4,5 +4,6 @@
 
 pub mod formation;
 pub mod hunt;
+pub mod hunt_checks;
 pub mod roam;
 pub mod search;

@@ -21,6 +21,7 @@ pub const ENTRY: MissionEntry = MissionEntry {
     name: "formation",
     progress_label: "robots in place",
     implied_by: &["formation"],
+    sections: &["formation"],
     validate,
     new,
 };
@@ -37,7 +38,7 @@ fn section(sc: &Scenario) -> FormationSection {
 fn validate(sc: &Scenario, c: &Check) -> Result<(), ConfigError> {
     let f = section(sc);
     f.template_points(sc.run.robots as usize)
-        .map_err(|m| c.err("formation.template", m))?;
+        .map_err(|m| c.err(f.template_key(), m))?;
     c.range_f("formation.epsilon", f.epsilon, 0.0, 1e6, true)?;
     c.range_u("formation.lost_after_ticks", f.lost_after_ticks as u64, 1, 1_000_000)?;
     for (i, v) in f.unoptimised_centre.iter().enumerate() {
@@ -62,7 +63,7 @@ impl FormationMission {
     let template = f
         .template_points(n)
         .map_err(|message| MissionError::Setup {
-            key: "formation.template".into(),
+            key: f.template_key().into(),
             message,
         })?;
     let centroid = template.iter().fold([0.0, 0.0], |a, p| {

@@ -35,6 +35,7 @@ pub const ENTRY: MissionEntry = MissionEntry {
     name: "hunt",
     progress_label: "evaders captured",
     implied_by: &["hunt"],
+    sections: &["hunt"],
     validate,
     new,
 };
@@ -50,11 +51,21 @@ const LIVE_TRAIL_SAMPLES: usize = 20;
 /// Checks the `[hunt]` section against the rest of the scenario.
 fn validate(sc: &Scenario, c: &Check) -> Result<(), ConfigError> {
     let h = &sc.hunt;
-    h.validate().map_err(|e| c.err("hunt", e.to_string()))?;
+    h.validate(c)?;
     if h.robots.is_empty() || h.evaders.is_empty() {
+        // What asked for the hunt: the mission named, or the behaviour that implies it.
+        let (key, value) = match &sc.run.mission {
+            Some(m) => ("run.mission", m.as_str()),
+            None => ("run.behaviour", sc.run.behaviour.as_str()),
+        };
         return Err(c.err(
-            "hunt",
-            "needs [[hunt.robots]] and [[hunt.evaders]] rows (configs/hunt-auction.toml)".into(),
+            key,
+            format!(
+                "= {value:?} runs the hunt mission, which needs [[hunt.robots]] and \
+                 [[hunt.evaders]] rows (configs/hunt-auction.toml); the scenario has {} and {}",
+                h.robots.len(),
+                h.evaders.len()
+            ),
         ));
     }
     // The auction runs an auctioneer station; a decentralised behaviour (cbca) runs none.

@@ -124,6 +124,9 @@ pub struct MissionEntry {
     /// What its progress counts, for progress bars ("targets found"); empty: nothing.
     pub progress_label: &'static str,
     pub implied_by: &'static [&'static str],
+    /// The scenario sections it reads (a run refuses any other behaviour's or mission's
+    /// section).
+    pub sections: &'static [&'static str],
     pub validate: fn(&Scenario, &Check) -> Result<(), ConfigError>,
     pub new: fn(&Scenario) -> Result<Box<dyn Mission>, MissionError>,
 }

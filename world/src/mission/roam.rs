@@ -9,6 +9,7 @@ pub const ENTRY: MissionEntry = MissionEntry {
     name: "roam",
     progress_label: "",
     implied_by: &[],
+    sections: &[],
     validate,
     new,
 };

@@ -19,6 +19,7 @@ pub const ENTRY: MissionEntry = MissionEntry {
     name: "search",
     progress_label: "targets found",
     implied_by: &["search"],
+    sections: &["search"],
     validate,
     new,
 };

@@ -26,6 +26,9 @@ pub use robot::{Cbca, TargetSensing};
 /// The registry's name of this behaviour.
 pub const NAME: &str = "cbca";
 
+/// The scenario sections it reads (a run refuses any other behaviour's or mission's section).
+pub const SECTIONS: &[&str] = &["cbca", "hunt"];
+
 /// How targets appear in the Sense frame (the hunt mission's entity contract): kind
 /// `ENTITY_EVADER` = 1, id the thesis's 1-based T_j, the captured flag 1 << 4.
 pub const TARGET_SENSING: TargetSensing = TargetSensing {

@@ -295,11 +295,7 @@ fn template(sc: &Scenario, f: &FormationSection, p: &Params, c: &Check) -> Resul
     let Ok(points) = f.template_points(n) else {
         return Ok(());
     };
-    let key = if f.template.is_empty() {
-        "formation.template_name"
-    } else {
-        "formation.template"
-    };
+    let key = f.template_key();
     let k = &p.kernels;
     let r = sc.robot.radius;
     if f.pattern == PatternChoice::Fixed {

@@ -86,6 +86,9 @@ fn real_wrecks(remembered: Vec<Vec2>, me: Vec2, live: &[Disc], robot_radius: f64
 /// The registry's name of this behaviour.
 pub const NAME: &str = "formation";
 
+/// The scenario sections it reads (a run refuses any other behaviour's or mission's section).
+pub const SECTIONS: &[&str] = &["formation"];
+
 /// Checks the formation behaviour's kernels against the scenario.
 pub fn validate(sc: &Scenario, c: &Check) -> Result<(), ConfigError> {
     crate::behaviours::require_holonomic(sc, c, NAME)?;

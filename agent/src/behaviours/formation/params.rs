@@ -251,6 +251,15 @@ pub fn validate(sc: &Scenario, c: &Check) -> Result<(), ConfigError> {
         1,
         100_000_000,
     )?;
+    // The polygon bound's budget (its Hungarian solves and their operations): NaN or a
+    // huge count left the first plan without a bound on its work.
+    c.range_u(
+        "formation.kernels.optimiser.max_solves",
+        o.max_solves as u64,
+        4,
+        100_000_000,
+    )?;
+    c.range_f("formation.kernels.optimiser.max_work", o.max_work, 1.0, 1e18, false)?;
     c.range_u(
         "formation.kernels.replan.max_nodes",
         p.replan.max_nodes as u64,

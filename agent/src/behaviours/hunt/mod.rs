@@ -16,6 +16,9 @@ use swarm::{Behaviour, Command, Outbox, Received, Sense};
 /// The registry's name of this behaviour.
 pub const NAME: &str = "hunt";
 
+/// The scenario sections it reads (a run refuses any other behaviour's or mission's section).
+pub const SECTIONS: &[&str] = &["hunt"];
+
 /// Nothing of its own to check: the behaviour reads only the `[hunt]` section, which the
 /// world's hunt mission (implied by this behaviour) validates: rows, agent count, kinematics,
 /// limits.

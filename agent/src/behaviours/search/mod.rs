@@ -81,6 +81,9 @@ use swarm::{Behaviour, Command, Outbox, Received, Sense};
 /// The registry's name of this behaviour.
 pub const NAME: &str = "search";
 
+/// The scenario sections it reads (a run refuses any other behaviour's or mission's section).
+pub const SECTIONS: &[&str] = &["search"];
+
 /// Checks the search behaviour's mode and kernels (`search.mode`, `search.kernels`) against
 /// the scenario.
 pub fn validate(sc: &Scenario, c: &Check) -> Result<(), ConfigError> {
