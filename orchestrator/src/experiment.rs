@@ -19,6 +19,7 @@ pub struct ExperimentArgs {
     /// Seeds per cell (overrides the file's `seeds`; the same seeds for every mode and size).
     #[arg(long)]
     pub runs: Option<u32>,
+    /// Where each run's robots run.
     #[arg(long, value_enum, default_value_t = Executor::Inprocess)]
     pub executor: Executor,
     /// Where results.md and results.json go (default runs/experiment-<id>).
@@ -27,6 +28,7 @@ pub struct ExperimentArgs {
     /// Runs at once (in-process executor); default: the number of cores.
     #[arg(long)]
     pub jobs: Option<usize>,
+    /// No progress bar.
     #[arg(long)]
     pub quiet: bool,
 }

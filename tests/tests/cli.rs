@@ -1,0 +1,128 @@
+//! The command line as a user meets it: every subcommand's `--help` gives every option a
+//! description and `up`'s show their defaults; the completion scripts generate and bash
+//! parses its own; the short flags run a real run, whose summary fits 80 columns and ends
+//! with how to watch it.
+
+use e2e::*;
+use std::process::Command;
+
+fn help_of(sub: &[&str]) -> String {
+    let o = Command::new(orchestrator())
+        .args(sub)
+        .arg("--help")
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{sub:?}: {}", stderr(&o));
+    String::from_utf8(o.stdout).unwrap()
+}
+
+/// The names listed under "Commands:" of a help text (`help` itself left out).
+fn subcommands(help: &str) -> Vec<String> {
+    help.lines()
+        .skip_while(|l| !l.starts_with("Commands:"))
+        .skip(1)
+        .take_while(|l| l.starts_with("  "))
+        .filter_map(|l| l.split_whitespace().next())
+        .filter(|n| *n != "help")
+        .map(String::from)
+        .collect()
+}
+
+/// Options of a long help text (`--help`) without a description: clap prints an option's
+/// line, then its description indented deeper, then a blank line.
+fn undescribed(help: &str) -> Vec<String> {
+    let lines: Vec<&str> = help.lines().collect();
+    lines
+        .iter()
+        .enumerate()
+        .filter(|(_, l)| l.starts_with("  -") || l.starts_with("  <"))
+        .filter(|(i, _)| lines.get(i + 1).is_none_or(|n| n.trim().is_empty()))
+        .map(|(_, l)| l.trim().to_string())
+        .collect()
+}
+
+#[test]
+fn every_subcommands_help_describes_every_option_and_up_shows_defaults() {
+    let mut todo: Vec<Vec<String>> = vec![vec![]];
+    let mut walked = 0;
+    while let Some(path) = todo.pop() {
+        let args: Vec<&str> = path.iter().map(String::as_str).collect();
+        let help = help_of(&args);
+        let bad = undescribed(&help);
+        assert!(bad.is_empty(), "orchestrator {path:?} --help: {bad:?}\n{help}");
+        for s in subcommands(&help) {
+            let mut p = path.clone();
+            p.push(s);
+            todo.push(p);
+        }
+        walked += 1;
+    }
+    assert!(walked >= 12, "{walked} helps walked");
+    let up = help_of(&["up"]);
+    let sc = swarm::scenario::Scenario::default();
+    for want in [
+        format!("[scenario: run.robots, default {}]", sc.run.robots),
+        format!("[scenario: run.max_ticks, default {}]", sc.run.max_ticks),
+        "[default: processes]".to_string(),
+        "-n, --robots".to_string(),
+        "-s, --scenario".to_string(),
+        "-o, --out".to_string(),
+        "-q, --quiet".to_string(),
+    ] {
+        assert!(up.contains(&want), "up --help lacks {want:?}:\n{up}");
+    }
+}
+
+#[test]
+fn the_completion_scripts_generate_and_bash_parses_its_own() {
+    for shell in ["bash", "zsh", "fish"] {
+        let o = Command::new(orchestrator())
+            .args(["completions", shell])
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{shell}: {}", stderr(&o));
+        let script = String::from_utf8(o.stdout).unwrap();
+        for word in ["export", "--format", "mcap", "--robots"] {
+            assert!(script.contains(word), "{shell} completion lacks {word}");
+        }
+        if shell == "bash" {
+            let dir = tmp_dir("completions");
+            std::fs::create_dir_all(&dir).unwrap();
+            let f = dir.join("orchestrator.bash");
+            std::fs::write(&f, &script).unwrap();
+            let o = Command::new("bash").arg("-n").arg(&f).output().unwrap();
+            assert!(o.status.success(), "bash -n: {}", stderr(&o));
+            let _ = std::fs::remove_dir_all(&dir);
+        }
+    }
+}
+
+#[test]
+fn short_flags_run_and_the_summary_fits_80_columns_and_says_how_to_watch() {
+    let _g = serial();
+    let out = tmp_dir("cli-short-flags");
+    let o = Command::new(orchestrator())
+        .args(["up", "-q", "-n", "3", "-s", roam(), "--max-ticks", "12", "-o"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", stderr(&o));
+    let s = summary(&out);
+    assert_eq!(s["robots"], 3);
+    assert_eq!(s["ticks"], 12);
+    let text = String::from_utf8(o.stdout).unwrap();
+    let lines: Vec<&str> = text.lines().collect();
+    // The last line is the command that shows the run, whole however long; the others fit.
+    let (watch, rest) = lines.split_last().expect("a summary");
+    for l in rest {
+        assert!(l.chars().count() <= 80, "wider than 80 columns: {l:?}");
+    }
+    assert_eq!(
+        watch.trim(),
+        format!("{} view {}", orchestrator().display(), out.display()),
+        "{text}"
+    );
+    assert_eq!(rest.last().map(|l| l.trim()), Some("watch it in the browser:"));
+    assert_left_nothing(&out);
+    let _ = std::fs::remove_dir_all(&out);
+}
