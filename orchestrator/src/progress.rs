@@ -5,7 +5,7 @@
 //! alive and the radio's deliveries and drops, with digit grouping. It is cleared when the
 //! run ends, however it ends (Ctrl-C included): nothing of it is left on the screen.
 
-use indicatif::{HumanCount, ProgressBar, ProgressState, ProgressStyle};
+use indicatif::{HumanCount, ProgressBar, ProgressDrawTarget, ProgressState, ProgressStyle, TermLike};
 use std::fmt::Write;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Arc;
@@ -14,6 +14,45 @@ use swarm::scenario::Scenario;
 /// Width of the bar itself, in columns: with the spinner, the label and the counts, the
 /// line's fixed part stays under 60 columns, so a message fits an 80-column terminal.
 const BAR_COLUMNS: usize = 20;
+
+/// Columns left free at the end of the bar's line. A Ctrl-C's echo (`^C`) lands there, on the
+/// bar's line, which the clear then wipes; on a full line the echo wrapped to the next one, the
+/// clear wiped that one, and the bar stayed on the screen above the summary.
+const ECHO_COLUMNS: u16 = 3;
+
+/// stderr as the bar sees it: [`ECHO_COLUMNS`] narrower than the terminal.
+#[derive(Debug)]
+struct Narrow(console::Term);
+
+impl TermLike for Narrow {
+    fn width(&self) -> u16 {
+        self.0.size().1.saturating_sub(ECHO_COLUMNS)
+    }
+    fn move_cursor_up(&self, n: usize) -> std::io::Result<()> {
+        self.0.move_cursor_up(n)
+    }
+    fn move_cursor_down(&self, n: usize) -> std::io::Result<()> {
+        self.0.move_cursor_down(n)
+    }
+    fn move_cursor_right(&self, n: usize) -> std::io::Result<()> {
+        self.0.move_cursor_right(n)
+    }
+    fn move_cursor_left(&self, n: usize) -> std::io::Result<()> {
+        self.0.move_cursor_left(n)
+    }
+    fn write_line(&self, s: &str) -> std::io::Result<()> {
+        self.0.write_line(s)
+    }
+    fn write_str(&self, s: &str) -> std::io::Result<()> {
+        self.0.write_str(s)
+    }
+    fn clear_line(&self) -> std::io::Result<()> {
+        self.0.clear_line()
+    }
+    fn flush(&self) -> std::io::Result<()> {
+        self.0.flush()
+    }
+}
 
 /// What the run reports to the bar, each tick or status.
 #[derive(Debug, Clone, Copy, Default)]
@@ -42,10 +81,15 @@ impl Bar {
     pub fn new(sc: &Scenario, quiet: bool) -> Bar {
         let label = world::mission::progress_label(sc);
         let tick = Arc::new(AtomicU64::new(0));
-        let pb = if quiet {
+        let stderr = console::Term::stderr();
+        // Not a terminal (a pipe, a file): no bar, as indicatif's own stderr target does.
+        let pb = if quiet || !stderr.is_term() {
             ProgressBar::hidden()
         } else {
-            ProgressBar::new(sc.run.max_ticks)
+            ProgressBar::with_draw_target(
+                Some(sc.run.max_ticks),
+                ProgressDrawTarget::term_like(Box::new(Narrow(stderr))),
+            )
         };
         let t = tick.clone();
         let rate = move |s: &ProgressState, w: &mut dyn Write| {

@@ -69,11 +69,14 @@ pub fn print(v: &serde_json::Value, dir: &Path, program: &str) {
         c("/messages/in_flight")
     );
     say!(
-        "    dropped: range {}  occluded {}  bandwidth {}  loss {}  malformed {}  receiver dead {}",
+        "    dropped: range {}  occluded {}  bandwidth {}  loss {}",
         c("/messages/dropped_range"),
         c("/messages/dropped_occluded"),
         c("/messages/dropped_bandwidth"),
         c("/messages/dropped_loss"),
+    );
+    say!(
+        "    undelivered: malformed {}  receiver dead {}",
         c("/messages/malformed"),
         c("/messages/receiver_dead")
     );
@@ -128,9 +131,13 @@ pub fn print(v: &serde_json::Value, dir: &Path, program: &str) {
             None => format!("censored at {}", c("/ticks")),
         };
         say!(
-            "  search: targets found {}/{}  steps {steps}  energy {} arena units (distance moved)",
+            "  search: targets found {}/{}  steps {steps}",
             sm["found"],
-            sm["targets"],
+            sm["targets"]
+        );
+        // The paper's energy: the distance the robots moved, all told.
+        say!(
+            "    energy {} arena units moved",
             grouped(sm["energy"].as_f64().unwrap_or(0.0).round() as u64)
         );
     }

@@ -292,6 +292,17 @@ fn the_csv_holds_the_recordings_numbers_and_state_names_and_events_every_event()
     for (row, (tick, _)) in rows.iter().zip(&want) {
         assert_eq!(row[0], tick.to_string());
     }
+    // A target is found by a live robot, and names the target (search.toml has 10).
+    let targets = summary(&out)["mission"]["search"]["targets"].as_u64().unwrap();
+    let found: Vec<&Vec<String>> = rows.iter().filter(|r| r[2] == "entity_done").collect();
+    assert!(!found.is_empty(), "{rows:?}");
+    for r in found {
+        let tick: usize = r[0].parse().unwrap();
+        let robot: usize = r[3].parse().unwrap();
+        assert!(r[4].parse::<u64>().unwrap() < targets, "{r:?}");
+        let t = ticks.iter().find(|t| t.tick as usize == tick).unwrap();
+        assert_eq!(t.alive[robot], 1, "found by a dead robot: {r:?}");
+    }
     let died: Vec<&Vec<String>> = rows.iter().filter(|r| r[2] == "robot_died").collect();
     assert_eq!(died.len(), 1, "{rows:?}");
     assert_eq!(died[0][3], "4");
