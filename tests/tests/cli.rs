@@ -28,15 +28,28 @@ fn subcommands(help: &str) -> Vec<String> {
         .collect()
 }
 
-/// Options of a long help text (`--help`) without a description: clap prints an option's
-/// line, then its description indented deeper, then a blank line.
+/// Options of a help text without a description. clap prints a described option either on
+/// one line, the description after two spaces (`-V, --version  Print version`), or (when some
+/// description is long) as a line of its own with the description on the next lines,
+/// indented deeper.
 fn undescribed(help: &str) -> Vec<String> {
     let lines: Vec<&str> = help.lines().collect();
+    let indent = |l: &str| l.len() - l.trim_start().len();
     lines
         .iter()
         .enumerate()
-        .filter(|(_, l)| l.starts_with("  -") || l.starts_with("  <"))
-        .filter(|(i, _)| lines.get(i + 1).is_none_or(|n| n.trim().is_empty()))
+        // An option's or argument's own line: indented 2 to 6 columns (descriptions on lines
+        // of their own are indented 10).
+        .filter(|(_, l)| {
+            (2..=6).contains(&indent(l)) && l.trim_start().starts_with(['-', '<'])
+        })
+        .filter(|(i, l)| match l.trim().split_once("  ") {
+            // Only clap's own brackets (`[possible values: csv, mcap]`) are no description.
+            Some((_, text)) => text.trim().starts_with('['),
+            None => lines.get(i + 1).is_none_or(|n| {
+                n.trim().is_empty() || n.trim().starts_with('[') || indent(n) <= indent(l)
+            }),
+        })
         .map(|(_, l)| l.trim().to_string())
         .collect()
 }
@@ -82,7 +95,8 @@ fn the_completion_scripts_generate_and_bash_parses_its_own() {
             .unwrap();
         assert!(o.status.success(), "{shell}: {}", stderr(&o));
         let script = String::from_utf8(o.stdout).unwrap();
-        for word in ["export", "--format", "mcap", "--robots"] {
+        // fish names options without their dashes (`-l format`).
+        for word in ["export", "format", "mcap", "robots", "scenario"] {
             assert!(script.contains(word), "{shell} completion lacks {word}");
         }
         if shell == "bash" {
