@@ -23,10 +23,14 @@ fn embedded_default(key: &str) -> Option<String> {
     }
 }
 
+/// The widest help: a wider terminal still gets lines of at most this many columns.
+const HELP_COLUMNS: usize = 80;
+
 /// The orchestrator's command line; `up`'s flags that set a scenario key say the embedded
 /// scenario's value: `[scenario: run.robots, default 12]`.
 pub fn command() -> clap::Command {
-    crate::Cli::command().mut_subcommand("up", |mut up| {
+    let cli = crate::Cli::command().max_term_width(HELP_COLUMNS);
+    cli.mut_subcommand("up", |mut up| {
         for (key, flag) in crate::up::FLAG_KEYS {
             let Some(default) = embedded_default(key) else {
                 continue;

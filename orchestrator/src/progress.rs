@@ -5,7 +5,9 @@
 //! alive and the radio's deliveries and drops, with digit grouping. It is cleared when the
 //! run ends, however it ends (Ctrl-C included): nothing of it is left on the screen.
 
-use indicatif::{HumanCount, ProgressBar, ProgressDrawTarget, ProgressState, ProgressStyle, TermLike};
+use indicatif::{
+    HumanCount, ProgressBar, ProgressDrawTarget, ProgressState, ProgressStyle, TermLike,
+};
 use std::fmt::Write;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Arc;

@@ -170,7 +170,8 @@ fn print_hunt(h: &serde_json::Value, ticks: &serde_json::Value) {
     };
     say!(
         "  hunt: evaders captured {}/{}  {all}",
-        h["captured"], h["evaders"]
+        h["captured"],
+        h["evaders"]
     );
     for e in h["per_evader"].as_array().into_iter().flatten() {
         let by: Vec<String> = e["captured_by"]
@@ -220,7 +221,9 @@ fn print_formation(fm: &serde_json::Value, ticks: &serde_json::Value, faults: &s
         say!(
             "  formation: the re-plan of epoch {} (robot {}, tick {}) after a death found no \
              placement: the robots kept the previous pattern's slots round the wrecks",
-            p["epoch"], p["robot"], p["tick"]
+            p["epoch"],
+            p["robot"],
+            p["tick"]
         );
     }
     if infeasible
@@ -267,7 +270,8 @@ fn print_formation(fm: &serde_json::Value, ticks: &serde_json::Value, faults: &s
             // within them takes them (world/src/mission/formation.rs, PlanReport).
             say!(
                 "    plan by robot {} at tick {}: superseded before its parameters were reported",
-                p["robot"], p["tick"]
+                p["robot"],
+                p["tick"]
             );
             continue;
         }
@@ -325,7 +329,6 @@ fn gap_sentinel(gap: f64) -> &'static str {
         ""
     }
 }
-
 
 #[cfg(test)]
 mod tests {

@@ -457,7 +457,9 @@ pub fn up(a: UpArgs) -> i32 {
     match std::fs::read_to_string(run_dir.join("summary.json")) {
         Ok(s) => {
             let v: serde_json::Value = serde_json::from_str(&s).unwrap_or_default();
-            let program = std::env::args().next().unwrap_or_else(|| "orchestrator".into());
+            let program = std::env::args()
+                .next()
+                .unwrap_or_else(|| "orchestrator".into());
             crate::summary::print(&v, &run_dir, &program);
             0
         }
@@ -495,5 +497,4 @@ mod tests {
         let back = Scenario::parse(&sc.to_toml(), "resolved").unwrap();
         assert_eq!(swarm::chaos::schedule(&back), all);
     }
-
 }

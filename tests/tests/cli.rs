@@ -1,5 +1,5 @@
-//! The command line as a user meets it: every subcommand's `--help` gives every option a
-//! description and `up`'s show their defaults; the completion scripts generate and bash
+//! The command line as a user meets it: every subcommand's `--help` fits 80 columns, gives
+//! every option a description and `up`'s show their defaults; the completion scripts generate and bash
 //! parses its own; the short flags run a real run, whose summary fits 80 columns and ends
 //! with how to watch it.
 
@@ -40,9 +40,7 @@ fn undescribed(help: &str) -> Vec<String> {
         .enumerate()
         // An option's or argument's own line: indented 2 to 6 columns (descriptions on lines
         // of their own are indented 10).
-        .filter(|(_, l)| {
-            (2..=6).contains(&indent(l)) && l.trim_start().starts_with(['-', '<'])
-        })
+        .filter(|(_, l)| (2..=6).contains(&indent(l)) && l.trim_start().starts_with(['-', '<']))
         .filter(|(i, l)| match l.trim().split_once("  ") {
             // Only clap's own brackets (`[possible values: csv, mcap]`) are no description.
             Some((_, text)) => text.trim().starts_with('['),
@@ -61,8 +59,14 @@ fn every_subcommands_help_describes_every_option_and_up_shows_defaults() {
     while let Some(path) = todo.pop() {
         let args: Vec<&str> = path.iter().map(String::as_str).collect();
         let help = help_of(&args);
+        for l in help.lines() {
+            assert!(l.chars().count() <= 80, "{path:?} --help: {l:?}");
+        }
         let bad = undescribed(&help);
-        assert!(bad.is_empty(), "orchestrator {path:?} --help: {bad:?}\n{help}");
+        assert!(
+            bad.is_empty(),
+            "orchestrator {path:?} --help: {bad:?}\n{help}"
+        );
         for s in subcommands(&help) {
             let mut p = path.clone();
             p.push(s);
@@ -116,7 +120,17 @@ fn short_flags_run_and_the_summary_fits_80_columns_and_says_how_to_watch() {
     let _g = serial();
     let out = tmp_dir("cli-short-flags");
     let o = Command::new(orchestrator())
-        .args(["up", "-q", "-n", "3", "-s", roam(), "--max-ticks", "12", "-o"])
+        .args([
+            "up",
+            "-q",
+            "-n",
+            "3",
+            "-s",
+            roam(),
+            "--max-ticks",
+            "12",
+            "-o",
+        ])
         .arg(&out)
         .output()
         .unwrap();
@@ -136,7 +150,10 @@ fn short_flags_run_and_the_summary_fits_80_columns_and_says_how_to_watch() {
         format!("{} view {}", orchestrator().display(), out.display()),
         "{text}"
     );
-    assert_eq!(rest.last().map(|l| l.trim()), Some("watch it in the browser:"));
+    assert_eq!(
+        rest.last().map(|l| l.trim()),
+        Some("watch it in the browser:")
+    );
     assert_left_nothing(&out);
     let _ = std::fs::remove_dir_all(&out);
 }

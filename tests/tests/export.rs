@@ -293,7 +293,9 @@ fn the_csv_holds_the_recordings_numbers_and_state_names_and_events_every_event()
         assert_eq!(row[0], tick.to_string());
     }
     // A target is found by a live robot, and names the target (search.toml has 10).
-    let targets = summary(&out)["mission"]["search"]["targets"].as_u64().unwrap();
+    let targets = summary(&out)["mission"]["search"]["targets"]
+        .as_u64()
+        .unwrap();
     let found: Vec<&Vec<String>> = rows.iter().filter(|r| r[2] == "entity_done").collect();
     assert!(!found.is_empty(), "{rows:?}");
     for r in found {

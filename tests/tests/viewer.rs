@@ -993,4 +993,3 @@ fn the_live_page_shows_the_running_run_and_its_kill_button_makes_a_fault() {
     );
     assert_left_nothing(&out);
 }
-

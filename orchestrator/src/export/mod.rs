@@ -121,9 +121,7 @@ pub fn export(a: ExportArgs) -> i32 {
             return 2;
         }
     };
-    let out = a
-        .out
-        .unwrap_or_else(|| a.run.join(a.format.default_file()));
+    let out = a.out.unwrap_or_else(|| a.run.join(a.format.default_file()));
     let r = match a.format {
         Format::Csv => csv::write(&out, &run, &ticks),
         Format::Events => events::write(&out, &run, &ticks),

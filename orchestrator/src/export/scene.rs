@@ -169,11 +169,7 @@ fn mark_entity(run: &Run, time: Time, k: usize, m: &Mark) -> SceneEntity {
             };
             e.triangles.push(TriangleListPrimitive {
                 pose: Pose::at(0.0, 0.0, 0.0, 0.0),
-                points: vec![
-                    corner(0.0, l),
-                    corner(2.5, l * 0.6),
-                    corner(-2.5, l * 0.6),
-                ],
+                points: vec![corner(0.0, l), corner(2.5, l * 0.6), corner(-2.5, l * 0.6)],
                 color: Color::rgb(*fill, 1.0),
                 colors: Vec::new(),
                 indices: Vec::new(),
