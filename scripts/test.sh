@@ -33,6 +33,11 @@ need_chromium() {
   command -v chromium >/dev/null || apt_install chromium
 }
 
+# The Ctrl-C test (tests/tests/cli.rs) runs `orchestrator up` in a real terminal.
+need_tmux() {
+  command -v tmux >/dev/null || apt_install tmux
+}
+
 # The export test (tests/tests/export.rs) reads Foxglove's JSON schemas from their npm package.
 need_node() {
   if ! command -v node >/dev/null || ! command -v npm >/dev/null; then
@@ -47,7 +52,7 @@ need_foxglove_schemas() {
     (cd tests/foxglove && npm ci --no-audit --no-fund)
 }
 
-NEEDS=(need_rust_tools need_chromium need_node need_foxglove_schemas)
+NEEDS=(need_rust_tools need_chromium need_tmux need_node need_foxglove_schemas)
 for need in "${NEEDS[@]}"; do
   "$need"
 done

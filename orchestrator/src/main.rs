@@ -54,7 +54,7 @@ enum Cmd {
     /// Write a run's recording as CSV (one row per robot and tick), its events as CSV, or
     /// MCAP (for Foxglove).
     Export(export::ExportArgs),
-    /// Print a shell's completion script: `orchestrator completions bash > ~/.local/share/bash-completion/completions/orchestrator`.
+    /// Print a shell's completion script, e.g. `orchestrator completions bash`.
     Completions(completions::CompletionsArgs),
     /// (internal) A benchmark child process.
     #[command(hide = true, name = "__bench-child")]

@@ -22,6 +22,8 @@ fn subcommands(help: &str) -> Vec<String> {
         .skip_while(|l| !l.starts_with("Commands:"))
         .skip(1)
         .take_while(|l| l.starts_with("  "))
+        // A name is indented 2; a wrapped description's next lines, deeper.
+        .filter(|l| !l.starts_with("   "))
         .filter_map(|l| l.split_whitespace().next())
         .filter(|n| *n != "help")
         .map(String::from)
@@ -75,7 +77,11 @@ fn every_subcommands_help_describes_every_option_and_up_shows_defaults() {
         walked += 1;
     }
     assert!(walked >= 12, "{walked} helps walked");
-    let up = help_of(&["up"]);
+    // Wrapped lines joined: a bracket may be cut across two.
+    let up = help_of(&["up"])
+        .split_whitespace()
+        .collect::<Vec<_>>()
+        .join(" ");
     let sc = swarm::scenario::Scenario::default();
     for want in [
         format!("[scenario: run.robots, default {}]", sc.run.robots),
@@ -153,6 +159,71 @@ fn short_flags_run_and_the_summary_fits_80_columns_and_says_how_to_watch() {
     assert_eq!(
         rest.last().map(|l| l.trim()),
         Some("watch it in the browser:")
+    );
+    assert_left_nothing(&out);
+    let _ = std::fs::remove_dir_all(&out);
+}
+
+/// tmux, the terminal of the Ctrl-C test (scripts/test.sh installs Debian's package).
+fn tmux(args: &[&str]) -> std::process::Output {
+    Command::new("tmux")
+        .args(args)
+        .output()
+        .expect("tmux (Debian package tmux; scripts/test.sh installs it)")
+}
+
+/// Polls tmux pane `target` until its text holds `needle`; returns the text.
+fn screen_until(target: &str, needle: &str, budget: std::time::Duration) -> String {
+    let start = std::time::Instant::now();
+    loop {
+        let o = tmux(&["capture-pane", "-p", "-t", target]);
+        let text = String::from_utf8_lossy(&o.stdout).to_string();
+        if text.contains(needle) || start.elapsed() > budget {
+            return text;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(100));
+    }
+}
+
+#[test]
+fn ctrl_c_in_a_real_terminal_leaves_no_progress_bar_on_the_screen() {
+    let _g = serial();
+    let session = format!("swarm-e2e-{}-ctrl-c", std::process::id());
+    let out = tmp_dir("cli-ctrl-c");
+    // An 80-column terminal with a shell, as a user has; the run is typed into it.
+    let o = tmux(&[
+        "new-session",
+        "-d",
+        "-s",
+        &session,
+        "-x",
+        "80",
+        "-y",
+        "30",
+        "bash",
+        "--norc",
+    ]);
+    assert!(o.status.success(), "tmux: {}", stderr(&o));
+    let line = format!(
+        "{} up -n 4 -s {} --max-ticks 100000 --tick-hz 40 -o {}",
+        orchestrator().display(),
+        roam(),
+        out.display()
+    );
+    tmux(&["send-keys", "-t", &session, &line, "Enter"]);
+    let budget = std::time::Duration::from_secs(30);
+    let running = screen_until(&session, "ticks/s |", budget);
+    tmux(&["send-keys", "-t", &session, "C-c"]);
+    let after = screen_until(&session, "watch it in the browser", budget);
+    tmux(&["kill-session", "-t", &session]);
+    assert!(
+        running.contains("tick ["),
+        "no progress bar drawn:\n{running}"
+    );
+    assert!(after.contains("interrupted"), "{after}");
+    assert!(
+        !after.contains("tick [") && !after.contains("ticks/s |"),
+        "the progress bar stayed on the screen:\n{after}"
     );
     assert_left_nothing(&out);
     let _ = std::fs::remove_dir_all(&out);
