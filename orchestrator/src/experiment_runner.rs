@@ -37,6 +37,7 @@ pub struct ExperimentArgs {
     /// seeds, its first K).
     #[arg(long)]
     pub runs: Option<u32>,
+    /// Where each run's robots run: in one process (fast sweeps) or as real processes.
     #[arg(long, value_enum, default_value_t = Executor::Inprocess)]
     pub executor: Executor,
     /// The folder results.md, results.json, results.csv and the charts go to; nothing is

@@ -2,6 +2,7 @@
 
 mod bench;
 mod clean;
+mod completions;
 mod control;
 mod experiment;
 mod experiment_cbca;
@@ -12,13 +13,15 @@ mod inprocess;
 mod phase;
 mod prepare;
 mod processes;
+mod progress;
 mod registry;
 mod runid;
 mod signals;
+mod summary;
 mod up;
 mod view;
 
-use clap::{Parser, Subcommand};
+use clap::{FromArgMatches, Parser, Subcommand};
 
 #[derive(Parser)]
 #[command(
@@ -48,8 +51,11 @@ enum Cmd {
     Kill(control::KillArgs),
     /// Replay a run in the browser: serves a page on 127.0.0.1 that plays its recording.bin.
     View(view::ViewArgs),
-    /// Write a run's recording as CSV (one row per robot and tick) or MCAP (for Foxglove).
+    /// Write a run's recording as CSV (one row per robot and tick), its events as CSV, or
+    /// MCAP (for Foxglove).
     Export(export::ExportArgs),
+    /// Print a shell's completion script, e.g. `orchestrator completions bash`.
+    Completions(completions::CompletionsArgs),
     /// (internal) A benchmark child process.
     #[command(hide = true, name = "__bench-child")]
     BenchChild(bench::ChildArgs),
@@ -66,7 +72,10 @@ fn main() {
     swarm::transport::quiet_logs();
     // Every robot costs the world descriptors; its children inherit the raised limit.
     swarm::limits::raise_nofile();
-    let cli = Cli::parse();
+    let cli = match Cli::from_arg_matches(&completions::command().get_matches()) {
+        Ok(c) => c,
+        Err(e) => e.exit(),
+    };
     if !matches!(cli.cmd, Cmd::Bench(_) | Cmd::BenchChild(_)) {
         // `orchestrator up | head`: a closed stdout ends us quietly, as for any Unix tool,
         // instead of a panic. These commands print only after their runs are cleaned up; the
@@ -83,6 +92,7 @@ fn main() {
         Cmd::Kill(a) => control::kill(a),
         Cmd::View(a) => view::view(a),
         Cmd::Export(a) => export::export(a),
+        Cmd::Completions(a) => completions::print(a),
         Cmd::Clean => {
             let r = clean::clean_dead_runs();
             println!(

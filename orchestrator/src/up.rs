@@ -2,7 +2,6 @@
 
 use crate::{clean, inprocess, processes, runid, signals};
 use clap::{Args, ValueEnum};
-use indicatif::{ProgressBar, ProgressStyle};
 use std::path::{Path, PathBuf};
 use swarm::scenario::{ConfigError, Scenario};
 
@@ -17,10 +16,11 @@ pub enum Executor {
 #[derive(Args, Debug, Clone)]
 pub struct UpArgs {
     /// Number of robots (one agent process each) [scenario: run.robots].
-    #[arg(long)]
+    #[arg(short = 'n', long)]
     pub robots: Option<u32>,
-    /// Scenario file (TOML); keys it leaves out take the embedded default's values.
-    #[arg(long)]
+    /// Scenario file (TOML); keys it leaves out take the embedded default's values
+    /// [default: the embedded scenario].
+    #[arg(short, long)]
     pub scenario: Option<PathBuf>,
     /// Seed of every random stream [scenario: run.seed].
     #[arg(long)]
@@ -61,9 +61,10 @@ pub struct UpArgs {
     /// deadline miss. Processes executor only [scenario: runtime.realtime_hz].
     #[arg(long, value_name = "HZ")]
     pub realtime: Option<f64>,
-    /// Run folder (default runs/<run-id>).
-    #[arg(long)]
+    /// Run folder [default: runs/<run-id>].
+    #[arg(short, long)]
     pub out: Option<PathBuf>,
+    /// Where the robots run.
     #[arg(long, value_enum, default_value_t = Executor::Processes)]
     pub executor: Executor,
     /// Random SIGKILLs of agents per 100 ticks, from the run's seed [scenario: faults.chaos_rate].
@@ -83,7 +84,7 @@ pub struct UpArgs {
     #[arg(long)]
     pub max_restarts: Option<u32>,
     /// No progress bar.
-    #[arg(long)]
+    #[arg(short, long)]
     pub quiet: bool,
     /// Watch the run in the browser: serves the viewer on 127.0.0.1 (the URL is printed)
     /// fed from the run's recording as the world writes it, with a button that kills a
@@ -166,7 +167,7 @@ fn parse_burst(s: &str) -> Result<swarm::radio::BurstParams, String> {
 }
 
 /// Which flag set a scenario key, for error messages.
-const FLAG_KEYS: &[(&str, &str)] = &[
+pub(crate) const FLAG_KEYS: &[(&str, &str)] = &[
     ("run.robots", "--robots"),
     ("run.seed", "--seed"),
     ("run.max_ticks", "--max-ticks"),
@@ -306,43 +307,6 @@ pub fn expand_kills(sc: &mut Scenario) {
 /// How long `up --view` goes on serving after the run, for the pages to get its last frames.
 const VIEW_LAST_FRAMES: std::time::Duration = std::time::Duration::from_millis(300);
 
-fn progress(sc: &Scenario, quiet: bool) -> ProgressBar {
-    if quiet {
-        return ProgressBar::hidden();
-    }
-    let pb = ProgressBar::new(sc.run.max_ticks);
-    pb.set_style(
-        ProgressStyle::with_template("{spinner} tick {pos}/{len} [{bar:30}] {per_sec} | {msg}")
-            .expect("template")
-            .progress_chars("=> "),
-    );
-    pb
-}
-
-#[allow(clippy::too_many_arguments)]
-fn bar_msg(
-    alive: u32,
-    n: u32,
-    delivered: u64,
-    range: u64,
-    loss: u64,
-    other: u64,
-    progress: (&str, u32, u32),
-    misses: Option<u64>,
-) -> String {
-    let (label, done, total) = progress;
-    let t = if total > 0 && !label.is_empty() {
-        format!("{label} {done}/{total} | ")
-    } else {
-        String::new()
-    };
-    // Real-time mode: the deadline misses so far.
-    let m = misses
-        .map(|m| format!(" | deadline misses {m}"))
-        .unwrap_or_default();
-    format!("{t}robots alive {alive}/{n}{m} | messages delivered {delivered}, dropped: out of range {range}, lost {loss}, other {other}")
-}
-
 pub fn up(a: UpArgs) -> i32 {
     // First of all: a Ctrl-C at any moment is a clean stop, never the default death.
     signals::install();
@@ -423,9 +387,7 @@ pub fn up(a: UpArgs) -> i32 {
     } else {
         None
     };
-    let pb = progress(&sc, a.quiet);
-    let n = sc.run.robots;
-    let label = world::mission::progress_label(&sc);
+    let bar = crate::progress::Bar::new(&sc, a.quiet);
     let realtime = sc.runtime.is_realtime();
     let result: Result<(), String> = match a.executor {
         Executor::Inprocess => inprocess::run_live(
@@ -434,20 +396,21 @@ pub fn up(a: UpArgs) -> i32 {
             &run_id,
             cores(),
             &mut |w| {
-                pb.set_position(w.tick);
                 if w.tick % 16 == 0 {
                     let r = &w.radio;
-                    let (done, total) = w.mission.progress();
-                    pb.set_message(bar_msg(
-                        w.alive_count(),
-                        n,
-                        r.delivered,
-                        r.dropped_range,
-                        r.dropped_loss,
-                        r.dropped_occluded + r.dropped_bandwidth + r.receiver_dead + r.malformed,
-                        (label, done, total),
-                        None,
-                    ));
+                    bar.update(&crate::progress::BarStatus {
+                        tick: w.tick,
+                        progress: w.mission.progress(),
+                        alive: w.alive_count(),
+                        delivered: r.delivered,
+                        dropped: r.dropped_range
+                            + r.dropped_loss
+                            + r.dropped_occluded
+                            + r.dropped_bandwidth
+                            + r.receiver_dead
+                            + r.malformed,
+                        misses: None,
+                    });
                 }
             },
             a.view,
@@ -459,17 +422,14 @@ pub fn up(a: UpArgs) -> i32 {
             run_id: &run_id,
             run_dir: &run_dir,
             on_status: &mut |s| {
-                pb.set_position(s.tick);
-                pb.set_message(bar_msg(
-                    s.alive,
-                    n,
-                    s.delivered,
-                    s.dropped_range,
-                    s.dropped_loss,
-                    s.dropped_other,
-                    (label, s.progress_done, s.progress_total),
-                    realtime.then_some(s.deadline_misses),
-                ));
+                bar.update(&crate::progress::BarStatus {
+                    tick: s.tick,
+                    progress: (s.progress_done, s.progress_total),
+                    alive: s.alive,
+                    delivered: s.delivered,
+                    dropped: s.dropped_range + s.dropped_loss + s.dropped_other,
+                    misses: realtime.then_some(s.deadline_misses),
+                });
             },
             live: a.view,
         })
@@ -479,7 +439,7 @@ pub fn up(a: UpArgs) -> i32 {
             Err(sig) => Err(format!("the world process was killed by signal {sig}")),
         }),
     };
-    pb.finish_and_clear();
+    bar.clear();
     if let Some(l) = &live {
         // The follower reads the last bytes, the open pages get them and the stream's end;
         // a page keeps every frame it got, to scrub after the run.
@@ -499,285 +459,16 @@ pub fn up(a: UpArgs) -> i32 {
     match std::fs::read_to_string(run_dir.join("summary.json")) {
         Ok(s) => {
             let v: serde_json::Value = serde_json::from_str(&s).unwrap_or_default();
-            print_summary(&v, &run_dir);
+            let program = std::env::args()
+                .next()
+                .unwrap_or_else(|| "orchestrator".into());
+            crate::summary::print(&v, &run_dir, &program);
             0
         }
         Err(e) => {
             eprintln!("error: run {run_id}: no summary.json: {e}");
             1
         }
-    }
-}
-
-/// Robots whose misses the printed summary lists.
-const MISSES_LISTED: usize = 20;
-
-fn print_summary(v: &serde_json::Value, dir: &Path) {
-    let g = |p: &str| v.pointer(p).cloned().unwrap_or_default();
-    let f = |p: &str| v.pointer(p).and_then(|x| x.as_f64()).unwrap_or(0.0);
-    println!(
-        "run {}  ({} executor, {})",
-        g("/run_id").as_str().unwrap_or(""),
-        g("/executor").as_str().unwrap_or(""),
-        g("/end").as_str().unwrap_or("")
-    );
-    println!(
-        "  robots {}  behaviour {}  seed {}  ticks {}/{}",
-        g("/robots"),
-        g("/behaviour").as_str().unwrap_or(""),
-        g("/seed"),
-        g("/ticks"),
-        g("/max_ticks")
-    );
-    println!(
-        "  wall {:.2} s (start-up {:.2} s)  {:.0} ticks/s  tick p50 {:.0} us  p99 {:.0} us",
-        f("/wall_seconds"),
-        f("/startup_seconds"),
-        f("/ticks_per_second"),
-        f("/tick_time/p50_us"),
-        f("/tick_time/p99_us")
-    );
-    println!(
-        "  messages offered {}  delivered {}  dropped: range {}  occluded {}  bandwidth {}  loss {}  malformed {}  receiver dead {}  in flight {}",
-        g("/messages/offered"), g("/messages/delivered"), g("/messages/dropped_range"),
-        g("/messages/dropped_occluded"), g("/messages/dropped_bandwidth"), g("/messages/dropped_loss"),
-        g("/messages/malformed"), g("/messages/receiver_dead"), g("/messages/in_flight")
-    );
-    if let Some(rt) = v.pointer("/realtime") {
-        // Robots that missed, as robot:misses (the first MISSES_LISTED; summary.json has all).
-        let per: Vec<String> = rt["misses_per_robot"]
-            .as_array()
-            .map(|a| {
-                a.iter()
-                    .enumerate()
-                    .filter(|(_, x)| x.as_u64().unwrap_or(0) > 0)
-                    .take(MISSES_LISTED)
-                    .map(|(i, x)| format!("{i}:{x}"))
-                    .collect()
-            })
-            .unwrap_or_default();
-        println!(
-            "  real-time {} Hz: deadline misses {} of {} robot-ticks ({:.2} %), late actions {}, late releases {}; robot:misses [{}]",
-            rt["hz"],
-            rt["deadline_misses"],
-            rt["robot_ticks"],
-            100.0 * rt["miss_rate"].as_f64().unwrap_or(0.0),
-            rt["late_actions"],
-            rt["late_releases"],
-            per.join(", ")
-        );
-    }
-    let rejected: u64 = v
-        .pointer("/rejected_actions")
-        .and_then(|r| r.as_object())
-        .map(|o| o.values().filter_map(|x| x.as_u64()).sum())
-        .unwrap_or(0);
-    println!(
-        "  rejected actions {rejected}  blocked moves {}  alive at end {}",
-        g("/blocked_moves"),
-        g("/alive_at_end")
-    );
-    if let Some(faults) = v.pointer("/faults").and_then(|x| x.as_array()) {
-        for fl in faults {
-            println!(
-                "  fault: robot {} at tick {}: {}",
-                fl["robot"],
-                fl["tick"],
-                fl["cause"].as_str().unwrap_or("")
-            );
-        }
-    }
-    if let Some(sm) = v.pointer("/mission/search") {
-        let steps = match sm["steps"].as_u64() {
-            Some(s) => s.to_string(),
-            None => format!("censored at {}", g("/ticks")),
-        };
-        println!(
-            "  search: targets found {}/{}  steps {steps}  energy {:.3} x 10^4",
-            sm["found"],
-            sm["targets"],
-            sm["energy"].as_f64().unwrap_or(0.0) / 1e4
-        );
-    }
-    if let Some(h) = v.pointer("/mission/hunt") {
-        print_hunt(h, &g("/ticks"));
-    }
-    if let Some(fm) = v.pointer("/mission/formation") {
-        print_formation(fm, &g("/ticks"), &g("/faults"));
-    }
-    println!(
-        "  mission: coverage {:.1} %  spread {:.1}  mean nearest neighbour {:.1}",
-        100.0 * f("/mission/coverage"),
-        f("/mission/spread"),
-        f("/mission/mean_nearest_neighbour")
-    );
-    println!(
-        "  outputs: {}/{{scenario.toml, summary.json, recording.bin, run.svg}}",
-        dir.display()
-    );
-}
-
-/// The hunt mission's line of the run summary: evaders captured, when and by whom.
-fn print_hunt(h: &serde_json::Value, ticks: &serde_json::Value) {
-    let all = match h["all_captured_minutes"].as_f64() {
-        Some(m) => format!("all by {m:.2} min"),
-        None => format!("not all: censored at tick {ticks}"),
-    };
-    println!(
-        "  hunt: evaders captured {}/{}  {all}",
-        h["captured"], h["evaders"]
-    );
-    for e in h["per_evader"].as_array().into_iter().flatten() {
-        let by: Vec<String> = e["captured_by"]
-            .as_array()
-            .into_iter()
-            .flatten()
-            .map(|r| format!("R{r}"))
-            .collect();
-        match e["capture_minutes"].as_f64() {
-            Some(m) => println!(
-                "    T{}: captured at {m:.2} min by {{{}}}",
-                e["id"],
-                by.join(", ")
-            ),
-            None => println!("    T{}: not captured", e["id"]),
-        }
-    }
-}
-
-/// The formation mission's line of the run summary: formed or not, K, L, clearances, plans.
-/// Whether a plan made at `tick` came after a robot's death (`faults` of the summary): a
-/// re-plan, whose "no placement" keeps the previous pattern's slots round the wrecks.
-fn after_a_death(faults: &serde_json::Value, tick: &serde_json::Value) -> bool {
-    let tick = tick.as_u64().unwrap_or(0);
-    faults
-        .as_array()
-        .into_iter()
-        .flatten()
-        .any(|f| f["tick"].as_u64().is_some_and(|t| t <= tick))
-}
-
-fn print_formation(fm: &serde_json::Value, ticks: &serde_json::Value, faults: &serde_json::Value) {
-    let formed = if fm["formed"].as_bool() == Some(true) {
-        format!("formed at K = {}", fm["iterations"])
-    } else {
-        format!("not formed: censored at tick {ticks}")
-    };
-    let plans: Vec<&serde_json::Value> = fm["plans"].as_array().into_iter().flatten().collect();
-    let infeasible: Vec<&&serde_json::Value> = plans
-        .iter()
-        .filter(|p| p["feasible"].as_bool() == Some(false))
-        .collect();
-    for p in infeasible
-        .iter()
-        .filter(|p| after_a_death(faults, &p["tick"]))
-    {
-        println!(
-            "  formation: the re-plan of epoch {} (robot {}, tick {}) after a death found no \
-             placement: the robots kept the previous pattern's slots round the wrecks",
-            p["epoch"], p["robot"], p["tick"]
-        );
-    }
-    if infeasible
-        .iter()
-        .any(|p| !after_a_death(faults, &p["tick"]))
-    {
-        println!(
-            "  formation: NO FEASIBLE PATTERN: the optimiser found no placement of the template \
-             inside the box, clear of the discs and 2r + separation_margin apart (within \
-             formation.kernels.optimiser.max_nodes); the plan fell back to formation.transform. \
-             Move or shrink the discs, enlarge the arena, or widen alpha_range / theta_range"
-        );
-    }
-    println!(
-        "  formation: {formed}  robots in place {}/{}  L {:.1}  reassignments {}  overlapping pairs {}",
-        fm["robots_in_place"],
-        fm["robots"],
-        fm["path_length"].as_f64().unwrap_or(0.0),
-        fm["reassignments"],
-        fm["overlapping_pairs"]
-    );
-    // A clearance with nothing to measure (one robot, no disc) is infinite, null in JSON.
-    let clearance = |v: &serde_json::Value| {
-        v.as_f64()
-            .map_or_else(|| "none (no pair)".to_string(), |c| format!("{c:.3}"))
-    };
-    println!(
-        "    least clearance: robot-robot {}  robot-obstacle {}",
-        clearance(&fm["min_robot_clearance"]),
-        clearance(&fm["min_obstacle_clearance"])
-    );
-    // A swarm that re-plans often (a plan a lost member) lists hundreds: the first and last
-    // few, and how many between.
-    const SHOWN: usize = 3;
-    for (i, p) in plans.iter().enumerate() {
-        if plans.len() > 2 * SHOWN && i == SHOWN {
-            println!("    ... {} more plans ...", plans.len() - 2 * SHOWN);
-        }
-        if plans.len() > 2 * SHOWN && (SHOWN..plans.len() - SHOWN).contains(&i) {
-            continue;
-        }
-        if p["epoch"].is_null() {
-            // Its parameters come on the next two ticks; a newer plan of the same robot
-            // within them takes them (world/src/mission/formation.rs, PlanReport).
-            println!(
-                "    plan by robot {} at tick {}: superseded before its parameters were reported",
-                p["robot"], p["tick"]
-            );
-            continue;
-        }
-        if p["feasible"].as_bool() == Some(false) && after_a_death(faults, &p["tick"]) {
-            println!(
-                "    plan epoch {} by robot {} at tick {}: no placement ({} nodes, {:.2} s): the previous pattern kept",
-                p["epoch"],
-                p["robot"],
-                p["tick"],
-                p["nodes"],
-                p["seconds"].as_f64().unwrap_or(f64::NAN),
-            );
-            continue;
-        }
-        if p["feasible"].as_bool() == Some(false) {
-            println!(
-                "    plan epoch {} by robot {} at tick {}: NO FEASIBLE PATTERN ({} nodes, {:.2} s): fallback alpha {:.3} theta {:.3}",
-                p["epoch"],
-                p["robot"],
-                p["tick"],
-                p["nodes"],
-                p["seconds"].as_f64().unwrap_or(f64::NAN),
-                p["alpha"].as_f64().unwrap_or(f64::NAN),
-                p["theta"].as_f64().unwrap_or(f64::NAN),
-            );
-            continue;
-        }
-        let gap = p["gap"].as_f64().unwrap_or(f64::NAN);
-        println!(
-            "    plan epoch {} by robot {} at tick {}: alpha {:.3} theta {:.3}  gap {:.3}{}  {:.2} s",
-            p["epoch"],
-            p["robot"],
-            p["tick"],
-            p["alpha"].as_f64().unwrap_or(f64::NAN),
-            p["theta"].as_f64().unwrap_or(f64::NAN),
-            gap,
-            gap_sentinel(gap),
-            p["seconds"].as_f64().unwrap_or(f64::NAN)
-        );
-    }
-}
-
-/// What a negative plan gap means: the re-plans report sentinels, not bounds (agent crate:
-/// replan.rs `NO_PLACEMENT` = -1, replan_multihop.rs `SHIFTED` = -2 (also the relayed mode's
-/// shift, relay_place.rs), shift_drop.rs `SHIFTED_AND_DROPPED` = -3). A gap the optimiser
-/// proved is never negative.
-fn gap_sentinel(gap: f64) -> &'static str {
-    if gap == -1.0 {
-        " (no placement found: old transform)"
-    } else if gap == -2.0 {
-        " (old pattern shifted: no certificate)"
-    } else if gap == -3.0 {
-        " (shifted, blocked slots dropped: no certificate)"
-    } else {
-        ""
     }
 }
 
@@ -807,18 +498,5 @@ mod tests {
         assert_eq!(swarm::chaos::schedule(&sc), all);
         let back = Scenario::parse(&sc.to_toml(), "resolved").unwrap();
         assert_eq!(swarm::chaos::schedule(&back), all);
-    }
-
-    #[test]
-    fn a_plan_made_after_a_death_is_a_re_plan_and_one_before_is_not() {
-        let faults = serde_json::json!([{"robot": 3, "tick": 150}, {"robot": 4, "tick": 152}]);
-        assert!(!after_a_death(&faults, &serde_json::json!(1)));
-        assert!(!after_a_death(&faults, &serde_json::json!(149)));
-        assert!(after_a_death(&faults, &serde_json::json!(150)));
-        assert!(after_a_death(&faults, &serde_json::json!(164)));
-        assert!(!after_a_death(
-            &serde_json::json!([]),
-            &serde_json::json!(164)
-        ));
     }
 }

@@ -6,6 +6,13 @@
 //! runtime, the in-process radio (`mailbox`), the recording format, and the iceoryx2 / futex
 //! plumbing of the multi-process path.
 
+// Linux only: the runtime's futex barrier, /proc reads and shared memory in /dev/shm have no
+// equivalent here on other systems; say so at once rather than with errors deep in the build.
+#[cfg(not(target_os = "linux"))]
+compile_error!(
+    "the swarm runtime is Linux-only (futex, /proc, /dev/shm); build it on Linux (README.md)"
+);
+
 pub mod air;
 pub mod barrier;
 pub mod behaviour;

@@ -1,34 +1,25 @@
-//! MCAP with JSON messages and JSON-schema channels, one message per tick on each:
-//! `/swarm/poses` (every robot's pose, state, alive), `/swarm/entities` (the mission's marks:
-//! search targets found and not, ...) and `/swarm/radio` (the tick's radio counters); a
-//! recording with deliveries (version 7, `up --record-deliveries`) adds `/swarm/deliveries`
-//! (per receiver, the messages it was handed: sender, seq, bytes). The recording's header is
-//! the file's `scenario` metadata record.
+//! MCAP for Foxglove, zstd-compressed chunks, JSON messages:
+//! - `/scene` (`foxglove.SceneUpdate`, one a tick): arena, obstacles, robots as discs with a
+//!   heading arrow coloured by state, the mission's marks (`scene.rs`);
+//! - `/tf` (`foxglove.FrameTransforms`, one a tick): frame `robot/<i>` of each robot in frame
+//!   `world`, to follow a robot;
+//! - `/events` (`foxglove.Log`, one per event): deaths, restarts, entities done, ...;
+//! - `/swarm/radio` (one a tick): the tick's radio counters, flat numbers to plot;
+//! - `/swarm/deliveries` (recordings with deliveries, version 7, `up --record-deliveries`):
+//!   per receiver, the messages it was handed (sender, seq, bytes).
+//!
+//! Log and publish time is simulated time (`clock.rs`), tick 0 at 0; the file's `swarm run`
+//! metadata record states seconds per tick and where that comes from, with the scenario.
 
-use super::ExportError;
+use super::events::{Described, Severity};
+use super::foxglove::{self as fg, FrameTransform, FrameTransforms, Quaternion, Time, Vector3};
+use super::{ExportError, Run};
 use mcap::records::MessageHeader;
 use mcap::{WriteOptions, Writer};
 use serde_json::json;
 use std::collections::BTreeMap;
 use std::path::Path;
-use swarm::recording::{RecordingHeader, TickRecord};
-
-/// A tick's log time when the run is unpaced (runtime.tick_hz = 0): the recording holds no
-/// wall-clock time, so ticks are shown 0.1 s apart. A paced run's ticks are 1/tick_hz apart.
-const UNPACED_TICK_NS: u64 = 100_000_000;
-
-const POSES_SCHEMA: &str = r#"{"type":"object","properties":{
- "tick":{"type":"integer"},
- "robots":{"type":"array","items":{"type":"object","properties":{
-  "id":{"type":"integer"},"x":{"type":"number"},"y":{"type":"number"},
-  "heading":{"type":"number"},"state":{"type":"integer"},"alive":{"type":"boolean"}}}}}}"#;
-
-const ENTITIES_SCHEMA: &str = r#"{"type":"object","properties":{
- "tick":{"type":"integer"},
- "marks":{"type":"array","items":{"type":"object","properties":{
-  "kind":{"type":"string","enum":["Disc","Ring","Circle","Triangle","Path"]},
-  "at":{"type":"array","items":{"type":"number"}},
-  "colour":{"type":"array","items":{"type":"integer"}}}}}}}"#;
+use swarm::recording::TickRecord;
 
 const RADIO_SCHEMA: &str = r#"{"type":"object","properties":{
  "tick":{"type":"integer"},"offered":{"type":"integer"},"delivered":{"type":"integer"},
@@ -44,43 +35,123 @@ const DELIVERIES_SCHEMA: &str = r#"{"type":"object","properties":{
   "messages":{"type":"array","items":{"type":"object","properties":{
    "sender":{"type":"integer"},"seq":{"type":"integer"},"bytes":{"type":"integer"}}}}}}}}}"#;
 
-/// The channels, in the order their messages are written each tick.
-pub const TOPICS: [&str; 3] = ["/swarm/poses", "/swarm/entities", "/swarm/radio"];
-/// The channel of a recording with deliveries, written after the others each tick.
+pub const SCENE_TOPIC: &str = "/scene";
+pub const TF_TOPIC: &str = "/tf";
+pub const EVENTS_TOPIC: &str = "/events";
+pub const RADIO_TOPIC: &str = "/swarm/radio";
+/// The channel of a recording with deliveries.
 pub const DELIVERIES_TOPIC: &str = "/swarm/deliveries";
 
-fn tick_ns(header: &RecordingHeader) -> u64 {
-    let hz = swarm::scenario::Scenario::parse(&header.scenario, "recording.bin header")
-        .map(|s| s.runtime.tick_hz)
-        .unwrap_or(0.0);
-    if hz > 0.0 {
-        (1e9 / hz).round() as u64
-    } else {
-        UNPACED_TICK_NS
+/// zstd level of the chunks (the crate's default is 0, zstd's own default, 3).
+const ZSTD_LEVEL: u32 = 9;
+
+/// The channels of a file, by what they carry.
+struct Channels {
+    scene: u16,
+    tf: u16,
+    events: u16,
+    radio: u16,
+    deliveries: Option<u16>,
+}
+
+fn add_channels<W: std::io::Write + std::io::Seek>(
+    w: &mut Writer<W>,
+    deliveries: bool,
+) -> Result<Channels, mcap::McapError> {
+    let mut channel = |(name, schema): (&str, &str), topic: &str| {
+        let s = w.add_schema(name, "jsonschema", schema.as_bytes())?;
+        w.add_channel(s, topic, "json", &BTreeMap::new())
+    };
+    Ok(Channels {
+        scene: channel(fg::SCENE_UPDATE, SCENE_TOPIC)?,
+        tf: channel(fg::FRAME_TRANSFORMS, TF_TOPIC)?,
+        events: channel(fg::LOG, EVENTS_TOPIC)?,
+        radio: channel(("swarm.Radio", RADIO_SCHEMA), RADIO_TOPIC)?,
+        deliveries: if deliveries {
+            Some(channel(
+                ("swarm.Deliveries", DELIVERIES_SCHEMA),
+                DELIVERIES_TOPIC,
+            )?)
+        } else {
+            None
+        },
+    })
+}
+
+/// The robots' frames at tick `t`.
+fn transforms(t: &TickRecord, time: Time) -> FrameTransforms {
+    FrameTransforms {
+        transforms: t
+            .poses
+            .iter()
+            .enumerate()
+            .map(|(i, p)| FrameTransform {
+                timestamp: time,
+                parent_frame_id: fg::WORLD_FRAME.to_string(),
+                child_frame_id: format!("robot/{i}"),
+                translation: Vector3 {
+                    x: p[0],
+                    y: p[1],
+                    z: 0.0,
+                },
+                rotation: Quaternion::yaw(p[2]),
+            })
+            .collect(),
     }
 }
 
-/// A mark as an object with its kind named (`{"kind": "Disc", "at": ..., ...}`).
-fn mark_json(m: &swarm::layer::Mark) -> serde_json::Value {
-    let v = serde_json::to_value(m).expect("mark JSON");
-    match v {
-        serde_json::Value::Object(o) if o.len() == 1 => {
-            let (kind, mut body) = o.into_iter().next().expect("one entry");
-            if let Some(b) = body.as_object_mut() {
-                b.insert("kind".into(), kind.into());
-            }
-            body
-        }
-        v => v,
+fn log(d: &Described, time: Time) -> fg::Log {
+    fg::Log {
+        timestamp: time,
+        level: match d.severity {
+            Severity::Info => fg::LOG_INFO,
+            Severity::Warning => fg::LOG_WARNING,
+            Severity::Error => fg::LOG_ERROR,
+        },
+        message: d.sentence(),
+        name: d.name.to_string(),
+        file: String::new(),
+        line: 0,
     }
+}
+
+/// The tick's messages, (channel, JSON), in the order written.
+fn messages(run: &Run, c: &Channels, t: &TickRecord, ns: u64) -> Vec<(u16, String)> {
+    let time = Time::from_ns(ns);
+    let mut out = vec![
+        (c.scene, text(&super::scene::update(run, t, ns))),
+        (c.tf, text(&transforms(t, time))),
+    ];
+    for e in &t.events {
+        out.push((c.events, text(&log(&Described::of(e), time))));
+    }
+    // Every counter the recording holds (the schema names those known today).
+    let mut radio = serde_json::to_value(t.radio).expect("radio JSON");
+    radio["tick"] = t.tick.into();
+    out.push((c.radio, radio.to_string()));
+    if let Some(ch) = c.deliveries {
+        // Receivers that heard something, in id order.
+        let heard: Vec<serde_json::Value> = t
+            .deliveries
+            .as_ref()
+            .map_or(&[][..], |d| &d.heard[..])
+            .iter()
+            .enumerate()
+            .filter(|(_, h)| !h.is_empty())
+            .map(|(i, h)| json!({"receiver": i, "messages": h}))
+            .collect();
+        out.push((ch, json!({"tick": t.tick, "heard": heard}).to_string()));
+    }
+    out
+}
+
+/// A message as JSON text (the types hold nothing that fails to serialise).
+fn text<T: serde::Serialize>(v: &T) -> String {
+    serde_json::to_string(v).expect("message JSON")
 }
 
 /// Writes the file; returns the number of messages.
-pub fn write(
-    path: &Path,
-    header: &RecordingHeader,
-    ticks: &[TickRecord],
-) -> Result<u64, ExportError> {
+pub fn write(path: &Path, run: &Run, ticks: &[TickRecord]) -> Result<u64, ExportError> {
     let io = |source| ExportError::Io {
         path: path.to_path_buf(),
         source,
@@ -91,100 +162,41 @@ pub fn write(
     };
     let file = std::io::BufWriter::new(std::fs::File::create(path).map_err(io)?);
     let mut w: Writer<_> = WriteOptions::new()
-        .compression(None)
+        .compression(Some(mcap::Compression::Zstd))
+        .compression_level(ZSTD_LEVEL)
         .profile("")
         .create(file)
         .map_err(mc)?;
+    let h = &run.header;
     let mut meta = BTreeMap::new();
-    meta.insert("scenario".to_string(), header.scenario.clone());
-    meta.insert("seed".to_string(), header.seed.to_string());
-    meta.insert("robots".to_string(), header.robots.to_string());
-    meta.insert("recording_version".to_string(), header.version.to_string());
+    meta.insert("scenario".to_string(), h.scenario.clone());
+    meta.insert("seed".to_string(), h.seed.to_string());
+    meta.insert("robots".to_string(), h.robots.to_string());
+    meta.insert("recording_version".to_string(), h.version.to_string());
+    meta.insert(
+        "seconds_per_tick".to_string(),
+        run.clock.seconds_per_tick.to_string(),
+    );
+    meta.insert("time".to_string(), run.clock.source.to_string());
     w.write_metadata(&mcap::records::Metadata {
         name: "swarm run".into(),
         metadata: meta,
     })
     .map_err(mc)?;
-    let schemas = [
-        ("swarm.Poses", POSES_SCHEMA),
-        ("swarm.Entities", ENTITIES_SCHEMA),
-        ("swarm.Radio", RADIO_SCHEMA),
-    ];
-    let mut channels = [0u16; 3];
-    for (k, (name, schema)) in schemas.iter().enumerate() {
-        let s = w
-            .add_schema(name, "jsonschema", schema.as_bytes())
-            .map_err(mc)?;
-        channels[k] = w
-            .add_channel(s, TOPICS[k], "json", &BTreeMap::new())
-            .map_err(mc)?;
-    }
-    let deliveries = if header.version >= swarm::recording::RECORDING_VERSION_DELIVERIES {
-        let s = w
-            .add_schema(
-                "swarm.Deliveries",
-                "jsonschema",
-                DELIVERIES_SCHEMA.as_bytes(),
-            )
-            .map_err(mc)?;
-        Some(
-            w.add_channel(s, DELIVERIES_TOPIC, "json", &BTreeMap::new())
-                .map_err(mc)?,
-        )
-    } else {
-        None
-    };
-    let dt = tick_ns(header);
+    let deliveries = h.version >= swarm::recording::RECORDING_VERSION_DELIVERIES;
+    let channels = add_channels(&mut w, deliveries).map_err(mc)?;
     let mut count = 0u64;
     for t in ticks {
-        let robots: Vec<serde_json::Value> = t
-            .poses
-            .iter()
-            .enumerate()
-            .map(|(i, p)| {
-                json!({"id": i, "x": p[0], "y": p[1], "heading": p[2],
-                       "state": t.states.get(i).copied().unwrap_or(0),
-                       "alive": t.alive.get(i).copied().unwrap_or(0) == 1})
-            })
-            .collect();
-        let marks: Vec<serde_json::Value> = t
-            .layer
-            .as_deref()
-            .unwrap_or(&[])
-            .iter()
-            .map(mark_json)
-            .collect();
-        // Every counter the recording holds (the schema names those known today).
-        let mut radio = serde_json::to_value(t.radio).expect("radio JSON");
-        radio["tick"] = t.tick.into();
-        let mut msgs = vec![
-            (channels[0], json!({"tick": t.tick, "robots": robots})),
-            (channels[1], json!({"tick": t.tick, "marks": marks})),
-            (channels[2], radio),
-        ];
-        if let Some(c) = deliveries {
-            // Receivers that heard something, in id order.
-            let heard: Vec<serde_json::Value> = t
-                .deliveries
-                .as_ref()
-                .map_or(&[][..], |d| &d.heard[..])
-                .iter()
-                .enumerate()
-                .filter(|(_, h)| !h.is_empty())
-                .map(|(i, h)| json!({"receiver": i, "messages": h}))
-                .collect();
-            msgs.push((c, json!({"tick": t.tick, "heard": heard})));
-        }
-        let time = t.tick * dt;
-        for (channel_id, m) in &msgs {
+        let ns = run.clock.ns(t.tick);
+        for (channel_id, m) in messages(run, &channels, t, ns) {
             w.write_to_known_channel(
                 &MessageHeader {
-                    channel_id: *channel_id,
+                    channel_id,
                     sequence: t.tick as u32,
-                    log_time: time,
-                    publish_time: time,
+                    log_time: ns,
+                    publish_time: ns,
                 },
-                m.to_string().as_bytes(),
+                m.as_bytes(),
             )
             .map_err(mc)?;
             count += 1;

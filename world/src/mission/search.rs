@@ -171,7 +171,7 @@ impl Mission for SearchMission {
         self.targets.sense(&self.sc, robot, pos, out);
     }
     fn update(&mut self, tick: u64, poses: &[[f64; 3]], alive: &[bool], events: &mut Vec<Event>) {
-        for (target, robot) in self.targets.update(&self.sc, tick, poses, alive) {
+        for (robot, target) in self.targets.update(&self.sc, tick, poses, alive) {
             events.push(Event::EntityDone {
                 entity: target,
                 robot,
@@ -328,7 +328,7 @@ impl Targets {
     }
 
     /// After the moves of tick k: targets with a robot closer than L_0 are found (lowest robot
-    /// id first when several arrive together). Returns (target, robot) pairs found now.
+    /// id first when several arrive together). Returns (robot, target) pairs found now.
     pub fn update(
         &mut self,
         sc: &Scenario,
