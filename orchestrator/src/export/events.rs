@@ -1,7 +1,8 @@
 //! The events export: `tick,time_s,event,robot,entity,detail`, one row per event of the
 //! recording, in tick order and, within a tick, as the world logged them. `event` is a
 //! snake_case name (robot_died, robot_restarted, action_rejected, move_blocked, entity_done,
-//! declared, deadline_missed); `entity` is set for entity_done only; `detail` is the cause of a
+//! declared, deadline_missed, progress); `robot` is empty for the mission's own progress
+//! (done of total); `entity` is set for entity_done only; `detail` is the cause of a
 //! death, the reason of a rejection, the flags of a declaration. The MCAP's `/events` log
 //! says the same in words ([`Described::sentence`]).
 
@@ -24,7 +25,8 @@ pub enum Severity {
 #[derive(Debug, Clone, PartialEq)]
 pub struct Described {
     pub name: &'static str,
-    pub robot: u32,
+    /// The robot it is about (None: the mission's, e.g. its progress).
+    pub robot: Option<u32>,
     pub entity: Option<u32>,
     pub detail: String,
     pub severity: Severity,
@@ -34,7 +36,7 @@ impl Described {
     pub fn of(e: &Event) -> Described {
         let d = |name, robot, detail: String, severity| Described {
             name,
-            robot,
+            robot: Some(robot),
             entity: None,
             detail,
             severity,
@@ -68,11 +70,18 @@ impl Described {
             Event::DeadlineMissed { robot } => {
                 d("deadline_missed", *robot, String::new(), Severity::Warning)
             }
+            Event::Progress { done, total } => Described {
+                robot: None,
+                ..d("progress", 0, format!("{done} of {total}"), Severity::Info)
+            },
         }
     }
     /// One line for a log: "robot 3 robot_died: process died".
     pub fn sentence(&self) -> String {
-        let mut s = format!("robot {} {}", self.robot, self.name);
+        let mut s = match self.robot {
+            Some(r) => format!("robot {r} {}", self.name),
+            None => format!("mission {}", self.name),
+        };
         if let Some(e) = self.entity {
             s += &format!(" entity {e}");
         }
@@ -97,7 +106,7 @@ pub fn write(path: &Path, run: &Run, ticks: &[TickRecord]) -> Result<u64, Export
                 t.tick.to_string().as_str(),
                 &time,
                 d.name,
-                &d.robot.to_string(),
+                &d.robot.map(|r| r.to_string()).unwrap_or_default(),
                 &d.entity.map(|e| e.to_string()).unwrap_or_default(),
                 &d.detail,
             ])
