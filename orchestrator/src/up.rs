@@ -1,6 +1,6 @@
 //! `orchestrator up`: resolve the scenario, run it, print the summary.
 
-use crate::{clean, inprocess, processes, runid, signals};
+use crate::{clean, exit, inprocess, outcome, outdir, processes, registry, runid, signals};
 use clap::{Args, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::path::{Path, PathBuf};
@@ -348,54 +348,83 @@ pub fn up(a: UpArgs) -> i32 {
         Ok(s) => s,
         Err(e) => {
             eprintln!("error: {e}");
-            return 2;
+            return exit::BAD_INPUT;
         }
     };
     if a.executor == Executor::Inprocess {
         if let Err(e) = inprocess::check(&sc) {
             eprintln!("error: --executor inprocess: {e}");
-            return 2;
+            return exit::BAD_INPUT;
         }
     }
+    let fixed_id = match runid::from_env() {
+        Ok(id) => id,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return exit::BAD_INPUT;
+        }
+    };
     if a.executor == Executor::Processes {
         // Refused before anything starts, rather than EMFILE in the world after seconds.
         let (soft, _) = swarm::limits::raise_nofile();
         if let Err(e) = swarm::limits::check_fits(sc.run.robots, soft) {
             eprintln!("error: {e}");
-            return 2;
+            return exit::BAD_INPUT;
         }
     }
     if signals::interrupted() {
         eprintln!("error: {}", processes::INTERRUPTED_AT_START);
-        return 130;
+        return signals::exit_code();
     }
-    let cleaned = clean::clean_dead_runs();
+    // The registry must be this user's private folder (else nothing starts: another user
+    // could have planted entries naming processes to kill).
+    let cleaned = match clean::clean_dead_runs() {
+        Ok(c) => c,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return exit::FAILED;
+        }
+    };
     if cleaned.runs > 0 {
         eprintln!(
             "cleaned {} dead run(s) left by earlier orchestrators",
             cleaned.runs
         );
     }
-    let run_id = runid::new_run_id();
+    let run_id = fixed_id.unwrap_or_else(runid::new_run_id);
+    if a.executor == Executor::Processes {
+        if let Some(other) = registry::list()
+            .into_iter()
+            .find(|e| e.run_id == run_id && e.orchestrator_is_live())
+        {
+            eprintln!(
+                "error: {}",
+                registry::RegistryError::InUse {
+                    run_id,
+                    pid: other.orchestrator_pid
+                }
+            );
+            return exit::BAD_INPUT;
+        }
+    }
     let run_dir = a
         .out
         .clone()
         .unwrap_or_else(|| Path::new("runs").join(&run_id));
-    // The run folder is bad input like any other (exit 2), found before anything starts.
-    if let Err(e) = std::fs::create_dir_all(&run_dir)
-        .and_then(|_| std::fs::write(run_dir.join("scenario.toml"), sc.to_toml()))
-    {
-        let what = if a.out.is_some() {
-            "--out "
-        } else {
-            "run folder "
-        };
-        eprintln!(
-            "error: {what}{}: cannot write the run folder: {e}",
-            run_dir.display()
-        );
-        return 2;
-    }
+    // The run folder is bad input like any other (exit 2), found before anything starts; a
+    // full disk fails the run (exit 1). Held by this run alone until it ends.
+    let what = if a.out.is_some() {
+        "--out "
+    } else {
+        "run folder "
+    };
+    let _held = match outdir::open(&run_dir, what, &sc.to_toml()) {
+        Ok(h) => h,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return e.exit_code();
+        }
+    };
     let live = if a.view {
         let kill: Option<std::sync::Arc<crate::view::server::KillFn>> =
             (a.executor == Executor::Processes).then(|| {
@@ -415,7 +444,7 @@ pub fn up(a: UpArgs) -> i32 {
             }
             Err(e) => {
                 eprintln!("error: --view-port: {e}");
-                return 2;
+                return exit::BAD_INPUT;
             }
         }
     } else {
@@ -425,7 +454,7 @@ pub fn up(a: UpArgs) -> i32 {
     let n = sc.run.robots;
     let label = world::mission::progress_label(&sc);
     let realtime = sc.runtime.is_realtime();
-    let result: Result<(), String> = match a.executor {
+    let result: Result<(), (i32, String)> = match a.executor {
         Executor::Inprocess => inprocess::run_live(
             &sc,
             Some(&run_dir),
@@ -449,10 +478,11 @@ pub fn up(a: UpArgs) -> i32 {
                 }
             },
             a.view,
+            &signals::interrupted,
         )
         .map(|_| ())
-        .map_err(|e| e.to_string()),
-        Executor::Processes => processes::run(processes::ProcessRun {
+        .map_err(|e| (exit::FAILED, e.to_string())),
+        Executor::Processes => processes::run_typed(processes::ProcessRun {
             sc: &sc,
             run_id: &run_id,
             run_dir: &run_dir,
@@ -471,10 +501,24 @@ pub fn up(a: UpArgs) -> i32 {
             },
             live: a.view,
         })
-        .and_then(|o| match o.world_exit {
-            Ok(0) => Ok(()),
-            Ok(c) => Err(format!("the world process failed with exit code {c}")),
-            Err(sig) => Err(format!("the world process was killed by signal {sig}")),
+        .map_err(|e| match e {
+            processes::RunError::InterruptedAtStart => (signals::exit_code(), e.to_string()),
+            processes::RunError::Registry(registry::RegistryError::InUse { .. }) => {
+                (exit::BAD_INPUT, e.to_string())
+            }
+            e => (exit::FAILED, e.to_string()),
+        })
+        .and_then(|o| match (o.failed_robot, o.world_exit) {
+            (Some(f), _) => Err((exit::FAILED, f.to_string())),
+            (None, Ok(0)) => Ok(()),
+            (None, Ok(c)) => Err((
+                exit::FAILED,
+                format!("the world process failed with exit code {c}"),
+            )),
+            (None, Err(sig)) => Err((
+                exit::FAILED,
+                format!("the world process was killed by signal {sig}"),
+            )),
         }),
     };
     pb.finish_and_clear();
@@ -485,24 +529,20 @@ pub fn up(a: UpArgs) -> i32 {
         std::thread::sleep(VIEW_LAST_FRAMES);
         l.viewer.stop();
     }
-    if let Err(e) = result {
-        eprintln!("error: run {run_id}: {e}");
+    if let Err((code, e)) = result {
         // Ctrl-C before the first tick: the shell's code for an interrupted command.
-        return if e == processes::INTERRUPTED_AT_START {
-            130
-        } else {
-            1
-        };
+        eprintln!("error: run {run_id}: {e}");
+        return code;
     }
     match std::fs::read_to_string(run_dir.join("summary.json")) {
         Ok(s) => {
             let v: serde_json::Value = serde_json::from_str(&s).unwrap_or_default();
             print_summary(&v, &run_dir);
-            0
+            outcome::exit_code(&v)
         }
         Err(e) => {
             eprintln!("error: run {run_id}: no summary.json: {e}");
-            1
+            exit::FAILED
         }
     }
 }
