@@ -281,25 +281,13 @@ pub enum InProcessError {
          deadline; use --executor processes, or --tick-hz to pace an in-process run"
     )]
     Realtime(f64),
-    /// Restart means a new agent process taking a robot over, fresh from its Sense frame; in
-    /// one process there is no agent process to die or replace, and rebuilding a behaviour
-    /// from its constructor inside the world's threads would be a different fault model
-    /// from the one the processes executor measures. Refused rather than ignored.
-    #[error(
-        "faults.on_fault = \"restart\" (--on-fault restart) needs the processes executor: \
-         in-process there is no agent process to die and be replaced (a scheduled kill there \
-         drops the robot); use --executor processes, or --on-fault drop"
-    )]
-    Restart,
 }
 
-/// Refuses what the in-process executor cannot run (real-time mode, restarts).
+/// Refuses what the in-process executor cannot run (real-time mode; `up` refuses
+/// `faults.on_fault = "restart"` when it resolves the scenario, naming where it was set).
 pub fn check(sc: &Scenario) -> Result<(), InProcessError> {
     if sc.runtime.is_realtime() {
         return Err(InProcessError::Realtime(sc.runtime.realtime_hz));
-    }
-    if sc.faults.on_fault == swarm::scenario::FaultPolicy::Restart {
-        return Err(InProcessError::Restart);
     }
     Ok(())
 }
@@ -315,9 +303,7 @@ pub fn run_live(
     live: bool,
     stop: &dyn Fn() -> bool,
 ) -> std::io::Result<Summary> {
-    if sc.runtime.is_realtime() {
-        check(sc).map_err(|e| std::io::Error::new(std::io::ErrorKind::InvalidInput, e))?;
-    }
+    check(sc).map_err(|e| std::io::Error::new(std::io::ErrorKind::InvalidInput, e))?;
     dispatch(
         sc,
         InProcess {

@@ -3,8 +3,8 @@
 use crate::{exit, signals};
 
 /// Whether the run's mission is accomplished: search: every target found; hunt: every
-/// evader captured; formation: formed; a mission with no goal (roam): the run was not ended
-/// by every robot's death.
+/// evader captured; formation: formed; a mission with no goal (roam): a robot is alive at
+/// the end.
 pub fn mission_complete(v: &serde_json::Value) -> bool {
     let m = &v["mission"];
     let all = |done: &str, of: &str, s: &serde_json::Value| {
@@ -17,7 +17,7 @@ pub fn mission_complete(v: &serde_json::Value) -> bool {
     } else if m["formation"].is_object() {
         m["formation"]["formed"].as_bool() == Some(true)
     } else {
-        v["end"].as_str() != Some("all robots dead")
+        v["alive_at_end"].as_u64().unwrap_or(0) > 0
     }
 }
 
@@ -47,8 +47,9 @@ mod tests {
         assert_eq!(exit_code(&hunt), exit::MISSION_NOT_COMPLETE);
         let formed = json!({"end": "completed", "mission": {"formation": {"formed": true}}});
         assert_eq!(exit_code(&formed), exit::COMPLETE);
-        let roam = |end| json!({"end": end, "mission": {"coverage": 0.5}});
-        assert_eq!(exit_code(&roam("completed")), exit::COMPLETE);
-        assert_eq!(exit_code(&roam("all robots dead")), exit::MISSION_NOT_COMPLETE);
+        let roam = |end, alive| json!({"end": end, "alive_at_end": alive, "mission": {"coverage": 0.5}});
+        assert_eq!(exit_code(&roam("completed", 2)), exit::COMPLETE);
+        assert_eq!(exit_code(&roam("all robots dead", 0)), exit::MISSION_NOT_COMPLETE);
+        assert_eq!(exit_code(&roam("completed", 0)), exit::MISSION_NOT_COMPLETE);
     }
 }

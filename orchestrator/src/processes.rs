@@ -330,6 +330,16 @@ fn supervise(
     let mut restarts = vec![0u32; n as usize];
     // Agents of each robot in a row that exited before attaching (reset by an attach).
     let mut start_failures = vec![0u32; n as usize];
+    // How the last of them ended.
+    let mut last_failure = vec![String::new(); n as usize];
+    let command_of = |robot: u32| {
+        let cmd = agent_command(robot);
+        std::iter::once(cmd.get_program())
+            .chain(cmd.get_args())
+            .map(|a| a.to_string_lossy().into_owned())
+            .collect::<Vec<_>>()
+            .join(" ")
+    };
     let start_failure_limit = if restart { START_FAILURES } else { 1 };
     let mut failed_robot: Option<RobotFailure> = None;
     // The last kill order of each robot acted on (see TickBarrier::order_kill).
@@ -365,18 +375,13 @@ fn supervise(
                 // Exited before it attached, however it exited (exit code 0 included: the
                 // world would wait for it until runtime.startup_timeout_s).
                 start_failures[r] += 1;
+                last_failure[r] = describe(st);
                 if start_failures[r] >= start_failure_limit {
-                    let cmd = agent_command(robot);
-                    let command = std::iter::once(cmd.get_program())
-                        .chain(cmd.get_args())
-                        .map(|a| a.to_string_lossy())
-                        .collect::<Vec<_>>()
-                        .join(" ");
                     failed_robot = Some(RobotFailure {
                         robot,
                         times: start_failures[r],
                         status: describe(st),
-                        command,
+                        command: command_of(robot),
                     });
                     send_control(CONTROL_STOP, 0, 0, last.tick);
                     stop_sent = Some(Instant::now());
@@ -466,6 +471,18 @@ fn supervise(
     }
     for &pid in agents.keys() {
         kill(pid);
+    }
+    // A run that ended (an unpaced one can reach max_ticks within milliseconds) before the
+    // limit was reached: a robot none of whose agents ever attached still failed.
+    if failed_robot.is_none() {
+        failed_robot = (0..n)
+            .find(|&i| start_failures[i as usize] > 0 && barrier.attach_count(i) == 0)
+            .map(|robot| RobotFailure {
+                robot,
+                times: start_failures[robot as usize],
+                status: last_failure[robot as usize].clone(),
+                command: command_of(robot),
+            });
     }
     drop(status);
     drop(control);

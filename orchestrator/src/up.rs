@@ -184,6 +184,7 @@ const FLAG_KEYS: &[(&str, &str)] = &[
     ("faults.kill_at", "--chaos-at"),
     ("faults.kill_fraction", "--kill-fraction"),
     ("faults.max_restarts", "--max-restarts"),
+    ("faults.on_fault", "--on-fault"),
     ("runtime.tick_hz", "--tick-hz"),
     ("runtime.realtime_hz", "--realtime"),
     ("runtime.record_deliveries", "--record-deliveries"),
@@ -275,18 +276,39 @@ pub fn resolve(a: &UpArgs) -> Result<Scenario, ConfigError> {
         set("faults.max_restarts", &mut || sc.faults.max_restarts = v);
     }
     if let Some(v) = a.on_fault {
-        sc.faults.on_fault = match v {
-            OnFault::Drop => swarm::scenario::FaultPolicy::Drop,
-            OnFault::Restart => swarm::scenario::FaultPolicy::Restart,
-        };
+        set("faults.on_fault", &mut || {
+            sc.faults.on_fault = match v {
+                OnFault::Drop => swarm::scenario::FaultPolicy::Drop,
+                OnFault::Restart => swarm::scenario::FaultPolicy::Restart,
+            }
+        });
     }
-    crate::prepare::prepare(&mut sc, &|key: &str| {
+    let key_source = |key: &str| {
         FLAG_KEYS
             .iter()
             .find(|(k, _)| *k == key && from_flag.contains(k))
             .map(|(_, f)| f.to_string())
             .unwrap_or_else(|| file.clone())
-    })?;
+    };
+    crate::prepare::prepare(&mut sc, &key_source)?;
+    if a.executor == Executor::Inprocess
+        && sc.faults.on_fault == swarm::scenario::FaultPolicy::Restart
+    {
+        // Restart means a new agent process taking a robot over, fresh from its Sense frame;
+        // in one process there is no agent process to die or replace, and rebuilding a
+        // behaviour from its constructor inside the world's threads would be another fault
+        // model than the one the processes executor runs. Refused rather than ignored.
+        let key = "faults.on_fault";
+        return Err(ConfigError {
+            source: swarm::key_lines::locate(&key_source(key), key),
+            key: key.into(),
+            message: "= \"restart\" needs the processes executor (--executor inprocess was \
+                      given): in one process there is no agent process to die and be \
+                      replaced, a scheduled kill drops the robot; use --executor processes, \
+                      or on_fault = \"drop\" (--on-fault drop)"
+                .into(),
+        });
+    }
     expand_kills(&mut sc);
     Ok(sc)
 }
