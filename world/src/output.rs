@@ -26,9 +26,31 @@ pub struct OutputError {
     pub source: std::io::Error,
 }
 
+/// The operating system's error under `e`, if some error in its chain has one: the
+/// recording's encoder wraps the file's error in its own (kind Other, printed as
+/// `Io { inner: Os { code: 28, .. }, index: 20 }`), which names neither the cause plainly
+/// nor the file.
+fn os_cause(e: std::io::Error) -> std::io::Error {
+    if e.raw_os_error().is_some() {
+        return e;
+    }
+    let mut cause: Option<&(dyn std::error::Error + 'static)> = e.get_ref().map(|x| x as _);
+    while let Some(c) = cause {
+        if let Some(code) = c
+            .downcast_ref::<std::io::Error>()
+            .and_then(|io| io.raw_os_error())
+        {
+            return std::io::Error::from_raw_os_error(code);
+        }
+        cause = c.source();
+    }
+    e
+}
+
 /// Wraps an I/O error so that it names `path` (its kind kept: a full disk stays StorageFull).
 pub fn named(path: &Path) -> impl FnOnce(std::io::Error) -> std::io::Error + '_ {
     move |source| {
+        let source = os_cause(source);
         std::io::Error::new(
             source.kind(),
             OutputError {
