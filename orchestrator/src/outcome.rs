@@ -7,9 +7,7 @@ use crate::{exit, signals};
 /// the end.
 pub fn mission_complete(v: &serde_json::Value) -> bool {
     let m = &v["mission"];
-    let all = |done: &str, of: &str, s: &serde_json::Value| {
-        matches!((s[done].as_u64(), s[of].as_u64()), (Some(d), Some(n)) if d >= n)
-    };
+    let all = |done: &str, of: &str, s: &serde_json::Value| matches!((s[done].as_u64(), s[of].as_u64()), (Some(d), Some(n)) if d >= n);
     if m["search"].is_object() {
         all("found", "targets", &m["search"])
     } else if m["hunt"].is_object() {
@@ -47,9 +45,13 @@ mod tests {
         assert_eq!(exit_code(&hunt), exit::MISSION_NOT_COMPLETE);
         let formed = json!({"end": "completed", "mission": {"formation": {"formed": true}}});
         assert_eq!(exit_code(&formed), exit::COMPLETE);
-        let roam = |end, alive| json!({"end": end, "alive_at_end": alive, "mission": {"coverage": 0.5}});
+        let roam =
+            |end, alive| json!({"end": end, "alive_at_end": alive, "mission": {"coverage": 0.5}});
         assert_eq!(exit_code(&roam("completed", 2)), exit::COMPLETE);
-        assert_eq!(exit_code(&roam("all robots dead", 0)), exit::MISSION_NOT_COMPLETE);
+        assert_eq!(
+            exit_code(&roam("all robots dead", 0)),
+            exit::MISSION_NOT_COMPLETE
+        );
         assert_eq!(exit_code(&roam("completed", 0)), exit::MISSION_NOT_COMPLETE);
     }
 }

@@ -128,7 +128,10 @@ fn kill(pid: u32) {
 /// Whether process `pid` has exited (gone, or a zombie not reaped yet).
 fn exited(pid: u32) -> bool {
     let stat = std::fs::read_to_string(format!("/proc/{pid}/stat")).unwrap_or_default();
-    match stat.rfind(')').and_then(|i| stat[i + 1..].split_whitespace().next()) {
+    match stat
+        .rfind(')')
+        .and_then(|i| stat[i + 1..].split_whitespace().next())
+    {
         Some(state) => state == "Z" || state == "X",
         None => true,
     }
@@ -172,7 +175,10 @@ pub fn run_typed(mut p: ProcessRun) -> Result<ProcessOutcome, RunError> {
     registry::create(&entry)?;
     if let Err(e) = std::fs::create_dir_all(p.run_dir)
         .map_err(|e| format!("{}: {e}", p.run_dir.display()))
-        .and_then(|_| world::output::write_atomic(&scenario_path, sc.to_toml().as_bytes()).map_err(|e| e.to_string()))
+        .and_then(|_| {
+            world::output::write_atomic(&scenario_path, sc.to_toml().as_bytes())
+                .map_err(|e| e.to_string())
+        })
     {
         registry::remove(p.run_id);
         return Err(RunError::Other(e));

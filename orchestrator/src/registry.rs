@@ -64,7 +64,11 @@ pub enum RegistryError {
         "run registry {path}: {why}; it must be a folder of this user's (uid {uid}) that no one \
          else can read or write: remove it, or set {RUNTIME_DIR_ENV} to a private folder"
     )]
-    Unsafe { path: PathBuf, why: String, uid: u32 },
+    Unsafe {
+        path: PathBuf,
+        why: String,
+        uid: u32,
+    },
     #[error("run registry {path}: {source}")]
     Io {
         path: PathBuf,
@@ -72,7 +76,8 @@ pub enum RegistryError {
     },
     #[error(
         "run id {run_id} is already in use by a running orchestrator (pid {pid}); give \
-         another {} or none", runid::RUN_ID_ENV
+         another {} or none",
+        runid::RUN_ID_ENV
     )]
     InUse { run_id: String, pid: u32 },
 }
@@ -279,7 +284,8 @@ impl RunEntry {
         if !runid::is_valid(&self.run_id) {
             return Err(format!("run_id {:?} is not a run id", self.run_id));
         }
-        if self.prefix != swarm::transport::prefix_for(&self.run_id) || !is_prefix_shape(&self.prefix)
+        if self.prefix != swarm::transport::prefix_for(&self.run_id)
+            || !is_prefix_shape(&self.prefix)
         {
             return Err(format!(
                 "prefix {:?} is not run {}'s",
@@ -391,7 +397,10 @@ mod tests {
             ("", String::new()),
             ("20261122-183500-3fa2", String::new()),
             ("20261122-183500-3fa2", "sw../".into()),
-            ("20261122-183500-3fa2", swarm::transport::prefix_for("other")),
+            (
+                "20261122-183500-3fa2",
+                swarm::transport::prefix_for("other"),
+            ),
         ] {
             let e = RunEntry {
                 run_id: run_id.into(),
@@ -416,8 +425,14 @@ mod tests {
         let exe = std::env::current_exe().unwrap();
         let own = exe.file_name().unwrap().to_str().unwrap();
         assert!(is_ours(me, start, own));
-        assert!(!is_ours(me, start + 1, own), "another start time: a reused pid");
-        let mut sleep = std::process::Command::new("sleep").arg("5").spawn().unwrap();
+        assert!(
+            !is_ours(me, start + 1, own),
+            "another start time: a reused pid"
+        );
+        let mut sleep = std::process::Command::new("sleep")
+            .arg("5")
+            .spawn()
+            .unwrap();
         let s = start_time(sleep.id()).unwrap();
         assert!(!is_ours(sleep.id(), s, AGENT), "sleep is no agent");
         assert!(!is_ours(sleep.id(), s + 1, AGENT));

@@ -73,8 +73,12 @@ fn files(dir: &Path) -> Vec<String> {
 
 const ROAM_ARGS: [&str; 6] = ["--robots", "6", "--seed", "4", "--max-ticks", "4000"];
 
-fn args<'a>(exec: &'a str) -> Vec<&'a str> {
-    [&["--scenario", roam(), "--executor", exec][..], &ROAM_ARGS[..]].concat()
+fn args(exec: &str) -> Vec<&str> {
+    [
+        &["--scenario", roam(), "--executor", exec][..],
+        &ROAM_ARGS[..],
+    ]
+    .concat()
 }
 
 #[test]
@@ -89,10 +93,17 @@ fn a_full_disk_at_start_fails_naming_scenario_toml_and_leaves_no_empty_file() {
     let err = stderr(&o);
     assert_eq!(o.status.code(), Some(exit::FAILED), "{err}");
     assert!(
-        err.contains(&format!("{}: No space left on device", out.join("scenario.toml").display())),
+        err.contains(&format!(
+            "{}: No space left on device",
+            out.join("scenario.toml").display()
+        )),
         "{err}"
     );
-    assert_eq!(files(&out), Vec::<String>::new(), "no scenario.toml, no temporary file");
+    assert_eq!(
+        files(&out),
+        Vec::<String>::new(),
+        "no scenario.toml, no temporary file"
+    );
 }
 
 #[test]
@@ -109,7 +120,10 @@ fn a_disk_that_fills_mid_run_fails_naming_recording_bin_in_both_executors() {
         let err = stderr(&o);
         assert_eq!(o.status.code(), Some(exit::FAILED), "{exec}: {err}");
         assert!(
-            err.contains(&format!("{}: No space left on device", out.join("recording.bin").display())),
+            err.contains(&format!(
+                "{}: No space left on device",
+                out.join("recording.bin").display()
+            )),
             "{exec}: {err}"
         );
         assert_eq!(
@@ -130,18 +144,35 @@ fn a_disk_that_fills_at_the_picture_leaves_no_cut_short_run_svg() {
     // The same run on a roomy disk: the size of each output (the run is deterministic; the
     // summary's timings vary by a few bytes, within its last page).
     let roomy = tmp_dir("disk-full-svg-roomy");
-    let few = ["--scenario", roam(), "--executor", "inprocess", "--robots", "6", "--max-ticks", "1000"];
+    let few = [
+        "--scenario",
+        roam(),
+        "--executor",
+        "inprocess",
+        "--robots",
+        "6",
+        "--max-ticks",
+        "1000",
+    ];
     let o = up(&few, &roomy);
     assert_eq!(o.status.code(), Some(exit::COMPLETE), "{}", stderr(&o));
     let page = 4096u64;
-    let pages = |f: &str| std::fs::metadata(roomy.join(f)).unwrap().len().div_ceil(page);
+    let pages = |f: &str| {
+        std::fs::metadata(roomy.join(f))
+            .unwrap()
+            .len()
+            .div_ceil(page)
+    };
     let (scenario, recording, summary, svg) = (
         pages("scenario.toml"),
         pages("recording.bin"),
         pages("summary.json"),
         pages("run.svg"),
     );
-    assert!(svg > scenario + 2, "the picture is the largest small file: {svg} pages");
+    assert!(
+        svg > scenario + 2,
+        "the picture is the largest small file: {svg} pages"
+    );
     let Some(disk) = SmallDisk::mount("disk-full-svg", 1024) else {
         return;
     };
@@ -153,10 +184,16 @@ fn a_disk_that_fills_at_the_picture_leaves_no_cut_short_run_svg() {
     let err = stderr(&o);
     assert_eq!(o.status.code(), Some(exit::FAILED), "{err}");
     assert!(
-        err.contains(&format!("{}: No space left on device", out.join("run.svg").display())),
+        err.contains(&format!(
+            "{}: No space left on device",
+            out.join("run.svg").display()
+        )),
         "{err}"
     );
     assert!(!out.join("run.svg").exists(), "a cut-short run.svg");
-    assert!(!out.join(".run.svg.tmp").exists(), "the temporary file stays");
+    assert!(
+        !out.join(".run.svg.tmp").exists(),
+        "the temporary file stays"
+    );
     let _ = std::fs::remove_dir_all(&roomy);
 }

@@ -126,7 +126,11 @@ fn sigint_and_sigterm_mid_run_exit_128_plus_the_signal_with_outputs_written() {
                 std::fs::File::open(out.join("recording.bin")).unwrap(),
             )
             .unwrap();
-            assert_eq!(recorded.len() as u64, ticks, "{tag}: the recording is whole");
+            assert_eq!(
+                recorded.len() as u64,
+                ticks,
+                "{tag}: the recording is whole"
+            );
             assert!(shm_of_run(&id).is_empty(), "{tag}: {:?}", shm_of_run(&id));
             assert_left_nothing(&out);
         }
@@ -223,7 +227,14 @@ fn bad_input_exits_2_before_anything_starts() {
     // Restart in one process: refused, naming the key and the flag that set it (before, it
     // did nothing and said nothing).
     let o = up(
-        &["--executor", "inprocess", "--on-fault", "restart", "--robots", "2"],
+        &[
+            "--executor",
+            "inprocess",
+            "--on-fault",
+            "restart",
+            "--robots",
+            "2",
+        ],
         &out,
     );
     assert_eq!(o.status.code(), Some(exit::BAD_INPUT), "{}", stderr(&o));

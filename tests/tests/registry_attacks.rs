@@ -120,7 +120,16 @@ fn all_refuse(base: &Path, why: &str, victim: &mut Child, kept: &[&Path], shm: &
     let out_s = out.display().to_string();
     let reg = registry_in(base).display().to_string();
     for args in [
-        vec!["up", "--quiet", "--scenario", roam(), "--robots", "2", "--out", &out_s],
+        vec![
+            "up",
+            "--quiet",
+            "--scenario",
+            roam(),
+            "--robots",
+            "2",
+            "--out",
+            &out_s,
+        ],
         vec!["clean"],
         vec!["status"],
         vec!["kill", "--run", "e2e-planted", "--robot", "0"],
@@ -134,7 +143,10 @@ fn all_refuse(base: &Path, why: &str, victim: &mut Child, kept: &[&Path], shm: &
         );
     }
     assert!(!out.exists(), "up started a run");
-    assert!(victim.try_wait().unwrap().is_none(), "the victim was killed");
+    assert!(
+        victim.try_wait().unwrap().is_none(),
+        "the victim was killed"
+    );
     for p in kept {
         assert!(
             std::fs::symlink_metadata(p).is_ok(),
@@ -239,12 +251,26 @@ fn entries_of_other_forms_are_ignored_and_only_verified_processes_are_killed() {
         // An empty prefix (matched everything), the victim as the run's world.
         (id("empty"), entry(&id("empty"), "", (0, 0), (v.id(), vs))),
         // A run id that climbs out of the registry.
-        ("escape".to_string(), entry("../decoy", &swarm::transport::prefix_for("../decoy"), (0, 0), (v.id(), vs))),
+        (
+            "escape".to_string(),
+            entry(
+                "../decoy",
+                &swarm::transport::prefix_for("../decoy"),
+                (0, 0),
+                (v.id(), vs),
+            ),
+        ),
         // A prefix that climbs out of /dev/shm.
-        (id("climb"), entry(&id("climb"), "sw../../tmp_", (0, 0), (v.id(), vs))),
+        (
+            id("climb"),
+            entry(&id("climb"), "sw../../tmp_", (0, 0), (v.id(), vs)),
+        ),
         // A valid dead run whose recorded processes are the victim: another program (and
         // once another start time): its files go, the victim stays.
-        (dead_run.clone(), entry(&dead_run, &dead_prefix, (v.id(), vs), (v.id(), vs + 1))),
+        (
+            dead_run.clone(),
+            entry(&dead_run, &dead_prefix, (v.id(), vs), (v.id(), vs + 1)),
+        ),
     ];
     for (name, text) in &planted {
         std::fs::write(reg.join(format!("{name}.json")), text).unwrap();
@@ -257,11 +283,17 @@ fn entries_of_other_forms_are_ignored_and_only_verified_processes_are_killed() {
     assert!(o.status.success(), "{}", stderr(&o));
     for name in [id("empty"), "escape".into(), id("climb")] {
         assert!(
-            stderr(&o).contains(&format!("ignored {}", reg.join(format!("{name}.json")).display())),
+            stderr(&o).contains(&format!(
+                "ignored {}",
+                reg.join(format!("{name}.json")).display()
+            )),
             "{name}: {}",
             stderr(&o)
         );
-        assert!(reg.join(format!("{name}.json")).exists(), "{name} was removed");
+        assert!(
+            reg.join(format!("{name}.json")).exists(),
+            "{name} was removed"
+        );
     }
     assert!(v.try_wait().unwrap().is_none(), "the victim was killed");
     assert!(outside.exists(), "a file outside the registry was removed");
@@ -287,7 +319,16 @@ fn a_link_at_the_temporary_name_is_not_followed() {
     std::os::unix::fs::symlink(&precious, &link).unwrap();
     let out = tmp_dir("tmp-link-out");
     let o = Command::new(orchestrator())
-        .args(["up", "--quiet", "--scenario", roam(), "--robots", "2", "--max-ticks", "20"])
+        .args([
+            "up",
+            "--quiet",
+            "--scenario",
+            roam(),
+            "--robots",
+            "2",
+            "--max-ticks",
+            "20",
+        ])
         .arg("--out")
         .arg(&out)
         .env("XDG_RUNTIME_DIR", &b)
@@ -296,6 +337,9 @@ fn a_link_at_the_temporary_name_is_not_followed() {
         .unwrap();
     assert_eq!(o.status.code(), Some(exit::COMPLETE), "{}", stderr(&o));
     assert_eq!(std::fs::read_to_string(&precious).unwrap(), "precious");
-    assert!(std::fs::symlink_metadata(&link).is_err(), "the link is gone");
+    assert!(
+        std::fs::symlink_metadata(&link).is_err(),
+        "the link is gone"
+    );
     assert_left_nothing(&out);
 }

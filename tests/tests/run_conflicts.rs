@@ -34,7 +34,10 @@ const LONG: [&str; 8] = [
 fn goes_on(out: &Path, from: u64) {
     let t = Instant::now();
     while registry_tick(out) < from + 20 {
-        assert!(t.elapsed() < Duration::from_secs(30), "the first run stopped");
+        assert!(
+            t.elapsed() < Duration::from_secs(30),
+            "the first run stopped"
+        );
         std::thread::sleep(Duration::from_millis(10));
     }
 }
@@ -64,11 +67,24 @@ fn a_second_run_on_the_same_out_is_refused_and_the_first_goes_on() {
         let before = std::fs::read(out.join("scenario.toml")).unwrap();
         // Another scenario (other seed), short: had it run, scenario.toml would differ.
         let second_args = [
-            "--scenario", roam(), "--executor", exec, "--robots", "4", "--max-ticks", "50",
-            "--seed", "6",
+            "--scenario",
+            roam(),
+            "--executor",
+            exec,
+            "--robots",
+            "4",
+            "--max-ticks",
+            "50",
+            "--seed",
+            "6",
         ];
         let o = up(&second_args, &out);
-        assert_eq!(o.status.code(), Some(exit::BAD_INPUT), "{exec}: {}", stderr(&o));
+        assert_eq!(
+            o.status.code(),
+            Some(exit::BAD_INPUT),
+            "{exec}: {}",
+            stderr(&o)
+        );
         assert!(
             stderr(&o).contains("another run is writing into this folder"),
             "{exec}: {}",
@@ -81,7 +97,12 @@ fn a_second_run_on_the_same_out_is_refused_and_the_first_goes_on() {
         // SAFETY: Ctrl-C to the orchestrator this test started.
         unsafe { libc::kill(first.id() as i32, libc::SIGINT) };
         let o = wait_with_timeout(first, Duration::from_secs(30));
-        assert_eq!(o.status.code(), Some(exit::SIGINT), "{exec}: {}", stderr(&o));
+        assert_eq!(
+            o.status.code(),
+            Some(exit::SIGINT),
+            "{exec}: {}",
+            stderr(&o)
+        );
         assert_eq!(summary(&out)["seed"], 5, "{exec}: the first run's summary");
         assert_left_nothing(&out);
     }

@@ -971,7 +971,11 @@ fn the_live_page_shows_the_running_run_and_its_kill_button_makes_a_fault() {
     let checked = check_robots(&shot, &meta, &frames[k]);
     assert!(checked >= 3, "robots checked: {checked}");
     let o = child.wait_with_output().unwrap();
-    assert!(ended_by_itself(&o), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(
+        ended_by_itself(&o),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
     let s = summary(&out);
     assert_eq!(s["end"], "completed", "{s}");
     assert_eq!(s["ticks"], 450);

@@ -64,7 +64,10 @@ pub fn named(path: &Path) -> impl FnOnce(std::io::Error) -> std::io::Error + '_ 
 /// The temporary name `path` is written under before its rename: hidden, in the same folder
 /// (a rename within one file system is atomic).
 fn temp_path(path: &Path) -> PathBuf {
-    let name = path.file_name().map(|n| n.to_string_lossy()).unwrap_or_default();
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy())
+        .unwrap_or_default();
     path.with_file_name(format!(".{name}.tmp"))
 }
 
@@ -327,8 +330,8 @@ impl RunOutputs {
                     .as_bytes(),
             )?;
             let svg = dir.join("run.svg");
-            let picture = crate::svg::svg_text(world)
-                .map_err(|e| named(&svg)(std::io::Error::other(e)))?;
+            let picture =
+                crate::svg::svg_text(world).map_err(|e| named(&svg)(std::io::Error::other(e)))?;
             write_atomic(&svg, picture.as_bytes())?;
         }
         Ok(summary)
