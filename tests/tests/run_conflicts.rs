@@ -156,7 +156,12 @@ fn a_robot_named_thrice_is_killed_once() {
         .output()
         .unwrap();
     assert!(o.status.success(), "{}", stderr(&o));
-    let said = String::from_utf8_lossy(&o.stdout).into_owned();
+    // One line in all (before: a line for each time it was named: killed, or gone).
+    let said = format!(
+        "{}{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    );
     assert_eq!(said.lines().count(), 1, "{said}");
     assert!(said.starts_with("killed robot 3 "), "{said}");
     let t = Instant::now();

@@ -388,9 +388,10 @@ fn a_hung_agent_is_killed_and_restarted() {
     assert_left_nothing(&out);
 }
 
-/// Under `--on-fault restart`, killing every robot at once restarts them all: the run does
-/// not end "all robots dead" while restarts are left (issue 37 item 9), and a Ctrl-C then
-/// ends it with 130 and every robot back.
+/// Under `--on-fault restart`, killing every robot at once (all four at tick 20, scheduled)
+/// restarts them all: the run does not end "all robots dead" while restarts are left
+/// (issue 37 item 9; before, it ended at tick 20), and a Ctrl-C then ends it with 130 and
+/// every robot back.
 #[test]
 fn killing_every_robot_under_restart_restarts_them_all() {
     let _g = serial();
@@ -407,16 +408,11 @@ fn killing_every_robot_under_restart_restarts_them_all() {
             "200",
             "--on-fault",
             "restart",
+            "--chaos-at",
+            "20:0,20:1,20:2,20:3",
         ],
         &out,
     );
-    let entry = running(&out, 4);
-    let run_id = entry["run_id"].as_str().unwrap();
-    let o = Command::new(orchestrator())
-        .args(["kill", "--run", run_id, "--robots", "0,1,2,3"])
-        .output()
-        .unwrap();
-    assert!(o.status.success(), "{}", stderr(&o));
     wait_for("every robot restarted", Duration::from_secs(30), || {
         registry_of(&out).is_some_and(|r| r["restarted"] == 4 && r["alive"] == 4)
     });
@@ -427,6 +423,11 @@ fn killing_every_robot_under_restart_restarts_them_all() {
     let s = summary(&out);
     assert_eq!(s["end"], "interrupted");
     assert_every_kill_restarted(&s, 4);
+    assert!(s["faults"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .all(|f| f["tick"] == 20));
     assert_eq!(s["alive_at_end"], 4);
     assert_left_nothing(&out);
 }
