@@ -145,8 +145,14 @@ fn reap() -> Option<(u32, i32)> {
     (pid > 0).then_some((pid as u32, status))
 }
 
+/// Runs the scenario; a robot that failed (its agents never attached) is an error here, for
+/// callers that only read the summary (experiments, benchmarks).
 pub fn run(p: ProcessRun) -> Result<ProcessOutcome, String> {
-    run_typed(p).map_err(|e| e.to_string())
+    let o = run_typed(p).map_err(|e| e.to_string())?;
+    match &o.failed_robot {
+        Some(f) => Err(f.to_string()),
+        None => Ok(o),
+    }
 }
 
 /// [`run`] with its errors typed: `up` tells a run id in use (bad input) from a failure.
