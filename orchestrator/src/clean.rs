@@ -1,44 +1,47 @@
 //! `orchestrator clean`: removes everything dead runs left behind, never touching a live run.
 
-use crate::registry;
+use crate::registry::{self, RegistryError};
 use swarm::cleanup;
 
 /// Shared-memory names that look like a run of ours: `sw` + 10 hex digits + `_`.
 fn run_prefix_of(name: &str) -> Option<&str> {
     let p = name.get(..13)?;
-    let ok =
-        p.starts_with("sw") && p.ends_with('_') && p[2..12].bytes().all(|b| b.is_ascii_hexdigit());
-    ok.then_some(p)
+    registry::is_prefix_shape(p).then_some(p)
 }
 
 pub struct CleanReport {
     pub runs: usize,
     pub shm_files: usize,
     pub processes: usize,
+    /// Registry files that were not valid entries of this user's, left as they are.
+    pub ignored: Vec<String>,
 }
 
-/// Cleans dead runs. A run is dead when its orchestrator process is gone.
-pub fn clean_dead_runs() -> CleanReport {
+/// Cleans dead runs. A run is dead when its orchestrator process is gone (the recorded pid
+/// no longer runs this build's orchestrator started at the recorded time). Only the run's
+/// own processes are killed (recorded pid, this project's binary, recorded start time) and
+/// only its own files removed (entries whose run id and prefix have the project's forms).
+/// Refuses, touching nothing, when the registry folder is not this user's private folder.
+pub fn clean_dead_runs() -> Result<CleanReport, RegistryError> {
+    let (entries, ignored) = registry::scan()?;
     let mut report = CleanReport {
         runs: 0,
         shm_files: 0,
         processes: 0,
+        ignored,
     };
-    let entries = registry::list();
     let mut live_prefixes = Vec::new();
     for e in &entries {
-        if registry::pid_alive(e.orchestrator_pid) {
+        if e.orchestrator_is_live() {
             live_prefixes.push(e.prefix.clone());
             continue;
         }
-        for &pid in std::iter::once(&e.world_pid).chain(e.agent_pids.iter()) {
-            if is_our_process(pid, &e.prefix) {
-                // SAFETY: plain kill of a process of the dead run.
-                unsafe {
-                    libc::kill(pid as i32, libc::SIGKILL);
-                }
-                report.processes += 1;
+        for pid in e.live_children() {
+            // SAFETY: plain kill of a verified process of the dead run.
+            unsafe {
+                libc::kill(pid as i32, libc::SIGKILL);
             }
+            report.processes += 1;
         }
         report.shm_files += cleanup::remove_run(&e.prefix);
         registry::remove(&e.run_id);
@@ -48,13 +51,15 @@ pub fn clean_dead_runs() -> CleanReport {
     // in-process sweeps make iceoryx2 services without a registry entry, so a missing entry
     // alone does not make a prefix dead: it is an orphan only when no live process maps or
     // holds any of its files and none of them changed in the last ORPHAN_GRACE (a run that is
-    // creating its first files has not mapped them yet).
+    // creating its first files has not mapped them yet). Files of another user's are never
+    // ours to remove.
     let mut orphans: Vec<String> = cleanup::shm_files("sw")
         .iter()
         .filter_map(|n| run_prefix_of(n).map(str::to_string))
         .filter(|p| !live_prefixes.contains(p))
         .collect();
     orphans.dedup();
+    orphans.retain(|p| all_mine(p));
     if !orphans.is_empty() {
         // Read /proc only when there is a candidate: `up` runs this on every start.
         let in_use = prefixes_in_use();
@@ -67,7 +72,18 @@ pub fn clean_dead_runs() -> CleanReport {
         report.shm_files += cleanup::remove_run(&p);
         report.runs += 1;
     }
-    report
+    Ok(report)
+}
+
+/// Whether every /dev/shm file of the prefix belongs to this user.
+fn all_mine(prefix: &str) -> bool {
+    use std::os::unix::fs::MetadataExt;
+    // SAFETY: geteuid cannot fail.
+    let me = unsafe { libc::geteuid() };
+    cleanup::shm_files(prefix).iter().all(|f| {
+        std::fs::symlink_metadata(std::path::Path::new("/dev/shm").join(f))
+            .is_ok_and(|m| m.uid() == me)
+    })
 }
 
 /// How recently a file of an unregistered prefix may have changed for the prefix still to
@@ -126,13 +142,6 @@ fn touched_recently(prefix: &str) -> bool {
     })
 }
 
-/// Whether pid is a process of the run with this prefix (its command line names the prefix).
-fn is_our_process(pid: u32, prefix: &str) -> bool {
-    std::fs::read(format!("/proc/{pid}/cmdline"))
-        .map(|c| String::from_utf8_lossy(&c).contains(prefix))
-        .unwrap_or(false)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -168,7 +177,7 @@ mod tests {
         assert_ne!(map, libc::MAP_FAILED);
         drop(f);
         assert!(prefixes_in_use().contains(&prefix));
-        clean_dead_runs();
+        clean_dead_runs().unwrap();
         assert!(
             path.exists(),
             "clean removed a mapped file of an unregistered run"
@@ -178,7 +187,7 @@ mod tests {
             libc::munmap(map, 4096);
         }
         assert!(!prefixes_in_use().contains(&prefix));
-        clean_dead_runs();
+        clean_dead_runs().unwrap();
         let gone = !path.exists();
         let _ = std::fs::remove_file(&path);
         assert!(

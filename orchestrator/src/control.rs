@@ -1,7 +1,8 @@
 //! `orchestrator status` and `orchestrator kill`: live control of running runs from another
 //! terminal, through the run registry.
 
-use crate::registry::{self, RunEntry};
+use crate::exit;
+use crate::registry::{self, RegistryError, RunEntry};
 use clap::Args;
 
 #[derive(Args, Debug)]
@@ -17,15 +18,24 @@ pub struct KillArgs {
     pub robots: Vec<u32>,
 }
 
-fn live_runs() -> Vec<RunEntry> {
-    registry::list()
+/// The registered runs whose orchestrator still runs (verified: its pid, binary and start
+/// time).
+fn live_runs() -> Result<Vec<RunEntry>, RegistryError> {
+    Ok(registry::scan()?
+        .0
         .into_iter()
-        .filter(|e| registry::pid_alive(e.orchestrator_pid))
-        .collect()
+        .filter(|e| e.orchestrator_is_live())
+        .collect())
 }
 
 pub fn status() -> i32 {
-    let runs = live_runs();
+    let runs = match live_runs() {
+        Ok(r) => r,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return exit::FAILED;
+        }
+    };
     if runs.is_empty() {
         println!("no runs");
         return 0;
@@ -60,13 +70,16 @@ pub enum KillError {
     NoRobot,
     #[error("--robot {robot} is out of range: run {run} has robots 0..={last}")]
     OutOfRange { robot: u32, run: String, last: u32 },
+    #[error(transparent)]
+    Registry(#[from] RegistryError),
 }
 
-/// SIGKILLs the agents of `robots` in live run `run` (found in the run registry; only a
-/// process whose command line carries the run's prefix). One line per robot: killed, or gone.
+/// SIGKILLs the agents of `robots` (each once, however often it is named) in live run `run`
+/// (found in the run registry; only the recorded process, verified as this build's agent
+/// started at the recorded time). One line per robot: killed, or gone.
 /// `orchestrator kill` and the viewer's kill button both come here.
 pub fn kill_robots(run: &str, robots: &[u32]) -> Result<Vec<String>, KillError> {
-    let runs = live_runs();
+    let runs = live_runs()?;
     let Some(e) = runs.iter().find(|e| e.run_id == run) else {
         let ids: Vec<&str> = runs.iter().map(|e| e.run_id.as_str()).collect();
         return Err(KillError::NoRun {
@@ -90,13 +103,10 @@ pub fn kill_robots(run: &str, robots: &[u32]) -> Result<Vec<String>, KillError> 
         });
     }
     let mut lines = Vec::new();
-    for &r in robots {
+    let mut seen = std::collections::BTreeSet::new();
+    for &r in robots.iter().filter(|&&r| seen.insert(r)) {
         let pid = e.agent_pids[r as usize];
-        // Only a process of this run (its command line carries the run's prefix).
-        let ours = std::fs::read(format!("/proc/{pid}/cmdline"))
-            .map(|c| String::from_utf8_lossy(&c).contains(&e.prefix))
-            .unwrap_or(false);
-        if !ours {
+        if !registry::is_ours(pid, e.agent_starts[r as usize], registry::AGENT) {
             lines.push(format!("robot {r}: process {pid} is gone (already dead?)"));
             continue;
         }
@@ -126,9 +136,13 @@ pub fn kill(a: KillArgs) -> i32 {
             }
             0
         }
+        Err(e @ KillError::Registry(_)) => {
+            eprintln!("error: {e}");
+            exit::FAILED
+        }
         Err(e) => {
             eprintln!("error: {e}");
-            2
+            exit::BAD_INPUT
         }
     }
 }

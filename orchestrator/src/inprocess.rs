@@ -19,6 +19,26 @@ use world::{RunOutputs, Summary, Timing, World};
 /// Robots per worker thread below which a run stays on one thread (thread hand-offs cost more
 /// than small ticks).
 const MIN_ROBOTS_PER_THREAD: usize = 16;
+/// The longest a paced run sleeps before it looks for a stop request again (Ctrl-C, SIGTERM).
+const STOP_POLL: std::time::Duration = std::time::Duration::from_millis(20);
+
+/// Sleeps until tick `k` may start (`runtime.tick_hz`), in slices of at most STOP_POLL;
+/// false as soon as `stop()` says so.
+fn pace(sc: &Scenario, loop_start: Instant, k: u64, stop: &dyn Fn() -> bool) -> bool {
+    let Some(at) = sc.runtime.tick_start(k) else {
+        return !stop();
+    };
+    loop {
+        if stop() {
+            return false;
+        }
+        let now = loop_start.elapsed();
+        if at <= now {
+            return true;
+        }
+        std::thread::sleep((at - now).min(STOP_POLL));
+    }
+}
 
 /// One robot's agent side of a tick: its inbox (its list in the tick's air, decoded once for
 /// all receivers by the mailbox), its step (messages into `air`).
@@ -83,6 +103,9 @@ pub struct InProcess<'a> {
     pub threads: usize,
     /// Flush recording.bin after every tick (a live viewer reads it as it grows).
     pub live: bool,
+    /// Asked before every tick: true ends the run "interrupted", its outputs written
+    /// (`orchestrator up`: a Ctrl-C or SIGTERM).
+    pub stop: &'a dyn Fn() -> bool,
 }
 
 impl BehaviourVisitor for InProcess<'_> {
@@ -155,6 +178,7 @@ impl BehaviourVisitor for InProcess<'_> {
         let t_loop = Instant::now();
         let mut end = "completed";
         let on_tick = self.on_tick;
+        let stop_requested = self.stop;
         let result: std::io::Result<()> = std::thread::scope(|scope| {
             for c in &chunks[1..] {
                 let (go, done, stop, run_chunk) = (&go, &done, &stop, &run_chunk);
@@ -172,7 +196,10 @@ impl BehaviourVisitor for InProcess<'_> {
                 if w.tick >= sc.run.max_ticks {
                     return Ok(());
                 }
-                sc.runtime.pace(t_loop, w.tick);
+                if !pace(sc, t_loop, w.tick, stop_requested) {
+                    end = "interrupted";
+                    return Ok(());
+                }
                 let t_tick = Instant::now();
                 w.begin_tick();
                 if w.tick + 1 == sc.run.max_ticks {
@@ -239,7 +266,7 @@ pub fn run(
     threads: usize,
     on_tick: &mut dyn FnMut(&World),
 ) -> std::io::Result<Summary> {
-    run_live(sc, out_dir, run_id, threads, on_tick, false)
+    run_live(sc, out_dir, run_id, threads, on_tick, false, &|| false)
 }
 
 /// Why the in-process executor refuses a scenario.
@@ -256,7 +283,8 @@ pub enum InProcessError {
     Realtime(f64),
 }
 
-/// Refuses what the in-process executor cannot run (real-time mode).
+/// Refuses what the in-process executor cannot run (real-time mode; `up` refuses
+/// `faults.on_fault = "restart"` when it resolves the scenario, naming where it was set).
 pub fn check(sc: &Scenario) -> Result<(), InProcessError> {
     if sc.runtime.is_realtime() {
         return Err(InProcessError::Realtime(sc.runtime.realtime_hz));
@@ -264,7 +292,8 @@ pub fn check(sc: &Scenario) -> Result<(), InProcessError> {
     Ok(())
 }
 
-/// [`run`], recording.bin flushed after every tick when `live` (`orchestrator up --view`).
+/// [`run`], recording.bin flushed after every tick when `live` (`orchestrator up --view`),
+/// ended "interrupted" when `stop()` says so before a tick.
 pub fn run_live(
     sc: &Scenario,
     out_dir: Option<&Path>,
@@ -272,6 +301,7 @@ pub fn run_live(
     threads: usize,
     on_tick: &mut dyn FnMut(&World),
     live: bool,
+    stop: &dyn Fn() -> bool,
 ) -> std::io::Result<Summary> {
     check(sc).map_err(|e| std::io::Error::new(std::io::ErrorKind::InvalidInput, e))?;
     dispatch(
@@ -283,6 +313,7 @@ pub fn run_live(
             on_tick,
             threads,
             live,
+            stop,
         },
     )
 }

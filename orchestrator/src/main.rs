@@ -4,12 +4,15 @@ mod bench;
 mod clean;
 mod completions;
 mod control;
+mod exit;
 mod experiment;
 mod experiment_cbca;
 mod experiment_formation;
 mod experiment_hunt;
 mod export;
 mod inprocess;
+mod outcome;
+mod outdir;
 mod phase;
 mod prepare;
 mod processes;
@@ -93,14 +96,22 @@ fn main() {
         Cmd::View(a) => view::view(a),
         Cmd::Export(a) => export::export(a),
         Cmd::Completions(a) => completions::print(a),
-        Cmd::Clean => {
-            let r = clean::clean_dead_runs();
-            println!(
-                "cleaned {} dead run(s): {} /dev/shm file(s), {} leftover process(es)",
-                r.runs, r.shm_files, r.processes
-            );
-            0
-        }
+        Cmd::Clean => match clean::clean_dead_runs() {
+            Ok(r) => {
+                for line in &r.ignored {
+                    eprintln!("{line}");
+                }
+                println!(
+                    "cleaned {} dead run(s): {} /dev/shm file(s), {} leftover process(es)",
+                    r.runs, r.shm_files, r.processes
+                );
+                0
+            }
+            Err(e) => {
+                eprintln!("error: {e}");
+                exit::FAILED
+            }
+        },
     };
     std::process::exit(code);
 }

@@ -1,6 +1,6 @@
 //! The multi-process executor: one world process and one agent process per robot.
 
-use crate::registry::{self, RunEntry};
+use crate::registry::{self, RegistryError, RunEntry};
 use crate::signals;
 use std::collections::BTreeMap;
 use std::io::{BufRead, BufReader};
@@ -30,6 +30,12 @@ const READY_TIMEOUT: Duration = Duration::from_secs(60);
 pub const INTERRUPTED_AT_START: &str = "interrupted during start-up, before any tick";
 /// How often the run registry (read by `orchestrator status`) is refreshed.
 const REGISTRY_PERIOD: Duration = Duration::from_millis(50);
+/// How many agents of one robot in a row may exit before attaching to the run, under
+/// `faults.on_fault = "restart"`, before the robot counts as failed and the run ends (a
+/// program that exits at once is not restarted for ever, and never waited on for the whole
+/// `runtime.startup_timeout_s`). Under "drop" one such exit fails the robot. [chosen] Enough
+/// for a replacement that lost a race with the run's end; a broken program fails in ~0.1 s.
+pub const START_FAILURES: u32 = 3;
 
 pub struct ProcessRun<'a> {
     pub sc: &'a Scenario,
@@ -45,11 +51,55 @@ pub struct ProcessOutcome {
     /// Exit status of the world: Ok(code) or Err(signal).
     pub world_exit: Result<i32, i32>,
     pub shm_removed: usize,
+    /// A robot whose agent kept exiting before it attached: the run was stopped for it.
+    pub failed_robot: Option<RobotFailure>,
+}
+
+/// A robot none of whose agents got as far as attaching to the run.
+#[derive(Debug, Clone, thiserror::Error)]
+#[error(
+    "robot {robot} failed: its agent exited before attaching to the run {times} time(s) in a \
+     row (last: {status}); command: {command}"
+)]
+pub struct RobotFailure {
+    pub robot: u32,
+    pub times: u32,
+    /// How the last one ended ("exit code 3", "signal 9").
+    pub status: String,
+    pub command: String,
+}
+
+/// Why a run of processes could not be run.
+#[derive(Debug, thiserror::Error)]
+pub enum RunError {
+    #[error("{INTERRUPTED_AT_START}")]
+    InterruptedAtStart,
+    #[error(transparent)]
+    Registry(#[from] RegistryError),
+    #[error("{0}")]
+    Other(String),
+}
+
+impl From<String> for RunError {
+    fn from(s: String) -> RunError {
+        if s == INTERRUPTED_AT_START {
+            RunError::InterruptedAtStart
+        } else {
+            RunError::Other(s)
+        }
+    }
 }
 
 fn bin(name: &str) -> PathBuf {
-    let exe = std::env::current_exe().expect("current exe");
-    exe.parent().expect("exe dir").join(name)
+    registry::binary(name)
+}
+
+/// "exit code C" or "signal S" of a waitpid status.
+fn describe(status: i32) -> String {
+    match exit_of(status) {
+        Ok(c) => format!("exit code {c}"),
+        Err(s) => format!("signal {s}"),
+    }
 }
 
 /// One agent process of the run.
@@ -75,6 +125,18 @@ fn kill(pid: u32) {
     }
 }
 
+/// Whether process `pid` has exited (gone, or a zombie not reaped yet).
+fn exited(pid: u32) -> bool {
+    let stat = std::fs::read_to_string(format!("/proc/{pid}/stat")).unwrap_or_default();
+    match stat
+        .rfind(')')
+        .and_then(|i| stat[i + 1..].split_whitespace().next())
+    {
+        Some(state) => state == "Z" || state == "X",
+        None => true,
+    }
+}
+
 /// Reaps one exited child, if any.
 fn reap() -> Option<(u32, i32)> {
     let mut status = 0;
@@ -83,27 +145,51 @@ fn reap() -> Option<(u32, i32)> {
     (pid > 0).then_some((pid as u32, status))
 }
 
-pub fn run(mut p: ProcessRun) -> Result<ProcessOutcome, String> {
+/// Runs the scenario; a robot that failed (its agents never attached) is an error here, for
+/// callers that only read the summary (experiments, benchmarks).
+pub fn run(p: ProcessRun) -> Result<ProcessOutcome, String> {
+    let o = run_typed(p).map_err(|e| e.to_string())?;
+    match &o.failed_robot {
+        Some(f) => Err(f.to_string()),
+        None => Ok(o),
+    }
+}
+
+/// [`run`] with its errors typed: `up` tells a run id in use (bad input) from a failure.
+pub fn run_typed(mut p: ProcessRun) -> Result<ProcessOutcome, RunError> {
     let sc = p.sc;
     let prefix = transport::prefix_for(p.run_id);
     let scenario_path = p.run_dir.join("scenario.toml");
-    std::fs::create_dir_all(p.run_dir).map_err(|e| format!("{}: {e}", p.run_dir.display()))?;
-    std::fs::write(&scenario_path, sc.to_toml())
-        .map_err(|e| format!("{}: {e}", scenario_path.display()))?;
+    let me = std::process::id();
     let mut entry = RunEntry {
         run_id: p.run_id.to_string(),
         prefix: prefix.clone(),
-        orchestrator_pid: std::process::id(),
+        orchestrator_pid: me,
+        orchestrator_start: registry::start_time(me).unwrap_or(0),
         world_pid: 0,
+        world_start: 0,
         agent_pids: vec![],
+        agent_starts: vec![],
         tick: 0,
         alive: 0,
         dead: 0,
         restarted: 0,
         run_dir: p.run_dir.display().to_string(),
     };
-    registry::write(&entry).map_err(|e| format!("run registry: {e}"))?;
-    let result = supervise(&mut p, &prefix, &scenario_path, &mut entry);
+    // First: a run id held by a live run is refused before anything of this run exists (the
+    // cleanup below would otherwise remove the other run's files).
+    registry::create(&entry)?;
+    if let Err(e) = std::fs::create_dir_all(p.run_dir)
+        .map_err(|e| format!("{}: {e}", p.run_dir.display()))
+        .and_then(|_| {
+            world::output::write_atomic(&scenario_path, sc.to_toml().as_bytes())
+                .map_err(|e| e.to_string())
+        })
+    {
+        registry::remove(p.run_id);
+        return Err(RunError::Other(e));
+    }
+    let result = supervise(&mut p, &prefix, &scenario_path, &mut entry).map_err(RunError::from);
     // Whatever happened: no process and nothing in /dev/shm of this run stays.
     for &pid in std::iter::once(&entry.world_pid).chain(entry.agent_pids.iter()) {
         if pid != 0 && registry::pid_alive(pid) {
@@ -151,7 +237,8 @@ fn supervise(
         .spawn()
         .map_err(|e| format!("cannot start {}: {e}", bin("world").display()))?;
     entry.world_pid = world.id();
-    registry::write(entry).map_err(|e| format!("run registry: {e}"))?;
+    entry.world_start = registry::start_time(world.id()).unwrap_or(0);
+    registry::write(entry).map_err(|e| e.to_string())?;
     // Wait for READY: every service exists.
     let stdout = world.stdout.take().expect("piped");
     let (tx, rx) = std::sync::mpsc::channel();
@@ -196,23 +283,28 @@ fn supervise(
         .create()
         .map_err(|e| format!("status subscriber: {e:?}"))?;
     let barrier = TickBarrier::open(prefix).map_err(|e| format!("tick barrier: {e}"))?;
-    let spawn_agent = |robot: u32| -> Result<u32, String> {
-        Command::new(bin("agent"))
-            .args([
-                "--robot",
-                &robot.to_string(),
-                "--prefix",
-                prefix,
-                "--run-id",
-                p.run_id,
-                "--scenario",
-            ])
-            .arg(scenario_path)
+    let agent_command = |robot: u32| {
+        let mut c = Command::new(bin("agent"));
+        c.args([
+            "--robot",
+            &robot.to_string(),
+            "--prefix",
+            prefix,
+            "--run-id",
+            p.run_id,
+            "--scenario",
+        ])
+        .arg(scenario_path);
+        c
+    };
+    // (pid, start time) of a new agent of `robot`.
+    let spawn_agent = |robot: u32| -> Result<(u32, u64), String> {
+        agent_command(robot)
             .stdin(Stdio::null())
             .stdout(Stdio::null())
             .process_group(0)
             .spawn()
-            .map(|c| c.id())
+            .map(|c| (c.id(), registry::start_time(c.id()).unwrap_or(0)))
             .map_err(|e| format!("cannot start {}: {e}", bin("agent").display()))
     };
     // pid -> (robot, the robot's attach count when it was spawned): only one agent of a
@@ -224,11 +316,12 @@ fn supervise(
             // Ctrl-C while the agents start: the loop below stops the world at once.
             break;
         }
-        let pid = spawn_agent(i)?;
+        let (pid, start) = spawn_agent(i)?;
         agents.insert(pid, Agent { robot: i, base: 0 });
         entry.agent_pids.push(pid);
+        entry.agent_starts.push(start);
     }
-    registry::write(entry).map_err(|e| format!("run registry: {e}"))?;
+    registry::write(entry).map_err(|e| e.to_string())?;
     let send_control = |kind: u32, robot: u32, value: u64, tick: u64| {
         if let Ok(s) = control.loan_uninit() {
             let _ = s
@@ -243,7 +336,24 @@ fn supervise(
         barrier.nudge_world();
     };
     let restart = sc.faults.on_fault == FaultPolicy::Restart;
+    // Deaths of agents that had attached, per robot: the k-th is restarted while
+    // k <= max_restarts (the world counts the same deaths as faults and waits for the restart
+    // rather than end the run "all robots dead", world::World::end_reason).
     let mut restarts = vec![0u32; n as usize];
+    // Agents of each robot in a row that exited before attaching (reset by an attach).
+    let mut start_failures = vec![0u32; n as usize];
+    // How the last of them ended.
+    let mut last_failure = vec![String::new(); n as usize];
+    let command_of = |robot: u32| {
+        let cmd = agent_command(robot);
+        std::iter::once(cmd.get_program())
+            .chain(cmd.get_args())
+            .map(|a| a.to_string_lossy().into_owned())
+            .collect::<Vec<_>>()
+            .join(" ")
+    };
+    let start_failure_limit = if restart { START_FAILURES } else { 1 };
+    let mut failed_robot: Option<RobotFailure> = None;
     // The last kill order of each robot acted on (see TickBarrier::order_kill).
     let mut kill_done = vec![0u64; n as usize];
     let mut last = WorldStatus::default();
@@ -257,16 +367,38 @@ fn supervise(
                 world_exit = exit_of(st);
                 break 'outer;
             }
-            let Some(Agent { robot, .. }) = agents.remove(&pid) else {
+            let Some(Agent { robot, base }) = agents.remove(&pid) else {
                 continue;
             };
+            let attached = barrier.attach_count(robot) > base;
             // It can attach no more and no other agent of the robot lives: every attach so
             // far is of a dead agent. Written before the report, which the world checks
             // against it (a report of a replacement that never took over is no fault).
             barrier.set_dead_upto(robot, barrier.attach_count(robot));
-            if barrier.is_shutdown() || exit_of(st) == Ok(0) {
-                // Ended with the run (the world's shutdown word), not a fault.
+            if barrier.is_shutdown() || (attached && exit_of(st) == Ok(0)) || exited(world_pid) {
+                // Ended with the run (the world's shutdown word, or the world is gone: the
+                // agent left because of it), not a fault.
                 continue;
+            }
+            let r = robot as usize;
+            if attached {
+                start_failures[r] = 0;
+            } else if stop_sent.is_none() {
+                // Exited before it attached, however it exited (exit code 0 included: the
+                // world would wait for it until runtime.startup_timeout_s).
+                start_failures[r] += 1;
+                last_failure[r] = describe(st);
+                if start_failures[r] >= start_failure_limit {
+                    failed_robot = Some(RobotFailure {
+                        robot,
+                        times: start_failures[r],
+                        status: describe(st),
+                        command: command_of(robot),
+                    });
+                    send_control(CONTROL_STOP, 0, 0, last.tick);
+                    stop_sent = Some(Instant::now());
+                    continue;
+                }
             }
             send_control(
                 CONTROL_ROBOT_DIED,
@@ -274,7 +406,9 @@ fn supervise(
                 monotonic_us(),
                 barrier.current_tick(),
             );
-            if restart && stop_sent.is_none() && restarts[robot as usize] < sc.faults.max_restarts {
+            // A start failure under the limit is retried without using up a restart.
+            let budget = !attached || restarts[r] < sc.faults.max_restarts;
+            if restart && stop_sent.is_none() && budget {
                 // The replacement starts first and the dead agent's ports are cleaned while
                 // it starts up: each service has room for one dead agent's ports beside the
                 // live one's (transport's RESTART_SLACK), and the cleanup (~0.3-0.6 s at
@@ -283,11 +417,14 @@ fn supervise(
                 // before the next death is reaped, so at most one dead agent's ports per
                 // robot are ever left.
                 let base = barrier.attach_count(robot);
-                let pid = spawn_agent(robot)?;
-                restarts[robot as usize] += 1;
+                let (pid, start) = spawn_agent(robot)?;
+                if attached {
+                    restarts[r] += 1;
+                }
                 agents.insert(pid, Agent { robot, base });
-                entry.agent_pids[robot as usize] = pid;
-                registry::write(entry).map_err(|e| format!("run registry: {e}"))?;
+                entry.agent_pids[r] = pid;
+                entry.agent_starts[r] = start;
+                registry::write(entry).map_err(|e| e.to_string())?;
                 cleanup_dead_agents(&node, prefix);
             }
         }
@@ -347,6 +484,18 @@ fn supervise(
     for &pid in agents.keys() {
         kill(pid);
     }
+    // A run that ended (an unpaced one can reach max_ticks within milliseconds) before the
+    // limit was reached: a robot none of whose agents ever attached still failed.
+    if failed_robot.is_none() {
+        failed_robot = (0..n)
+            .find(|&i| start_failures[i as usize] > 0 && barrier.attach_count(i) == 0)
+            .map(|robot| RobotFailure {
+                robot,
+                times: start_failures[robot as usize],
+                status: last_failure[robot as usize].clone(),
+                command: command_of(robot),
+            });
+    }
     drop(status);
     drop(control);
     drop(barrier);
@@ -354,6 +503,7 @@ fn supervise(
     Ok(ProcessOutcome {
         world_exit,
         shm_removed: 0,
+        failed_robot,
     })
 }
 

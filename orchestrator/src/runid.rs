@@ -17,18 +17,36 @@ fn civil(days: i64) -> (i64, u32, u32) {
 }
 
 /// The environment variable that fixes the next run's id (tests and scripts that must know a
-/// run's shared-memory prefix before it starts; it must be a valid id of letters, digits and
-/// dashes, at most 40 characters, or it is ignored).
+/// run's shared-memory prefix before it starts; it must be a valid id, see [`is_valid`]:
+/// `orchestrator up` refuses another, the sweeps and benchmarks ignore it).
 pub const RUN_ID_ENV: &str = "SWARM_RUN_ID";
+/// The longest run id.
+pub const MAX_LEN: usize = 40;
+
+/// Whether `id` has the form of a run id: 1 to MAX_LEN letters, digits and dashes, not
+/// starting with a dash (it names files: no `/`, no `.`).
+pub fn is_valid(id: &str) -> bool {
+    !id.is_empty()
+        && id.len() <= MAX_LEN
+        && !id.starts_with('-')
+        && id.chars().all(|c| c.is_ascii_alphanumeric() || c == '-')
+}
+
+/// `SWARM_RUN_ID`, if set: Err names it and the allowed form when it is not a run id.
+pub fn from_env() -> Result<Option<String>, String> {
+    match std::env::var(RUN_ID_ENV) {
+        Ok(id) if is_valid(&id) => Ok(Some(id)),
+        Ok(id) => Err(format!(
+            "{RUN_ID_ENV}={id:?} is not a run id: allowed are 1 to {MAX_LEN} ASCII letters, \
+             digits and dashes, not starting with a dash"
+        )),
+        Err(_) => Ok(None),
+    }
+}
 
 pub fn new_run_id() -> String {
-    if let Ok(id) = std::env::var(RUN_ID_ENV) {
-        let ok = !id.is_empty()
-            && id.len() <= 40
-            && id.chars().all(|c| c.is_ascii_alphanumeric() || c == '-');
-        if ok {
-            return id;
-        }
+    if let Ok(Some(id)) = from_env() {
+        return id;
     }
     let now = SystemTime::now()
         .duration_since(UNIX_EPOCH)
@@ -48,6 +66,15 @@ pub fn new_run_id() -> String {
 
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn run_id_forms() {
+        assert!(super::is_valid(&super::new_run_id()));
+        assert!(super::is_valid("e2e-123-x"));
+        for bad in ["", "../x", "a/b", "a.json", "-x", &"x".repeat(41)] {
+            assert!(!super::is_valid(bad), "{bad:?}");
+        }
+    }
+
     #[test]
     fn civil_dates() {
         assert_eq!(super::civil(0), (1970, 1, 1));

@@ -1,6 +1,6 @@
 //! `orchestrator up`: resolve the scenario, run it, print the summary.
 
-use crate::{clean, inprocess, processes, runid, signals};
+use crate::{clean, exit, inprocess, outcome, outdir, processes, registry, runid, signals};
 use clap::{Args, ValueEnum};
 use std::path::{Path, PathBuf};
 use swarm::scenario::{ConfigError, Scenario};
@@ -185,6 +185,7 @@ pub(crate) const FLAG_KEYS: &[(&str, &str)] = &[
     ("faults.kill_at", "--chaos-at"),
     ("faults.kill_fraction", "--kill-fraction"),
     ("faults.max_restarts", "--max-restarts"),
+    ("faults.on_fault", "--on-fault"),
     ("runtime.tick_hz", "--tick-hz"),
     ("runtime.realtime_hz", "--realtime"),
     ("runtime.record_deliveries", "--record-deliveries"),
@@ -276,12 +277,14 @@ pub fn resolve(a: &UpArgs) -> Result<Scenario, ConfigError> {
         set("faults.max_restarts", &mut || sc.faults.max_restarts = v);
     }
     if let Some(v) = a.on_fault {
-        sc.faults.on_fault = match v {
-            OnFault::Drop => swarm::scenario::FaultPolicy::Drop,
-            OnFault::Restart => swarm::scenario::FaultPolicy::Restart,
-        };
+        set("faults.on_fault", &mut || {
+            sc.faults.on_fault = match v {
+                OnFault::Drop => swarm::scenario::FaultPolicy::Drop,
+                OnFault::Restart => swarm::scenario::FaultPolicy::Restart,
+            }
+        });
     }
-    crate::prepare::prepare(&mut sc, &|key: &str| {
+    let key_source = |key: &str| {
         // A flag's key, or an entry of it (`faults.kill_at[3]` came from --chaos-at).
         let of = |k: &str| key == k || key.strip_prefix(k).is_some_and(|r| r.starts_with('['));
         FLAG_KEYS
@@ -289,7 +292,26 @@ pub fn resolve(a: &UpArgs) -> Result<Scenario, ConfigError> {
             .find(|(k, _)| of(k) && from_flag.contains(k))
             .map(|(_, f)| f.to_string())
             .unwrap_or_else(|| file.clone())
-    })?;
+    };
+    crate::prepare::prepare(&mut sc, &key_source)?;
+    if a.executor == Executor::Inprocess
+        && sc.faults.on_fault == swarm::scenario::FaultPolicy::Restart
+    {
+        // Restart means a new agent process taking a robot over, fresh from its Sense frame;
+        // in one process there is no agent process to die or replace, and rebuilding a
+        // behaviour from its constructor inside the world's threads would be another fault
+        // model than the one the processes executor runs. Refused rather than ignored.
+        let key = "faults.on_fault";
+        return Err(ConfigError {
+            source: swarm::key_lines::locate(&key_source(key), key),
+            key: key.into(),
+            message: "= \"restart\" needs the processes executor (--executor inprocess was \
+                      given): in one process there is no agent process to die and be \
+                      replaced, a scheduled kill drops the robot; use --executor processes, \
+                      or on_fault = \"drop\" (--on-fault drop)"
+                .into(),
+        });
+    }
     expand_kills(&mut sc);
     Ok(sc)
 }
@@ -314,54 +336,83 @@ pub fn up(a: UpArgs) -> i32 {
         Ok(s) => s,
         Err(e) => {
             eprintln!("error: {e}");
-            return 2;
+            return exit::BAD_INPUT;
         }
     };
     if a.executor == Executor::Inprocess {
         if let Err(e) = inprocess::check(&sc) {
             eprintln!("error: --executor inprocess: {e}");
-            return 2;
+            return exit::BAD_INPUT;
         }
     }
+    let fixed_id = match runid::from_env() {
+        Ok(id) => id,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return exit::BAD_INPUT;
+        }
+    };
     if a.executor == Executor::Processes {
         // Refused before anything starts, rather than EMFILE in the world after seconds.
         let (soft, _) = swarm::limits::raise_nofile();
         if let Err(e) = swarm::limits::check_fits(sc.run.robots, soft) {
             eprintln!("error: {e}");
-            return 2;
+            return exit::BAD_INPUT;
         }
     }
     if signals::interrupted() {
         eprintln!("error: {}", processes::INTERRUPTED_AT_START);
-        return 130;
+        return signals::exit_code();
     }
-    let cleaned = clean::clean_dead_runs();
+    // The registry must be this user's private folder (else nothing starts: another user
+    // could have planted entries naming processes to kill).
+    let cleaned = match clean::clean_dead_runs() {
+        Ok(c) => c,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return exit::FAILED;
+        }
+    };
     if cleaned.runs > 0 {
         eprintln!(
             "cleaned {} dead run(s) left by earlier orchestrators",
             cleaned.runs
         );
     }
-    let run_id = runid::new_run_id();
+    let run_id = fixed_id.unwrap_or_else(runid::new_run_id);
+    if a.executor == Executor::Processes {
+        if let Some(other) = registry::list()
+            .into_iter()
+            .find(|e| e.run_id == run_id && e.orchestrator_is_live())
+        {
+            eprintln!(
+                "error: {}",
+                registry::RegistryError::InUse {
+                    run_id,
+                    pid: other.orchestrator_pid
+                }
+            );
+            return exit::BAD_INPUT;
+        }
+    }
     let run_dir = a
         .out
         .clone()
         .unwrap_or_else(|| Path::new("runs").join(&run_id));
-    // The run folder is bad input like any other (exit 2), found before anything starts.
-    if let Err(e) = std::fs::create_dir_all(&run_dir)
-        .and_then(|_| std::fs::write(run_dir.join("scenario.toml"), sc.to_toml()))
-    {
-        let what = if a.out.is_some() {
-            "--out "
-        } else {
-            "run folder "
-        };
-        eprintln!(
-            "error: {what}{}: cannot write the run folder: {e}",
-            run_dir.display()
-        );
-        return 2;
-    }
+    // The run folder is bad input like any other (exit 2), found before anything starts; a
+    // full disk fails the run (exit 1). Held by this run alone until it ends.
+    let what = if a.out.is_some() {
+        "--out "
+    } else {
+        "run folder "
+    };
+    let _held = match outdir::open(&run_dir, what, &sc.to_toml()) {
+        Ok(h) => h,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return e.exit_code();
+        }
+    };
     let live = if a.view {
         let kill: Option<std::sync::Arc<crate::view::server::KillFn>> =
             (a.executor == Executor::Processes).then(|| {
@@ -381,7 +432,7 @@ pub fn up(a: UpArgs) -> i32 {
             }
             Err(e) => {
                 eprintln!("error: --view-port: {e}");
-                return 2;
+                return exit::BAD_INPUT;
             }
         }
     } else {
@@ -389,7 +440,7 @@ pub fn up(a: UpArgs) -> i32 {
     };
     let bar = crate::progress::Bar::new(&sc, a.quiet);
     let realtime = sc.runtime.is_realtime();
-    let result: Result<(), String> = match a.executor {
+    let result: Result<(), (i32, String)> = match a.executor {
         Executor::Inprocess => inprocess::run_live(
             &sc,
             Some(&run_dir),
@@ -414,10 +465,11 @@ pub fn up(a: UpArgs) -> i32 {
                 }
             },
             a.view,
+            &signals::interrupted,
         )
         .map(|_| ())
-        .map_err(|e| e.to_string()),
-        Executor::Processes => processes::run(processes::ProcessRun {
+        .map_err(|e| (exit::FAILED, e.to_string())),
+        Executor::Processes => processes::run_typed(processes::ProcessRun {
             sc: &sc,
             run_id: &run_id,
             run_dir: &run_dir,
@@ -433,10 +485,24 @@ pub fn up(a: UpArgs) -> i32 {
             },
             live: a.view,
         })
-        .and_then(|o| match o.world_exit {
-            Ok(0) => Ok(()),
-            Ok(c) => Err(format!("the world process failed with exit code {c}")),
-            Err(sig) => Err(format!("the world process was killed by signal {sig}")),
+        .map_err(|e| match e {
+            processes::RunError::InterruptedAtStart => (signals::exit_code(), e.to_string()),
+            processes::RunError::Registry(registry::RegistryError::InUse { .. }) => {
+                (exit::BAD_INPUT, e.to_string())
+            }
+            e => (exit::FAILED, e.to_string()),
+        })
+        .and_then(|o| match (o.failed_robot, o.world_exit) {
+            (Some(f), _) => Err((exit::FAILED, f.to_string())),
+            (None, Ok(0)) => Ok(()),
+            (None, Ok(c)) => Err((
+                exit::FAILED,
+                format!("the world process failed with exit code {c}"),
+            )),
+            (None, Err(sig)) => Err((
+                exit::FAILED,
+                format!("the world process was killed by signal {sig}"),
+            )),
         }),
     };
     bar.clear();
@@ -447,14 +513,10 @@ pub fn up(a: UpArgs) -> i32 {
         std::thread::sleep(VIEW_LAST_FRAMES);
         l.viewer.stop();
     }
-    if let Err(e) = result {
-        eprintln!("error: run {run_id}: {e}");
+    if let Err((code, e)) = result {
         // Ctrl-C before the first tick: the shell's code for an interrupted command.
-        return if e == processes::INTERRUPTED_AT_START {
-            130
-        } else {
-            1
-        };
+        eprintln!("error: run {run_id}: {e}");
+        return code;
     }
     match std::fs::read_to_string(run_dir.join("summary.json")) {
         Ok(s) => {
@@ -463,11 +525,11 @@ pub fn up(a: UpArgs) -> i32 {
                 .next()
                 .unwrap_or_else(|| "orchestrator".into());
             crate::summary::print(&v, &run_dir, &program);
-            0
+            outcome::exit_code(&v)
         }
         Err(e) => {
             eprintln!("error: run {run_id}: no summary.json: {e}");
-            1
+            exit::FAILED
         }
     }
 }

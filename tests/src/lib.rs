@@ -198,10 +198,43 @@ pub fn assert_left_nothing(out: &Path) {
     assert!(procs.is_empty(), "run {run_id} left processes: {procs:?}");
 }
 
-/// The registry entry (`/tmp/swarm-runtime/runs/*`) of the run writing to `out`, if it has one.
+/// The run registry's folder as the orchestrator finds it in this environment:
+/// `$XDG_RUNTIME_DIR/swarm-runtime-<uid>`, or `/tmp/swarm-runtime-<uid>`.
+pub fn registry_dir() -> PathBuf {
+    let base = std::env::var_os("XDG_RUNTIME_DIR")
+        .map(PathBuf::from)
+        .filter(|p| p.is_absolute())
+        .unwrap_or_else(|| PathBuf::from("/tmp"));
+    // SAFETY: geteuid cannot fail.
+    base.join(format!("swarm-runtime-{}", unsafe { libc::geteuid() }))
+}
+
+/// `orchestrator up`'s exit codes (README, "Exit codes").
+pub mod exit {
+    /// The run ended by itself, its mission accomplished (roam: ran its max_ticks).
+    pub const COMPLETE: i32 = 0;
+    pub const FAILED: i32 = 1;
+    pub const BAD_INPUT: i32 = 2;
+    /// The run ended by itself (max_ticks, every robot dead), its mission not accomplished.
+    pub const MISSION_NOT_COMPLETE: i32 = 3;
+    /// Stopped by SIGINT (Ctrl-C) / SIGTERM: 128 + the signal.
+    pub const SIGINT: i32 = 130;
+    pub const SIGTERM: i32 = 143;
+}
+
+/// Whether `up` ended a run by itself, its mission accomplished or not (exit 0 or 3): for
+/// tests that judge a run's outputs rather than its mission.
+pub fn ended_by_itself(o: &Output) -> bool {
+    matches!(
+        o.status.code(),
+        Some(exit::COMPLETE) | Some(exit::MISSION_NOT_COMPLETE)
+    )
+}
+
+/// The registry entry of the run writing to `out`, if it has one.
 pub fn registry_of(out: &Path) -> Option<serde_json::Value> {
     let dir = out.display().to_string();
-    std::fs::read_dir("/tmp/swarm-runtime/runs")
+    std::fs::read_dir(registry_dir())
         .into_iter()
         .flatten()
         .flatten()

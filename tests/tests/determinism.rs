@@ -14,7 +14,7 @@ fn same_run_in_both_executors(name: &str, args: &[&str]) -> std::path::PathBuf {
     let b = tmp_dir(&format!("{name}-i"));
     for (dir, exec) in [(&a, "processes"), (&b, "inprocess")] {
         let o = up(&[args, &["--executor", exec]].concat(), dir);
-        assert!(o.status.success(), "{exec}: {}", stderr(&o));
+        assert!(ended_by_itself(&o), "{exec}: {}", stderr(&o));
     }
     assert!(recording(&a) == recording(&b), "the executors differ");
     a
@@ -38,7 +38,7 @@ fn processes_and_inprocess_give_identical_recordings() {
     let c = tmp_dir("det-c");
     for (dir, exec) in [(&a, "processes"), (&b, "processes"), (&c, "inprocess")] {
         let o = up(&[&args[..], &["--executor", exec]].concat(), dir);
-        assert!(o.status.success(), "{exec}: {}", stderr(&o));
+        assert!(ended_by_itself(&o), "{exec}: {}", stderr(&o));
     }
     let ra = recording(&a);
     assert!(
@@ -88,7 +88,7 @@ fn run_folder_holds_every_output() {
     let _g = serial();
     let out = tmp_dir("outputs");
     let o = up(&["--robots", "8", "--max-ticks", "60"], &out);
-    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(ended_by_itself(&o), "{}", stderr(&o));
     for f in ["scenario.toml", "summary.json", "recording.bin", "run.svg"] {
         assert!(out.join(f).exists(), "missing {f}");
     }
@@ -169,7 +169,7 @@ fn the_iox2_event_barrier_gives_the_same_run_as_the_futex_one() {
             ],
             &out,
         );
-        assert!(o.status.success(), "{kind}: {}", stderr(&o));
+        assert!(ended_by_itself(&o), "{kind}: {}", stderr(&o));
         assert_left_nothing(&out);
         runs.push(out);
     }
@@ -187,9 +187,9 @@ fn a_paced_run_ticks_no_faster_than_asked_and_records_the_same_ticks() {
     let base = ["--robots", "6", "--max-ticks", "200", "--seed", "3"];
     let fast = tmp_dir("pace-free");
     let paced = tmp_dir("pace-400");
-    assert!(up(&base, &fast).status.success());
+    assert!(ended_by_itself(&up(&base, &fast)));
     let o = up(&[&base[..], &["--tick-hz", "400"]].concat(), &paced);
-    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(ended_by_itself(&o), "{}", stderr(&o));
     // Tick 199 starts no earlier than 199 / 400 s into the loop: at most 200 / 0.4975 ticks/s.
     let rate = summary(&paced)["ticks_per_second"].as_f64().unwrap();
     assert!(
@@ -282,9 +282,9 @@ fn messages_of_tick_0_are_delivered_and_a_bandwidth_cap_drops_what_exceeds_it() 
     let base = ["--scenario", roam(), "--robots", "8", "--max-ticks", "40"];
     let free = tmp_dir("bw-free");
     let capped = tmp_dir("bw-50");
-    assert!(up(&base, &free).status.success());
+    assert!(ended_by_itself(&up(&base, &free)));
     let o = up(&[&base[..], &["--bandwidth", "50"]].concat(), &capped);
-    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(ended_by_itself(&o), "{}", stderr(&o));
     let f = std::fs::File::open(free.join("recording.bin")).unwrap();
     let (_, ticks) = swarm::recording::read_recording(std::io::BufReader::new(f)).unwrap();
     assert_eq!(ticks[0].radio.offered, 8 * 7);
@@ -368,7 +368,7 @@ fn beacons_with_a_bulk_payload_received_in_place_give_the_same_run() {
         let plain = tmp_dir(&format!("det-blob-plain-{delay}"));
         let b = args(roam());
         let o = up(&b, &plain);
-        assert!(o.status.success(), "{}", stderr(&o));
+        assert!(ended_by_itself(&o), "{}", stderr(&o));
         // The header holds the resolved scenario (it differs); every tick record must not,
         // but for the byte counters (the payload's bytes are counted).
         let ticks = |dir: &std::path::Path| {

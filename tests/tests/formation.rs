@@ -31,7 +31,7 @@ fn nine_robots_in_processes_form_the_c_with_the_in_process_recording() {
     let i = tmp_dir("formation-i");
     for (dir, exec) in [(&p, "processes"), (&i, "inprocess")] {
         let o = up(&["--scenario", &sc, "--executor", exec], dir);
-        assert!(o.status.success(), "{exec}: {}", stderr(&o));
+        assert!(ended_by_itself(&o), "{exec}: {}", stderr(&o));
         let f = formation(dir);
         assert_eq!(f["formed"], true, "{exec}: {f}");
         assert_eq!(f["overlapping_pairs"], 0, "{exec}: {f}");
@@ -83,7 +83,7 @@ fn a_coordinator_killed_mid_run_is_replaced_and_the_pattern_replanned_for_eight(
         ],
         &out,
     );
-    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(ended_by_itself(&o), "{}", stderr(&o));
     let s = summary(&out);
     let f = formation(&out);
     assert_eq!(f["formed"], true, "{f}");
@@ -130,7 +130,7 @@ fn a_robot_killed_under_swaps_leaves_fifteen_that_re_form_a_re_planned_pattern()
             dir,
             run_id,
         );
-        assert!(o.status.success(), "{exec}: {}", stderr(&o));
+        assert!(ended_by_itself(&o), "{exec}: {}", stderr(&o));
         assert_survivors_re_formed(dir, exec, 16, 5, 30);
     }
     let rec = |d: &std::path::Path| std::fs::read(d.join("recording.bin")).unwrap();
@@ -219,7 +219,7 @@ fn a_robot_boxed_in_by_fourteen_wrecks_squeezes_out_and_the_86_form() {
             ],
             &dir,
         );
-        assert!(o.status.success(), "{}", stderr(&o));
+        assert!(ended_by_itself(&o), "{}", stderr(&o));
         (
             dir,
             format!("{}{}", String::from_utf8_lossy(&o.stdout), stderr(&o)),
@@ -290,7 +290,7 @@ fn a_robot_in_a_notch_of_wrecks_backs_out_along_a_planned_path_and_the_95_form()
             ],
             &dir,
         );
-        assert!(o.status.success(), "{}", stderr(&o));
+        assert!(ended_by_itself(&o), "{}", stderr(&o));
         dir
     };
     let dir = run("formation-notch", &fixed);
@@ -334,7 +334,7 @@ fn a_robot_wedged_between_a_wreck_and_an_arena_disc_squeezes_through_and_the_96_
         ],
         &dir,
     );
-    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(ended_by_itself(&o), "{}", stderr(&o));
     let f = formation(&dir);
     assert_eq!(f["formed"], true, "{f}");
     assert_eq!(f["overlapping_pairs"], 0, "{f}");
@@ -357,7 +357,7 @@ fn swaps_100_killed(name: &str, chaos_at: &str) -> PathBuf {
         ],
         &dir,
     );
-    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(ended_by_itself(&o), "{}", stderr(&o));
     dir
 }
 
@@ -416,7 +416,7 @@ fn the_relayed_coordinator_of_100_killed_is_replaced_and_the_99_form_its_re_plan
             "100:0",
         ];
         let o = up(&args, dir);
-        assert!(o.status.success(), "{exec}: {}", stderr(&o));
+        assert!(ended_by_itself(&o), "{exec}: {}", stderr(&o));
         let s = summary(dir);
         let f = formation(dir);
         assert_eq!(f["formed"], true, "{exec}: {f}");
@@ -491,7 +491,7 @@ fn formed_with_one_re_plan(
     dir: &std::path::Path,
 ) -> (std::process::Output, serde_json::Value) {
     let o = up(args, dir);
-    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(ended_by_itself(&o), "{}", stderr(&o));
     let f = formation(dir);
     assert_eq!(f["formed"], true, "{f}");
     assert_eq!(f["overlapping_pairs"], 0, "{f}");

@@ -150,7 +150,8 @@ fn run_case(c: &Case, dir: &Path) -> (Outcome, String) {
     use std::os::unix::process::ExitStatusExt;
     let outcome = match (status.code(), status.signal()) {
         (_, Some(_)) => Outcome::Signal,
-        (Some(0), _) => match left_behind(&out) {
+        // A run that ended by itself, its mission accomplished (0) or not (3).
+        (Some(0) | Some(3), _) => match left_behind(&out) {
             None => Outcome::Accepted,
             Some(what) => {
                 err.push_str(&what);

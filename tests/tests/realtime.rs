@@ -102,7 +102,7 @@ fn a_stopped_agent_misses_ticks_alone_while_the_world_keeps_its_clock() {
     wait_for_tick(&out, at + STOPPED_TICKS + 5);
     signal(pid, libc::SIGCONT);
     let o = child.wait_with_output().unwrap();
-    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(ended_by_itself(&o), "{}", stderr(&o));
     let s = summary(&out);
     assert_eq!(s["ticks"], 400, "{s}");
     assert_eq!(s["alive_at_end"], 4, "no one was declared dead: {s}");
@@ -231,7 +231,7 @@ fn an_agent_stopped_past_the_ack_deadline_is_declared_dead_while_the_clock_runs(
     // SAFETY: SIGINT to this test's own orchestrator: the clean stop.
     assert_eq!(unsafe { libc::kill(child.id() as i32, libc::SIGINT) }, 0);
     let o = child.wait_with_output().unwrap();
-    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(o.status.code(), Some(exit::SIGINT), "{}", stderr(&o));
     let s = summary(&out);
     let faults = s["faults"].as_array().unwrap();
     assert_eq!(faults.len(), 1, "{faults:?}");

@@ -84,7 +84,7 @@ fn a_robot_restarts_100_times_in_a_row() {
     // SAFETY: Ctrl-C to our own child.
     unsafe { libc::kill(child.id() as i32, libc::SIGINT) };
     let o = finish(child, Duration::from_secs(30));
-    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(o.status.code(), Some(exit::SIGINT), "{}", stderr(&o));
     let s = summary(&out);
     let faults = s["faults"].as_array().unwrap();
     assert_eq!(faults.len(), 100, "{faults:?}");
@@ -218,7 +218,7 @@ fn killing_the_orchestrator_takes_the_run_down_and_clean_removes_its_leftovers()
     // SAFETY: Ctrl-C to our own child.
     unsafe { libc::kill(live.id() as i32, libc::SIGINT) };
     let o = finish(live, Duration::from_secs(30));
-    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(o.status.code(), Some(exit::SIGINT), "{}", stderr(&o));
     assert_left_nothing(&live_out);
 }
 
@@ -311,7 +311,7 @@ fn status_lists_the_run_and_kill_rejects_bad_input() {
     // SAFETY: Ctrl-C to our own child.
     unsafe { libc::kill(child.id() as i32, libc::SIGINT) };
     let o = finish(child, Duration::from_secs(30));
-    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(o.status.code(), Some(exit::SIGINT), "{}", stderr(&o));
     let s = summary(&out);
     let mut dead: Vec<u64> = s["faults"]
         .as_array()
@@ -374,7 +374,7 @@ fn a_hung_agent_is_killed_and_restarted() {
     // SAFETY: as above (no effect on a dead pid that was not reused within this test).
     unsafe { libc::kill(child.id() as i32, libc::SIGINT) };
     let o = finish(child, Duration::from_secs(30));
-    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(o.status.code(), Some(exit::SIGINT), "{}", stderr(&o));
     let s = summary(&out);
     let faults = s["faults"].as_array().unwrap();
     assert_eq!(faults.len(), 1, "{faults:?}");
@@ -385,5 +385,49 @@ fn a_hung_agent_is_killed_and_restarted() {
     );
     assert!(faults[0]["restarted_tick"].is_u64(), "{faults:?}");
     assert_eq!(s["alive_at_end"], 6);
+    assert_left_nothing(&out);
+}
+
+/// Under `--on-fault restart`, killing every robot at once (all four at tick 20, scheduled)
+/// restarts them all: the run does not end "all robots dead" while restarts are left
+/// (issue 37 item 9; before, it ended at tick 20), and a Ctrl-C then ends it with 130 and
+/// every robot back.
+#[test]
+fn killing_every_robot_under_restart_restarts_them_all() {
+    let _g = serial();
+    let out = tmp_dir("kill-all-restart");
+    let child = spawn_up(
+        &[
+            "--scenario",
+            roam(),
+            "--robots",
+            "4",
+            "--max-ticks",
+            "100000000",
+            "--tick-hz",
+            "200",
+            "--on-fault",
+            "restart",
+            "--chaos-at",
+            "20:0,20:1,20:2,20:3",
+        ],
+        &out,
+    );
+    wait_for("every robot restarted", Duration::from_secs(30), || {
+        registry_of(&out).is_some_and(|r| r["restarted"] == 4 && r["alive"] == 4)
+    });
+    // SAFETY: Ctrl-C to our own child.
+    unsafe { libc::kill(child.id() as i32, libc::SIGINT) };
+    let o = finish(child, Duration::from_secs(30));
+    assert_eq!(o.status.code(), Some(exit::SIGINT), "{}", stderr(&o));
+    let s = summary(&out);
+    assert_eq!(s["end"], "interrupted");
+    assert_every_kill_restarted(&s, 4);
+    assert!(s["faults"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .all(|f| f["tick"] == 20));
+    assert_eq!(s["alive_at_end"], 4);
     assert_left_nothing(&out);
 }

@@ -37,7 +37,7 @@ fn finished_run(tag: &str) -> PathBuf {
         ],
         &out,
     );
-    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(ended_by_itself(&o), "{}", stderr(&o));
     out
 }
 
@@ -144,7 +144,7 @@ fn up_both_with_deliveries(args: &[&str], tag: &str) -> (PathBuf, PathBuf) {
         let mut all = args.to_vec();
         all.extend(["--record-deliveries", "--executor", exec]);
         let o = up(&all, dir);
-        assert!(o.status.success(), "{exec}: {}", stderr(&o));
+        assert!(ended_by_itself(&o), "{exec}: {}", stderr(&o));
     }
     (a, b)
 }
@@ -173,7 +173,7 @@ fn the_page_shows_whom_the_selected_robot_heard_that_tick() {
     let plain = tmp_dir("view-heard-plain");
     let mut a = args.to_vec();
     a.extend(["--executor", "inprocess"]);
-    assert!(up(&a, &plain).status.success());
+    assert!(ended_by_itself(&up(&a, &plain)));
     let read = |d: &Path| {
         swarm::recording::read_recording(std::fs::File::open(d.join("recording.bin")).unwrap())
             .unwrap()
@@ -457,7 +457,7 @@ fn layer_is_drawn(config: &str, ticks: &str, tag: &str, kinds: &[&str]) {
         ],
         &out,
     );
-    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(ended_by_itself(&o), "{}", stderr(&o));
     let v = ViewServer::start(&out, 0);
     let meta = json(&v.url, "/api/meta");
     let frames = json(&v.url, "/api/frames");
@@ -583,7 +583,11 @@ fn the_live_page_shows_the_running_run_and_its_kill_button_makes_a_fault() {
     let checked = check_robots(&shot, &meta, &frames[k]);
     assert!(checked >= 3, "robots checked: {checked}");
     let o = child.wait_with_output().unwrap();
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(
+        ended_by_itself(&o),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
     let s = summary(&out);
     assert_eq!(s["end"], "completed", "{s}");
     assert_eq!(s["ticks"], 450);

@@ -1,4 +1,9 @@
 //! The run folder: scenario.toml, recording.bin, summary.json, run.svg.
+//!
+//! Every error names its file. scenario.toml, summary.json and run.svg are written whole
+//! under a temporary name and renamed ([`write_atomic`]): a full disk leaves the file as it
+//! was or absent, never empty or cut short. recording.bin is written as the run goes (a live
+//! viewer reads it as it grows); a write that fails ends the run naming it.
 
 use crate::body::BodySummary;
 use crate::metrics::{spread, MissionMetrics};
@@ -7,9 +12,83 @@ use crate::world::{Fault, World, REJECT_NAMES};
 use serde::Serialize;
 use std::collections::BTreeMap;
 use std::fs::File;
+use std::io::Write;
 use std::path::{Path, PathBuf};
 use swarm::radio::RadioCounters;
 use swarm::recording::{RecordingHeader, RecordingWriter, TickRecord};
+
+/// A file of the run folder that could not be written.
+#[derive(Debug, thiserror::Error)]
+#[error("{}: {source}", path.display())]
+pub struct OutputError {
+    pub path: PathBuf,
+    #[source]
+    pub source: std::io::Error,
+}
+
+/// The operating system's error under `e`, if some error in its chain has one: the
+/// recording's encoder wraps the file's error in its own (kind Other, printed as
+/// `Io { inner: Os { code: 28, .. }, index: 20 }`), which names neither the cause plainly
+/// nor the file.
+fn os_cause(e: std::io::Error) -> std::io::Error {
+    if e.raw_os_error().is_some() {
+        return e;
+    }
+    let mut cause: Option<&(dyn std::error::Error + 'static)> = e.get_ref().map(|x| x as _);
+    while let Some(c) = cause {
+        if let Some(code) = c
+            .downcast_ref::<std::io::Error>()
+            .and_then(|io| io.raw_os_error())
+        {
+            return std::io::Error::from_raw_os_error(code);
+        }
+        cause = c.source();
+    }
+    e
+}
+
+/// Wraps an I/O error so that it names `path` (its kind kept: a full disk stays StorageFull).
+pub fn named(path: &Path) -> impl FnOnce(std::io::Error) -> std::io::Error + '_ {
+    move |source| {
+        let source = os_cause(source);
+        std::io::Error::new(
+            source.kind(),
+            OutputError {
+                path: path.to_path_buf(),
+                source,
+            },
+        )
+    }
+}
+
+/// The temporary name `path` is written under before its rename: hidden, in the same folder
+/// (a rename within one file system is atomic).
+fn temp_path(path: &Path) -> PathBuf {
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy())
+        .unwrap_or_default();
+    path.with_file_name(format!(".{name}.tmp"))
+}
+
+/// Writes `bytes` to `path` whole or not at all: to a temporary name, flushed to the disk,
+/// then renamed over `path`. On an error the temporary file is removed and `path` is left as
+/// it was; the error names `path`.
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
+    let tmp = temp_path(path);
+    let written = (|| {
+        let mut f = File::create(&tmp)?;
+        f.write_all(bytes)?;
+        // Data on the disk before the rename: a delayed-allocation file system reports a
+        // full disk here, not at close (which nobody checks).
+        f.sync_data()?;
+        std::fs::rename(&tmp, path)
+    })();
+    if written.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    written.map_err(named(path))
+}
 
 /// Wall-clock facts of a run, measured by the executor.
 #[derive(Debug, Clone, Default)]
@@ -99,6 +178,8 @@ pub struct Summary {
 pub struct RunOutputs {
     pub dir: Option<PathBuf>,
     rec: Option<RecordingWriter<File>>,
+    /// recording.bin's path (its errors name it).
+    rec_path: PathBuf,
     /// The recording holds the mission's layer per tick (version 5).
     layer: bool,
 }
@@ -107,8 +188,8 @@ impl RunOutputs {
     /// The run folder for `world`'s run (its scenario, and its recording version).
     pub fn create(dir: &Path, world: &World) -> std::io::Result<RunOutputs> {
         let sc = &world.sc;
-        std::fs::create_dir_all(dir)?;
-        std::fs::write(dir.join("scenario.toml"), sc.to_toml())?;
+        std::fs::create_dir_all(dir).map_err(named(dir))?;
+        write_atomic(&dir.join("scenario.toml"), sc.to_toml().as_bytes())?;
         let version = world.recording_version();
         let header = RecordingHeader {
             version,
@@ -116,10 +197,14 @@ impl RunOutputs {
             seed: sc.run.seed,
             scenario: sc.to_toml(),
         };
-        let rec = RecordingWriter::new(File::create(dir.join("recording.bin"))?, &header)?;
+        let rec_path = dir.join("recording.bin");
+        let rec = File::create(&rec_path)
+            .and_then(|f| RecordingWriter::new(f, &header))
+            .map_err(named(&rec_path))?;
         Ok(RunOutputs {
             dir: Some(dir.to_path_buf()),
             rec: Some(rec),
+            rec_path,
             layer: version >= swarm::recording::RECORDING_VERSION_LAYER,
         })
     }
@@ -129,6 +214,7 @@ impl RunOutputs {
         RunOutputs {
             dir: None,
             rec: None,
+            rec_path: PathBuf::new(),
             layer: false,
         }
     }
@@ -141,6 +227,7 @@ impl RunOutputs {
             Some(r) => r.push(t),
             None => Ok(()),
         }
+        .map_err(named(&self.rec_path))
     }
 
     /// Every tick reaches recording.bin as it is pushed, for a live viewer that reads the
@@ -161,7 +248,7 @@ impl RunOutputs {
         end: &str,
     ) -> std::io::Result<Summary> {
         if let Some(r) = self.rec.take() {
-            r.finish()?;
+            r.finish().map_err(named(&self.rec_path))?;
         }
         world.finish_radio();
         let warmup = (timing.tick_ns.len() / 20)
@@ -236,11 +323,16 @@ impl RunOutputs {
             },
         };
         if let Some(dir) = &self.dir {
-            std::fs::write(
-                dir.join("summary.json"),
-                serde_json::to_string_pretty(&summary).map_err(std::io::Error::other)?,
+            write_atomic(
+                &dir.join("summary.json"),
+                serde_json::to_string_pretty(&summary)
+                    .map_err(std::io::Error::other)?
+                    .as_bytes(),
             )?;
-            crate::svg::write_svg(world, &dir.join("run.svg")).map_err(std::io::Error::other)?;
+            let svg = dir.join("run.svg");
+            let picture =
+                crate::svg::svg_text(world).map_err(|e| named(&svg)(std::io::Error::other(e)))?;
+            write_atomic(&svg, picture.as_bytes())?;
         }
         Ok(summary)
     }

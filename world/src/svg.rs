@@ -160,12 +160,24 @@ fn legend<DB: DrawingBackend>(
     Ok(())
 }
 
+/// The run's picture as SVG text (written whole by the caller: `output::write_atomic`).
+pub fn svg_text(world: &World) -> Result<String, String> {
+    let mut text = String::new();
+    draw_svg(world, &mut text)?;
+    Ok(text)
+}
+
+/// Writes the run's picture to `path` whole or not at all; errors name the file.
 pub fn write_svg(world: &World, path: &Path) -> Result<(), String> {
+    crate::output::write_atomic(path, svg_text(world)?.as_bytes()).map_err(|e| e.to_string())
+}
+
+fn draw_svg(world: &World, out: &mut String) -> Result<(), String> {
     let sc = &world.sc;
     let (w, h) = (sc.arena.width, sc.arena.height);
     let aspect = h / w;
     let height = (SIZE as f64 * aspect).round().max(100.0) as u32;
-    let root = SVGBackend::new(path, (SIZE, height + LEGEND)).into_drawing_area();
+    let root = SVGBackend::with_string(out, (SIZE, height + LEGEND)).into_drawing_area();
     let e = |x: DrawingAreaErrorKind<std::io::Error>| format!("run.svg: {x:?}");
     root.fill(&WHITE).map_err(e)?;
     legend(&root, height, world).map_err(e)?;

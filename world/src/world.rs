@@ -844,15 +844,28 @@ impl World {
     }
 
     /// Why the run ends after this tick, if it does: the mission is complete, or every robot
-    /// is dead. The one place both executors ask.
+    /// is dead with no restart on its way. The one place both executors ask.
     pub fn end_reason(&self) -> Option<&'static str> {
         if self.mission.complete() {
             Some(self.mission.end_reason())
-        } else if !self.alive[..self.bodies].iter().any(|a| *a) {
+        } else if !self.alive[..self.bodies].iter().any(|a| *a) && !self.restart_due() {
             Some("all robots dead")
         } else {
             None
         }
+    }
+
+    /// Under `faults.on_fault = "restart"`, whether a dead robot has a restart left: the
+    /// orchestrator restarts a robot's k-th death while k <= max_restarts, so its new agent
+    /// is on its way (issue 37 item 9: killing every robot ended the run).
+    fn restart_due(&self) -> bool {
+        let f = &self.sc.faults;
+        f.on_fault == swarm::scenario::FaultPolicy::Restart
+            && (0..self.bodies).any(|i| {
+                !self.alive[i]
+                    && self.faults.iter().filter(|x| x.robot as usize == i).count()
+                        <= f.max_restarts as usize
+            })
     }
 
     pub fn status(&self, finished: bool) -> WorldStatus {
