@@ -42,13 +42,13 @@ pub struct ExperimentArgs {
     pub executor: Executor,
     /// The folder results.md, results.json, results.csv and the charts go to; nothing is
     /// written anywhere else [default: runs/experiments/<file stem>-<run id>].
-    #[arg(long)]
+    #[arg(short, long)]
     pub out: Option<PathBuf>,
     /// Runs at once (in-process executor) [default: the number of cores; processes: 1].
     #[arg(long)]
     pub jobs: Option<usize>,
     /// No progress output (the tables are still printed).
-    #[arg(long)]
+    #[arg(short, long)]
     pub quiet: bool,
 }
 
