@@ -18,7 +18,7 @@ apt_install() {
     $sudo apt-get update -q
     apt_updated=1
   fi
-  DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -q --no-install-recommends "$@"
+  DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -q "$@"
 }
 
 # cargo fmt and cargo clippy (rustup's default profile has them; a minimal one does not).
