@@ -249,13 +249,14 @@ pub fn senses_service(
     )
 }
 
-/// The world's Sense publisher: static slots of the largest Sense sample.
-pub fn senses_publisher(
-    svc: &SensesService,
-    sc: &Scenario,
-) -> TransportResult<iceoryx2::port::publisher::Publisher<ipc::Service, [u8], SenseHeader>> {
+/// A publisher of `[u8]` samples with user header `H` and static slots of `slot` bytes, one
+/// loan at a time: the shape of every per-tick publisher of the run (Sense, air, act).
+fn static_publisher<H: std::fmt::Debug + ZeroCopySend>(
+    svc: &PubSubService<[u8], H>,
+    slot: usize,
+) -> TransportResult<iceoryx2::port::publisher::Publisher<ipc::Service, [u8], H>> {
     svc.publisher_builder()
-        .initial_max_slice_len(senses_max_len(sc))
+        .initial_max_slice_len(slot)
         .allocation_strategy(AllocationStrategy::Static)
         .max_loaned_samples(1)
         .create()
@@ -263,6 +264,14 @@ pub fn senses_publisher(
             service: ServiceId::of(svc),
             source,
         })
+}
+
+/// The world's Sense publisher: static slots of the largest Sense sample.
+pub fn senses_publisher(
+    svc: &SensesService,
+    sc: &Scenario,
+) -> TransportResult<iceoryx2::port::publisher::Publisher<ipc::Service, [u8], SenseHeader>> {
+    static_publisher(svc, senses_max_len(sc))
 }
 
 /// One robot's Sense service (the latency benchmark's one-hop frame): the parent creates it
@@ -328,15 +337,7 @@ pub fn act_publisher(
     svc: &ActService,
     sc: &Scenario,
 ) -> TransportResult<iceoryx2::port::publisher::Publisher<ipc::Service, [u8], Action>> {
-    svc.publisher_builder()
-        .initial_max_slice_len(act_slice_len(sc))
-        .allocation_strategy(AllocationStrategy::Static)
-        .max_loaned_samples(1)
-        .create()
-        .map_err(|source| TransportError::Publisher {
-            service: ServiceId::of(svc),
-            source,
-        })
+    static_publisher(svc, act_slice_len(sc))
 }
 
 /// The world's subscriber of robot i's act service: this tick's sample and the next's
@@ -362,15 +363,7 @@ pub fn air_publisher(
     svc: &AirService,
     sc: &Scenario,
 ) -> TransportResult<iceoryx2::port::publisher::Publisher<ipc::Service, [u8], AirHeader>> {
-    svc.publisher_builder()
-        .initial_max_slice_len(air_max_len(sc))
-        .allocation_strategy(AllocationStrategy::Static)
-        .max_loaned_samples(1)
-        .create()
-        .map_err(|source| TransportError::Publisher {
-            service: ServiceId::of(svc),
-            source,
-        })
+    static_publisher(svc, air_max_len(sc))
 }
 
 /// A sample of the air.

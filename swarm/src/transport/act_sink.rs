@@ -94,7 +94,11 @@ impl ActSource {
     /// arrived, or the ack deadline passed), its messages appended to `sent` (`World::apply`
     /// judges both: an action of another tick is refused there). None: no sample.
     pub fn take(&mut self, robot: u32, k: u64, sent: &mut Air) -> Option<Action> {
-        self.arrived(robot, k);
+        // Received already while the world waited (the common case): no second receive.
+        let held = self.held.get(robot as usize)?;
+        if held.as_ref().is_none_or(|s| s.user_header().tick != k) {
+            self.arrived(robot, k);
+        }
         let s = self.held.get_mut(robot as usize)?.take()?;
         transmit_area(robot, area_of(&s), sent);
         Some(action_of(robot, &s))
