@@ -94,8 +94,14 @@ fn run_loop<B: Behaviour>(args: &AgentArgs, mut rt: AgentRuntime<B>) -> Result<i
     let mut ahead_sense: Option<Box<swarm::frames::Sense>> = None;
     let mut ahead_inbox: Vec<Received<B::Msg>> = Vec::new();
     let mut ahead_air: Option<(u64, u32)> = None;
-    let mut done = barrier.acked_up_to(robot);
-    barrier.mark_ready(robot);
+    // The first tick to answer is the first released after the attach: a replacement
+    // finds the tick its robot is dead in released already, without its Sense record, and
+    // waits for the next (the ack words, which any agent can write, are not read).
+    let mut done = 0;
+    let attach = barrier.mark_ready(robot);
+    // The attach notice: the world counts the robot attached when its act service
+    // delivers it (docs/protocol.md section 6).
+    act_out.attach(attach)?;
     loop {
         let k = match barrier.wait_release_with(done, poll, bell) {
             Wake::Shutdown => return Ok(EXIT_OK),

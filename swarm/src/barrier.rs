@@ -442,10 +442,13 @@ impl TickBarrier {
 
     // ---- agent side ----
 
-    /// An agent process for `robot` is attached and ready for its next tick.
-    pub fn mark_ready(&self, robot: u32) {
-        self.ack_word(robot, 1).fetch_add(1, Ordering::AcqRel);
+    /// An agent process for `robot` is attached and ready for its next tick: its attach
+    /// number (the robot's attach counter after this increment), which an agent sends in its
+    /// attach notice through its act service. The world believes only the notice.
+    pub fn mark_ready(&self, robot: u32) -> u64 {
+        let attach = self.ack_word(robot, 1).fetch_add(1, Ordering::AcqRel) + 1;
         self.ack_header().ready.fetch_add(1, Ordering::AcqRel);
+        attach
     }
 
     /// How many agent processes have attached for `robot` (a restart makes it grow).

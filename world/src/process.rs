@@ -36,26 +36,23 @@ fn publish_air(air: &mut transport::AirSink, world: &World, sent: &Air, k: u64) 
     Ok(())
 }
 
-/// Real-time mode's clock and each robot's progress: when the world last saw each robot
-/// acknowledge a tick (the ack-deadline rule is per robot here, since the world never waits
-/// for anyone past a tick's deadline) and from which tick its current agent drives it.
+/// Real-time mode's clock and each robot's progress: when the world last received an action
+/// of each robot through its act service (the ack-deadline rule is per robot here, since the
+/// world never waits for anyone past a tick's deadline) and from which tick its current agent
+/// drives it.
 struct RealtimeClock {
-    /// Each robot's last acknowledged tick + 1, as last seen, and when it last changed (or
-    /// the robot started or was revived).
-    seen: Vec<u64>,
+    /// When each robot's act service last delivered an action (or the robot started or was
+    /// revived).
     last_ack: Vec<Instant>,
     since: Vec<u64>,
-    late_msgs: Air,
     late_releases: u64,
 }
 
 impl RealtimeClock {
     fn new(n: usize, now: Instant) -> RealtimeClock {
         RealtimeClock {
-            seen: vec![0; n],
             last_ack: vec![now; n],
             since: vec![0; n],
-            late_msgs: Air::default(),
             late_releases: 0,
         }
     }
@@ -66,19 +63,17 @@ impl RealtimeClock {
         self.since[i] = k;
     }
 
-    /// Notes who acknowledged since the last look; true if every live robot acknowledged
-    /// tick k.
-    fn all_acked(&mut self, world: &World, barrier: &TickBarrier, k: u64) -> bool {
+    /// Receives what the live robots sent since the last look; true if every live robot's
+    /// action of tick k arrived.
+    fn all_acked(&mut self, world: &World, acts: &mut transport::ActSource, k: u64) -> bool {
         let now = Instant::now();
         let mut all = true;
         for i in world.live_robots() {
-            let a = barrier.acked_up_to(i);
             let r = i as usize;
-            if a != self.seen[r] {
-                self.seen[r] = a;
+            if acts.poll_realtime(i, k, self.since[r]) {
                 self.last_ack[r] = now;
             }
-            all &= a == k + 1;
+            all &= acts.holds(i, k);
         }
         all
     }
@@ -98,8 +93,9 @@ struct ControlState {
     stop: bool,
 }
 
-/// Which agent process drives each robot, by attach number (the barrier's per-robot attach
-/// counter after that agent's attach; 0 = the robot's first agent has not attached yet).
+/// Which agent process drives each robot, by attach number (the number in the attach notice
+/// that came through the robot's own act service, `ActSource::attached`; 0 = the robot's
+/// first agent has not attached yet).
 ///
 /// Deaths, attaches and kills all name an incarnation, never just a robot: a death report
 /// about an agent that is not the driver (a replacement killed before it attached, reported
@@ -210,6 +206,7 @@ pub fn monotonic_us() -> u64 {
 fn wait_realtime(
     clock: &mut RealtimeClock,
     world: &mut World,
+    acts: &mut transport::ActSource,
     barrier: &TickBarrier,
     bell: Option<&swarm::bell::EventBell>,
     (control, ctl, drivers): (
@@ -234,10 +231,10 @@ fn wait_realtime(
     }
     drain_control(control, world, ctl, barrier, drivers);
     loop {
-        // The counter first, then who acknowledged: an ack after the look changes the
-        // counter, so the sleep below returns at once.
+        // The counter first, then what arrived: an ack after the look changes the counter,
+        // so the sleep below returns at once. The counter only says when to look.
         let seen = barrier.ack_count();
-        if clock.all_acked(world, barrier, k) {
+        if clock.all_acked(world, acts, k) {
             break;
         }
         let now = Instant::now();
@@ -301,9 +298,16 @@ pub fn run(args: &WorldArgs) -> Result<i32> {
         ordered: 0,
     };
     let poll = Duration::from_millis(sc.runtime.poll_ms);
-    // Wait for every agent (or its death) before the first tick.
+    // Wait for every agent (or its death) before the first tick: a robot is attached when
+    // its own act service delivered its agent's attach notice (the barrier's ready and attach
+    // words, which every agent can write, are not believed).
     let startup_deadline = Instant::now() + Duration::from_secs(sc.runtime.startup_timeout_s);
-    while barrier.ready_count() + (n - world.alive_count()) < n {
+    let mut unattached: Vec<u32> = (0..n).collect();
+    loop {
+        unattached.retain(|&i| world.alive[i as usize] && acts.attached(i) == 0);
+        if unattached.is_empty() {
+            break;
+        }
         drain_control(&control, &mut world, &mut ctl, &barrier, &drivers);
         if ctl.stop {
             break;
@@ -311,7 +315,7 @@ pub fn run(args: &WorldArgs) -> Result<i32> {
         if Instant::now() > startup_deadline {
             return Err(format!(
                 "only {} of {n} agents attached within runtime.startup_timeout_s = {} s",
-                barrier.ready_count(),
+                n as usize - unattached.len(),
                 sc.runtime.startup_timeout_s
             )
             .into());
@@ -324,7 +328,7 @@ pub fn run(args: &WorldArgs) -> Result<i32> {
         // A robot whose first agent died during start-up is driven by no one yet: any later
         // attach beyond the dead ones takes it over.
         drivers.attached[i as usize] = if world.alive[i as usize] {
-            barrier.attach_count(i)
+            acts.attached(i)
         } else {
             barrier.dead_upto(i)
         };
@@ -355,12 +359,16 @@ pub fn run(args: &WorldArgs) -> Result<i32> {
         world.begin_tick();
         drivers.order_kills(&world, &barrier);
         if restart {
-            // A new agent process attached for a dead robot: it drives the robot from now on,
-            // unless it is already known dead itself (killed after its attach). An attach while
-            // the robot is still alive (the report of the old agent's death not drained yet) is
-            // kept pending until the robot is dead, never consumed early.
+            // A new agent process attached for a dead robot (its attach notice came through
+            // the robot's act service): it drives the robot from now on, unless it is already
+            // known dead itself (killed after its attach). An attach while the robot is still
+            // alive (the report of the old agent's death not drained yet) is kept pending until
+            // the robot is dead, never consumed early.
             for i in 0..n {
-                let c = barrier.attach_count(i);
+                if world.alive[i as usize] {
+                    continue;
+                }
+                let c = acts.attached(i);
                 if c > drivers.attached[i as usize] && c > barrier.dead_upto(i) && world.revive(i) {
                     drivers.attached[i as usize] = c;
                     clock.start(i as usize, k);
@@ -383,6 +391,7 @@ pub fn run(args: &WorldArgs) -> Result<i32> {
             if !wait_realtime(
                 &mut clock,
                 &mut world,
+                &mut acts,
                 &barrier,
                 bell,
                 (&control, &mut ctl, &mut drivers),
@@ -400,13 +409,7 @@ pub fn run(args: &WorldArgs) -> Result<i32> {
                     acts.discard(i as u32);
                     continue;
                 }
-                (actions[i], late[i]) = acts.take_realtime(
-                    i as u32,
-                    k,
-                    clock.since[i],
-                    &mut sent,
-                    &mut clock.late_msgs,
-                );
+                (actions[i], late[i]) = acts.take_realtime(i as u32, k, clock.since[i], &mut sent);
             }
             let rec = world.apply_with_late(&actions, &late, &sent);
             outputs.push(&rec, &world)?;
@@ -434,21 +437,28 @@ pub fn run(args: &WorldArgs) -> Result<i32> {
         // A death the orchestrator reported before this release (its nudge of the ack counter
         // was reset by the release): handled now, not after a whole poll_ms.
         drain_control(&control, &mut world, &mut ctl, &barrier, &drivers);
+        // The ack counter as read before a look that found robots missing: the next sleep
+        // lasts until it changes (a forged counter at or above the expected count would
+        // otherwise return at once, and the world would spin).
+        let mut missing_at: Option<u32> = None;
         loop {
-            // A robot is done with tick k when its act service holds its action of tick k;
-            // its ack word only says when to look (docs/protocol.md section 5).
-            let now_acked = world
-                .live_robots()
-                .filter(|&i| barrier.acked(i, k) && acts.arrived(i, k))
-                .count();
+            match missing_at {
+                None => barrier.wait_acks_with(poll, bell),
+                Some(seen) => barrier.wait_ack_change_with(seen, poll, bell),
+            }
+            let seen = barrier.ack_count();
+            // A robot is done with tick k when its own act service delivered its action of
+            // tick k; the ack counter and words only say when to look (docs/protocol.md
+            // section 5): what another agent writes there cannot make the world skip a robot.
+            let now_acked = world.live_robots().filter(|&i| acts.arrived(i, k)).count();
             if now_acked == world.alive_count() as usize {
                 break;
             }
+            missing_at = Some(seen);
             if now_acked > acked {
                 acked = now_acked;
                 waited = Instant::now();
             }
-            barrier.wait_acks_with(poll, bell);
             drain_control(&control, &mut world, &mut ctl, &barrier, &drivers);
             if ctl.stop {
                 // Ctrl-C while agents are slow (the first ticks make every radio link, which
@@ -460,7 +470,7 @@ pub fn run(args: &WorldArgs) -> Result<i32> {
             if waited.elapsed() > deadline {
                 let silent: Vec<u32> = world
                     .live_robots()
-                    .filter(|&i| !(barrier.acked(i, k) && acts.arrived(i, k)))
+                    .filter(|&i| !acts.arrived(i, k))
                     .collect();
                 for i in silent {
                     world.mark_dead(i, "no action within runtime.ack_deadline_ms", None, None);

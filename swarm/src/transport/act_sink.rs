@@ -46,17 +46,32 @@ fn area_of(s: &ActSample) -> &[u8] {
 
 type ActSample = iceoryx2::sample::Sample<ipc::Service, [u8], Action>;
 
+/// The top bit of an Action's `tick` marks an attach notice: the first sample an agent sends
+/// through its robot's act service, before any action, its attach number in the low bits
+/// (`docs/protocol.md` section 6). No run reaches 2^63 ticks.
+pub const ATTACH_NOTICE: u64 = 1 << 63;
+
+/// The attach number of an attach notice, None for an action.
+fn attach_of(a: &Action) -> Option<u64> {
+    (a.tick & ATTACH_NOTICE != 0).then_some(a.tick & !ATTACH_NOTICE)
+}
+
 /// One robot's act service as the world subscribes to it.
 pub struct ActPort {
     subscriber: Subscriber<ipc::Service, [u8], Action>,
     _service: ActService,
 }
 
-/// The world's side of the Action frames: every robot's act service, and the sample of this
-/// tick each robot has sent so far (held until the tick is applied).
+/// The world's side of the Action frames: every robot's act service, the newest action
+/// each robot has sent (held until the tick is applied), its newest late one (real-time
+/// mode), and the newest attach notice each service delivered. Everything the world decides
+/// about a robot (done with a tick, silent, attached) comes from here, never from the
+/// barrier's ack and attach words, which every agent can write (issue 37 item 5).
 pub struct ActSource {
     ports: Vec<ActPort>,
     held: Vec<Option<ActSample>>,
+    late: Vec<Option<ActSample>>,
+    attached: Vec<u64>,
 }
 
 impl ActSource {
@@ -71,23 +86,56 @@ impl ActSource {
                 })
             })
             .collect::<TransportResult<Vec<_>>>()?;
-        let held = (0..ports.len()).map(|_| None).collect();
-        Ok(ActSource { ports, held })
+        let none = |_| None;
+        Ok(ActSource {
+            held: (0..ports.len()).map(none).collect(),
+            late: (0..ports.len()).map(none).collect(),
+            attached: vec![0; ports.len()],
+            ports,
+        })
+    }
+
+    /// The next sample of robot `robot`'s service that is an action; attach notices met on
+    /// the way are noted.
+    fn next_action(&mut self, robot: usize) -> Option<ActSample> {
+        let port = self.ports.get(robot)?;
+        while let Ok(Some(s)) = port.subscriber.receive() {
+            match attach_of(s.user_header()) {
+                Some(n) => self.attached[robot] = self.attached[robot].max(n),
+                None => return Some(s),
+            }
+        }
+        None
+    }
+
+    /// The highest attach number an attach notice of robot `robot`'s own act service carried
+    /// (0: no agent attached through it yet). Receives what is pending: call it only while
+    /// the robot holds no action the world still needs (at start-up, while it is dead).
+    pub fn attached(&mut self, robot: u32) -> u64 {
+        let r = robot as usize;
+        while self.next_action(r).is_some() {}
+        self.attached.get(r).copied().unwrap_or(0)
     }
 
     /// Lock-step: whether robot `robot`'s action of tick `k` has arrived (received and held
-    /// until [`ActSource::take`]). The barrier's ack words only say when to look: a robot
-    /// counts as done with tick k when its own act service holds a sample of tick k, so an
-    /// ack word written by anyone else cannot make the world go on without the robot.
+    /// until [`ActSource::take`]). A robot counts as done with tick k when its own act
+    /// service delivered a sample of tick k: the barrier's ack words only say when to look.
+    /// One receive a robot a tick in the common case.
     pub fn arrived(&mut self, robot: u32, k: u64) -> bool {
-        let Some(port) = self.ports.get(robot as usize) else {
-            return false;
-        };
-        let held = &mut self.held[robot as usize];
-        while let Ok(Some(s)) = port.subscriber.receive() {
-            *held = Some(s);
+        let r = robot as usize;
+        loop {
+            if self
+                .held
+                .get(r)
+                .is_some_and(|h| h.as_ref().is_some_and(|s| s.user_header().tick == k))
+            {
+                return true;
+            }
+            match self.next_action(r) {
+                Some(s) => self.held[r] = Some(s),
+                None => return false,
+            }
         }
-        held.as_ref().is_some_and(|s| s.user_header().tick == k)
     }
 
     /// Lock-step: robot `robot`'s newest action (every live robot's action of tick `k`
@@ -95,13 +143,38 @@ impl ActSource {
     /// judges both: an action of another tick is refused there). None: no sample.
     pub fn take(&mut self, robot: u32, k: u64, sent: &mut Air) -> Option<Action> {
         // Received already while the world waited (the common case): no second receive.
-        let held = self.held.get(robot as usize)?;
-        if held.as_ref().is_none_or(|s| s.user_header().tick != k) {
-            self.arrived(robot, k);
-        }
+        self.arrived(robot, k);
         let s = self.held.get_mut(robot as usize)?.take()?;
         transmit_area(robot, area_of(&s), sent);
         Some(action_of(robot, &s))
+    }
+
+    /// Real-time mode: receives robot `robot`'s pending samples, keeping its action of tick
+    /// `k` and its newest late one (of a tick from `since` to k - 1: an earlier agent's, before
+    /// a restart, and ticks not yet released are dropped). True if an action was kept: the
+    /// robot made progress, as the world's deadline rule counts it.
+    pub fn poll_realtime(&mut self, robot: u32, k: u64, since: u64) -> bool {
+        let r = robot as usize;
+        let mut progress = false;
+        while let Some(s) = self.next_action(r) {
+            let t = s.user_header().tick;
+            if t == k {
+                self.held[r] = Some(s);
+            } else if t < k && t >= since {
+                self.late[r] = Some(s);
+            } else {
+                continue;
+            }
+            progress = true;
+        }
+        progress
+    }
+
+    /// Real-time mode: whether robot `robot`'s action of tick `k` is held.
+    pub fn holds(&self, robot: u32, k: u64) -> bool {
+        self.held
+            .get(robot as usize)
+            .is_some_and(|h| h.as_ref().is_some_and(|s| s.user_header().tick == k))
     }
 
     /// Real-time mode: robot `robot`'s actions at tick `k`'s deadline. The one of tick k (its
@@ -109,43 +182,37 @@ impl ActSource {
     /// that tick's deadline: its messages go out now (into `sent`, after this tick's) and its
     /// command is superseded. Only the newest late action counts; actions of a tick before
     /// `since` (an earlier agent's, before a restart) and of ticks not yet released are
-    /// dropped. `late_msgs` is scratch.
+    /// dropped.
     pub fn take_realtime(
         &mut self,
         robot: u32,
         k: u64,
         since: u64,
         sent: &mut Air,
-        late_msgs: &mut Air,
     ) -> (Option<Action>, Option<Action>) {
-        let Some(port) = self.ports.get(robot as usize) else {
+        let r = robot as usize;
+        if r >= self.ports.len() {
             return (None, None);
-        };
-        let (mut cur, mut late) = (None, None);
-        late_msgs.clear();
-        while let Ok(Some(s)) = port.subscriber.receive() {
-            let a = action_of(robot, &s);
-            let into = if a.tick == k {
-                cur = Some(a);
-                &mut *sent
-            } else if a.tick < k && a.tick >= since {
-                late = Some(a);
-                late_msgs.clear();
-                &mut *late_msgs
-            } else {
-                continue;
-            };
-            transmit_area(robot, area_of(&s), into);
         }
-        sent.append(late_msgs);
+        self.poll_realtime(robot, k, since);
+        let take = |slot: &mut Option<ActSample>, ok: &dyn Fn(u64) -> bool, sent: &mut Air| {
+            let s = slot.take().filter(|s| ok(s.user_header().tick))?;
+            transmit_area(robot, area_of(&s), sent);
+            Some(action_of(robot, &s))
+        };
+        let cur = take(&mut self.held[r], &|t| t == k, sent);
+        let late = take(&mut self.late[r], &|t| t < k && t >= since, sent);
         (cur, late)
     }
 
-    /// Robot `robot` is dead: nothing its agent sent is taken later (as late).
+    /// Robot `robot` is dead: nothing its agent sent is taken later (as late). Attach
+    /// notices are kept (a replacement's).
     pub fn discard(&mut self, robot: u32) {
-        if let Some(p) = self.ports.get(robot as usize) {
-            while let Ok(Some(_)) = p.subscriber.receive() {}
-            self.held[robot as usize] = None;
+        let r = robot as usize;
+        while self.next_action(r).is_some() {}
+        if r < self.ports.len() {
+            self.held[r] = None;
+            self.late[r] = None;
         }
     }
 }
@@ -168,6 +235,13 @@ impl ActSink {
             area: super::act_slice_len(sc),
             _service: service,
         })
+    }
+
+    /// Sends the attach notice of this agent, attach number `attach` (the robot's attach
+    /// counter after its own increment): the first sample of its act service, before any
+    /// action. The world counts the robot attached when it receives it.
+    pub fn attach(&mut self, attach: u64) -> TransportResult<()> {
+        self.send(|_| Action::idle(ATTACH_NOTICE | attach, 0))
     }
 
     /// Sends tick `tick`'s action: `step` writes the tick's messages into the loaned
