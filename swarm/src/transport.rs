@@ -136,12 +136,26 @@ pub fn sense_capacity() -> PubSubCapacity {
     }
 }
 
-/// Action frames with the tick's messages: the agent publishes, the world subscribes; this
-/// tick's and the next's.
+/// Act samples the world's subscriber of a robot's act service buffers and holds at once:
+/// this tick's action and one late one (real-time mode), or the attach notice and the first
+/// action of a replacement.
+const ACT_BUFFER: usize = 2;
+
+/// Action frames with the tick's messages: the robot's agent publishes (a restarted agent's
+/// dead predecessor may still hold its port until it is cleaned), the world is the one
+/// subscriber (it never restarts). Every capacity is the least the flow needs: the
+/// publisher's static slots are subscribers x (buffer + borrowed) + 1 loaned, so one
+/// subscriber instead of two halves its data segment, and each send walks one subscriber
+/// slot (`swarm/examples/act_shapes.rs`, BENCHMARKS 22).
 pub fn act_capacity() -> PubSubCapacity {
     PubSubCapacity {
-        buffer: 2,
-        ..sense_capacity()
+        publishers: 1 + RESTART_SLACK,
+        subscribers: 1,
+        nodes: 2 + RESTART_SLACK,
+        buffer: ACT_BUFFER,
+        borrowed: Some(ACT_BUFFER),
+        history: Some(0),
+        safe_overflow: None,
     }
 }
 
@@ -346,7 +360,7 @@ pub fn act_subscriber(
     svc: &ActService,
 ) -> TransportResult<iceoryx2::port::subscriber::Subscriber<ipc::Service, [u8], Action>> {
     svc.subscriber_builder()
-        .buffer_size(2)
+        .buffer_size(ACT_BUFFER)
         .create()
         .map_err(|source| TransportError::Subscriber {
             service: ServiceId::of(svc),
