@@ -219,6 +219,25 @@ pub fn run_typed(mut p: ProcessRun) -> Result<ProcessOutcome, RunError> {
     })
 }
 
+/// The barrier of the run this process supervises, while it runs (`bench restart` watches
+/// it: the segments have no name another thread could open).
+static SUPERVISED: std::sync::Mutex<Option<std::sync::Arc<TickBarrier>>> =
+    std::sync::Mutex::new(None);
+
+/// The tick barrier of the run this process supervises, if one runs.
+pub fn supervised_barrier() -> Option<std::sync::Arc<TickBarrier>> {
+    SUPERVISED.lock().unwrap_or_else(|e| e.into_inner()).clone()
+}
+
+/// Clears [`SUPERVISED`] when the supervision ends, however it ends.
+struct Supervised;
+
+impl Drop for Supervised {
+    fn drop(&mut self) {
+        *SUPERVISED.lock().unwrap_or_else(|e| e.into_inner()) = None;
+    }
+}
+
 fn supervise(
     p: &mut ProcessRun,
     prefix: &str,
@@ -227,7 +246,17 @@ fn supervise(
 ) -> Result<ProcessOutcome, String> {
     let sc = p.sc;
     let n = sc.run.robots;
-    let mut world = Command::new(bin("world"))
+    // The tick barrier: two sealed memfds, handed to the world and every agent (nothing of
+    // it in /dev/shm for an agent to open by name or truncate; docs/protocol.md section 4).
+    let (barrier, barrier_fds) =
+        TickBarrier::create(prefix, n).map_err(|e| format!("tick barrier: {e}"))?;
+    let barrier = std::sync::Arc::new(barrier);
+    *SUPERVISED.lock().unwrap_or_else(|e| e.into_inner()) = Some(barrier.clone());
+    let _supervised = Supervised;
+    let mut world = Command::new(bin("world"));
+    // The world and every agent inherit the barrier's descriptors (SWARM_BARRIER_FDS).
+    barrier_fds.pass_to(&mut world);
+    let mut world = world
         .args(["--run-id", p.run_id, "--prefix", prefix, "--run-dir"])
         .arg(p.run_dir)
         .args(p.live.then_some("--live"))
@@ -282,9 +311,14 @@ fn supervise(
         .subscriber_builder()
         .create()
         .map_err(|e| format!("status subscriber: {e:?}"))?;
-    let barrier = TickBarrier::open(prefix).map_err(|e| format!("tick barrier: {e}"))?;
+    // The world mapped the barrier (it does before READY): from now on nobody maps the
+    // world's segment writable, before any agent exists.
+    barrier_fds
+        .seal_worlds_segment()
+        .map_err(|e| e.to_string())?;
     let agent_command = |robot: u32| {
         let mut c = Command::new(bin("agent"));
+        barrier_fds.pass_to(&mut c);
         c.args([
             "--robot",
             &robot.to_string(),

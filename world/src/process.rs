@@ -280,7 +280,15 @@ pub fn run(args: &WorldArgs) -> Result<i32> {
         .subscriber_builder()
         .create()
         .map_err(|e| format!("control subscriber: {e:?}"))?;
-    let barrier = TickBarrier::create(&args.prefix, n)?;
+    // The barrier's segments, inherited from the orchestrator (docs/protocol.md section 4).
+    let barrier = TickBarrier::open_world()?;
+    if barrier.robots() != n {
+        return Err(format!(
+            "the tick barrier has {} robot slots, the scenario {n} robots",
+            barrier.robots()
+        )
+        .into());
+    }
     // runtime.barrier = "iox2-event": the barrier's wake-ups go through iceoryx2 events.
     let bell = match sc.runtime.barrier {
         swarm::scenario::BarrierKind::Futex => None,
