@@ -1,6 +1,7 @@
 //! The world process: drives `World` over iceoryx2 and the tick barrier.
 
 use crate::output::{RunOutputs, Timing};
+use crate::shrink_guard::GuardedActs;
 use crate::world::World;
 use iceoryx2::port::subscriber::Subscriber;
 use iceoryx2::prelude::*;
@@ -268,7 +269,10 @@ pub fn run(args: &WorldArgs) -> Result<i32> {
     // Sense frames: every robot's record packed into one `world/sense` sample a tick.
     let mut senses = transport::SenseSink::create(&node, sc)?;
     // Actions: one `robot/<i>/act` service a robot.
-    let mut acts = transport::ActSource::create(&node, sc)?;
+    // Every read of robot r's act service is guarded: a segment that shrinks under it makes r
+    // a fault, not a SIGBUS of the world (shrink_guard).
+    crate::shrink_guard::install()?;
+    let mut acts = GuardedActs::new(transport::ActSource::create(&node, sc)?);
     let mut air = transport::AirSink::create(&node, sc)?;
     let status_svc = transport::status_service(&node, true)?;
     let status_pub = status_svc
@@ -416,6 +420,9 @@ pub fn run(args: &WorldArgs) -> Result<i32> {
                     &mut clock.late_msgs,
                 );
             }
+            if acts.fault_shrunk(&mut world) {
+                drivers.order_kills(&world, &barrier);
+            }
             let rec = world.apply_with_late(&actions, &late, &sent);
             outputs.push(&rec, &world)?;
             tick_ns.push(t_tick.elapsed().as_nanos() as u64);
@@ -449,6 +456,10 @@ pub fn run(args: &WorldArgs) -> Result<i32> {
                 .live_robots()
                 .filter(|&i| barrier.acked(i, k) && acts.arrived(i, k))
                 .count();
+            if acts.fault_shrunk(&mut world) {
+                drivers.order_kills(&world, &barrier);
+                continue;
+            }
             if now_acked == world.alive_count() as usize {
                 break;
             }
@@ -482,6 +493,9 @@ pub fn run(args: &WorldArgs) -> Result<i32> {
             if world.alive[i] {
                 *a = acts.take(i as u32, k, &mut sent);
             }
+        }
+        if acts.fault_shrunk(&mut world) {
+            drivers.order_kills(&world, &barrier);
         }
         let rec = world.apply(&actions, &sent);
         outputs.push(&rec, &world)?;
