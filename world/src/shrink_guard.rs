@@ -24,6 +24,9 @@ use swarm::transport::ActSource;
 
 /// [`READING`]'s value while the world reads no robot's segments.
 const NOBODY: u32 = u32::MAX;
+/// [`READING`]'s value while the world closes every act service, after its outputs are
+/// written: a segment that shrank is of no consequence any more.
+const CLOSING: u32 = u32::MAX - 1;
 
 /// The robot whose act service the world is reading, or [`NOBODY`].
 static READING: AtomicU32 = AtomicU32::new(NOBODY);
@@ -128,14 +131,24 @@ pub fn cause(robot: u32) -> String {
 /// The world's act services, every read of robot r's under [`reading`]: the same calls as
 /// [`ActSource`]'s, and the robots whose segments shrank, for [`GuardedActs::fault_shrunk`].
 pub struct GuardedActs {
-    acts: ActSource,
+    /// Always Some but in Drop.
+    acts: Option<ActSource>,
     shrunk: Vec<u32>,
+}
+
+impl Drop for GuardedActs {
+    /// Closing the subscribers writes to every connection (a shrunk one too, which faulted
+    /// the world at its very end before this guard).
+    fn drop(&mut self) {
+        let acts = self.acts.take();
+        reading(CLOSING, || drop(acts));
+    }
 }
 
 impl GuardedActs {
     pub fn new(acts: ActSource) -> Self {
         GuardedActs {
-            acts,
+            acts: Some(acts),
             shrunk: Vec::new(),
         }
     }
@@ -144,7 +157,7 @@ impl GuardedActs {
     /// shrank under it (what `f` read is zeros then; the robot is kept for
     /// [`GuardedActs::fault_shrunk`]).
     fn guard<T>(&mut self, robot: u32, f: impl FnOnce(&mut ActSource) -> T) -> Option<T> {
-        let acts = &mut self.acts;
+        let acts = self.acts.as_mut().expect("taken only in drop");
         let (out, shrank) = reading(robot, || f(acts));
         if shrank {
             self.shrunk.push(robot);
