@@ -356,16 +356,25 @@ fn supervise(
         entry.agent_starts.push(start);
     }
     registry::write(entry).map_err(|e| e.to_string())?;
+    // Writes and reads of the run's own segments are guarded: one truncated by a process of
+    // the user is read as zeros (no message) rather than SIGBUS the orchestrator, which left
+    // the run's files behind (world::shrink_guard).
+    world::shrink_guard::install().map_err(|e| e.to_string())?;
     let send_control = |kind: u32, robot: u32, value: u64, tick: u64| {
-        if let Ok(s) = control.loan_uninit() {
-            let _ = s
-                .write_payload(Control {
-                    kind,
-                    robot,
-                    value,
-                    tick,
-                })
-                .send();
+        let (_, shrank) = guarded(|| {
+            if let Ok(s) = control.loan_uninit() {
+                let _ = s
+                    .write_payload(Control {
+                        kind,
+                        robot,
+                        value,
+                        tick,
+                    })
+                    .send();
+            }
+        });
+        if shrank {
+            world::shrink_guard::control_lost();
         }
         barrier.nudge_world();
     };
@@ -476,8 +485,17 @@ fn supervise(
                 }
             }
         }
-        while let Ok(Some(s)) = status.receive() {
-            last = *s;
+        let (newest, shrank) = guarded(|| {
+            let mut newest = None;
+            while let Ok(Some(s)) = status.receive() {
+                newest = Some(*s);
+            }
+            newest
+        });
+        // A status read from a shrunk `world/state` segment (zeros) is not believed; the
+        // world, which writes that segment, dies of it (docs/protocol.md section 4).
+        if let (Some(s), false) = (newest, shrank) {
+            last = s;
         }
         (p.on_status)(&last);
         if last_registry.elapsed() > REGISTRY_PERIOD {
@@ -539,6 +557,12 @@ fn supervise(
         shm_removed: 0,
         failed_robot,
     })
+}
+
+/// Runs `f`, which touches the run's own shared segments, under the SIGBUS guard: whether
+/// one shrank under it (its result then holds zeros).
+fn guarded<T>(f: impl FnOnce() -> T) -> (T, bool) {
+    world::shrink_guard::reading(world::shrink_guard::RUN_SEGMENTS, f)
 }
 
 /// An empty /dev/shm segment of the run older than this has lost its creator (one that lives

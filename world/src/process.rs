@@ -136,7 +136,18 @@ fn drain_control(
     barrier: &TickBarrier,
     drivers: &Drivers,
 ) {
-    while let Ok(Some(c)) = sub.receive() {
+    loop {
+        // `run/control` is the orchestrator's segment: truncated, its reads see zeros (no
+        // message) rather than SIGBUS the world (shrink_guard).
+        let (c, shrank) = crate::shrink_guard::reading(crate::shrink_guard::RUN_SEGMENTS, || {
+            sub.receive().ok().flatten().map(|c| *c)
+        });
+        if shrank {
+            crate::shrink_guard::control_lost();
+        }
+        let Some(c) = c.filter(|_| !shrank) else {
+            break;
+        };
         match c.kind {
             // A scheduled kill reaped before the world began its tick: begin_tick records it
             // (same tick, same cause) so the run stays reproducible.

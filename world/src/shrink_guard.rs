@@ -15,6 +15,10 @@
 //! faulting access, run again, kills the world by SIGBUS as before (docs/protocol.md
 //! section 4 says what an agent can still do).
 //!
+//! The orchestrator uses the same guard for its own reads and writes of `run/control` and
+//! `world/state` ([`RUN_SEGMENTS`]): a truncated `run/control` segment SIGBUSed it at the next
+//! agent death and left the run's files in /dev/shm.
+//!
 //! The handler is async-signal-safe: atomics, `syscall(SYS_gettid)`, `mmap` and `sigaction`.
 
 use std::sync::atomic::{compiler_fence, AtomicU32, AtomicUsize, Ordering};
@@ -24,6 +28,11 @@ use swarm::transport::ActSource;
 
 /// [`READING`]'s value while the world reads no robot's segments.
 const NOBODY: u32 = u32::MAX;
+/// The marker of a read of the run's own segments, no robot's (`run/control` in the world
+/// and the orchestrator, `world/state` in the orchestrator): a fault there is absorbed (the
+/// read sees zeros, which these services' readers ignore) and reported to the caller.
+pub const RUN_SEGMENTS: u32 = u32::MAX - 2;
+
 /// [`READING`]'s value while the world closes every act service, after its outputs are
 /// written: a segment that shrank is of no consequence any more.
 const CLOSING: u32 = u32::MAX - 1;
@@ -107,7 +116,7 @@ pub fn install() -> Result<(), GuardError> {
     Ok(())
 }
 
-/// Runs `f`, which reads robot `robot`'s act service, and says whether one of its segments
+/// Runs `f`, which reads robot `robot`'s act service (or [`RUN_SEGMENTS`]), and says whether one of its segments
 /// shrank under the read (`f`'s result then holds zeros where the segment was gone: the caller
 /// drops it and makes the robot a fault, [`cause`]).
 pub fn reading<T>(robot: u32, f: impl FnOnce() -> T) -> (T, bool) {
@@ -121,6 +130,19 @@ pub fn reading<T>(robot: u32, f: impl FnOnce() -> T) -> (T, bool) {
     READING.store(NOBODY, Ordering::Release);
     let shrank = SHRANK.swap(NOBODY, Ordering::AcqRel) == robot;
     (out, shrank)
+}
+
+/// Says once, on stderr, that `run/control` shrank under this process: the orchestrator's
+/// death and stop reports are lost from then on (the world still finds a dead robot by its
+/// ack deadline; a stop ends in the orchestrator's SIGKILL of the world after its grace).
+pub fn control_lost() {
+    static SAID: std::sync::Once = std::sync::Once::new();
+    SAID.call_once(|| {
+        eprintln!(
+            "the run/control segment shrank (truncated by a process of the user): its \
+             messages are lost from now on (docs/protocol.md section 4)"
+        )
+    });
 }
 
 /// The fault's cause in the summary and the recording.
