@@ -361,7 +361,13 @@ fn supervise(
     // the run's files behind (world::shrink_guard).
     world::shrink_guard::install().map_err(|e| e.to_string())?;
     let send_control = |kind: u32, robot: u32, value: u64, tick: u64| {
-        let (_, shrank) = guarded(|| {
+        if world::shrink_guard::control_is_lost() {
+            // Its segment shrank: nothing is sent on it any more (the world finds a dead
+            // robot by its ack deadline, and a stop is the SIGKILL after STOP_GRACE).
+            barrier.nudge_world();
+            return;
+        }
+        let sent = guarded(|| {
             if let Ok(s) = control.loan_uninit() {
                 let _ = s
                     .write_payload(Control {
@@ -373,7 +379,7 @@ fn supervise(
                     .send();
             }
         });
-        if shrank {
+        if sent.is_none() {
             world::shrink_guard::control_lost();
         }
         barrier.nudge_world();
@@ -485,7 +491,7 @@ fn supervise(
                 }
             }
         }
-        let (newest, shrank) = guarded(|| {
+        let newest = guarded(|| {
             let mut newest = None;
             while let Ok(Some(s)) = status.receive() {
                 newest = Some(*s);
@@ -494,7 +500,7 @@ fn supervise(
         });
         // A status read from a shrunk `world/state` segment (zeros) is not believed; the
         // world, which writes that segment, dies of it (docs/protocol.md section 4).
-        if let (Some(s), false) = (newest, shrank) {
+        if let Some(Some(s)) = newest {
             last = s;
         }
         (p.on_status)(&last);
@@ -548,8 +554,9 @@ fn supervise(
                 command: command_of(robot),
             });
     }
-    drop(status);
-    drop(control);
+    // Closing the ports touches their segments (one may have shrunk).
+    let _ = guarded(|| drop(status));
+    let _ = guarded(|| drop(control));
     drop(barrier);
     drop(node);
     Ok(ProcessOutcome {
@@ -559,9 +566,9 @@ fn supervise(
     })
 }
 
-/// Runs `f`, which touches the run's own shared segments, under the SIGBUS guard: whether
-/// one shrank under it (its result then holds zeros).
-fn guarded<T>(f: impl FnOnce() -> T) -> (T, bool) {
+/// Runs `f`, which touches the run's own shared segments, under the SIGBUS guard: None when
+/// one shrank under it.
+fn guarded<T>(f: impl FnOnce() -> T) -> Option<T> {
     world::shrink_guard::reading(world::shrink_guard::RUN_SEGMENTS, f)
 }
 

@@ -325,7 +325,13 @@ fn a_truncated_sense_segment_fails_the_run_cleanly() {
         .to_string();
     truncate(&sense);
     let o = up.wait_with_output().unwrap();
-    assert_eq!(o.status.code(), Some(exit::FAILED), "{}", stderr(&o));
+    assert_eq!(
+        o.status.code(),
+        Some(exit::FAILED),
+        "{:?} {}",
+        o.status,
+        stderr(&o)
+    );
     assert!(
         stderr(&o).contains("world process was killed by signal 7 (SIGBUS"),
         "{}",

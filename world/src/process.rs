@@ -136,16 +136,17 @@ fn drain_control(
     barrier: &TickBarrier,
     drivers: &Drivers,
 ) {
-    loop {
-        // `run/control` is the orchestrator's segment: truncated, its reads see zeros (no
-        // message) rather than SIGBUS the world (shrink_guard).
-        let (c, shrank) = crate::shrink_guard::reading(crate::shrink_guard::RUN_SEGMENTS, || {
+    // `run/control` is the orchestrator's segment: truncated, the world stops reading it
+    // rather than die of SIGBUS (shrink_guard; docs/protocol.md section 4).
+    while !crate::shrink_guard::control_is_lost() {
+        let c = crate::shrink_guard::reading(crate::shrink_guard::RUN_SEGMENTS, || {
             sub.receive().ok().flatten().map(|c| *c)
         });
-        if shrank {
+        let Some(c) = c else {
             crate::shrink_guard::control_lost();
-        }
-        let Some(c) = c.filter(|_| !shrank) else {
+            break;
+        };
+        let Some(c) = c else {
             break;
         };
         match c.kind {

@@ -113,29 +113,55 @@ pub fn install() -> Result<(), GuardError> {
     if r != 0 {
         return Err(GuardError(std::io::Error::last_os_error()));
     }
+    // iceoryx2 panics on some zeros it reads from a shrunk segment (a publisher's zeroed
+    // allocator: "the system seems to be corrupted"): [`reading`] catches that panic, and this
+    // hook keeps it off stderr; every other panic is reported as before.
+    static HOOK: std::sync::Once = std::sync::Once::new();
+    HOOK.call_once(|| {
+        let previous = std::panic::take_hook();
+        std::panic::set_hook(Box::new(move |info| {
+            if SHRANK.load(Ordering::Acquire) == NOBODY {
+                previous(info);
+            }
+        }));
+    });
     Ok(())
 }
 
-/// Runs `f`, which reads robot `robot`'s act service (or [`RUN_SEGMENTS`]), and says whether one of its segments
-/// shrank under the read (`f`'s result then holds zeros where the segment was gone: the caller
-/// drops it and makes the robot a fault, [`cause`]).
-pub fn reading<T>(robot: u32, f: impl FnOnce() -> T) -> (T, bool) {
+/// Runs `f`, which reads robot `robot`'s act service (or [`RUN_SEGMENTS`]): None when one of
+/// the segments it touched shrank under it (`f` then read zeros there, or panicked on them;
+/// either way its result is not to be believed: the caller makes the robot a fault, or gives
+/// up the run's segment, [`control_lost`]). A panic without a shrink is passed on.
+pub fn reading<T>(robot: u32, f: impl FnOnce() -> T) -> Option<T> {
     READER.store(tid(), Ordering::Release);
     READING.store(robot, Ordering::Release);
     // The handler runs on this thread: the marker is set before any of f's reads and cleared
     // after them, as the compiler emits them.
     compiler_fence(Ordering::SeqCst);
-    let out = f();
+    let out = std::panic::catch_unwind(std::panic::AssertUnwindSafe(f));
     compiler_fence(Ordering::SeqCst);
     READING.store(NOBODY, Ordering::Release);
     let shrank = SHRANK.swap(NOBODY, Ordering::AcqRel) == robot;
-    (out, shrank)
+    match out {
+        Ok(v) if !shrank => Some(v),
+        Err(panic) if !shrank => std::panic::resume_unwind(panic),
+        _ => None,
+    }
+}
+
+/// Whether `run/control` shrank under this process ([`control_lost`]): it is not touched again.
+static CONTROL_LOST: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
+/// Whether [`control_lost`] was called in this process.
+pub fn control_is_lost() -> bool {
+    CONTROL_LOST.load(Ordering::Acquire)
 }
 
 /// Says once, on stderr, that `run/control` shrank under this process: the orchestrator's
 /// death and stop reports are lost from then on (the world still finds a dead robot by its
 /// ack deadline; a stop ends in the orchestrator's SIGKILL of the world after its grace).
 pub fn control_lost() {
+    CONTROL_LOST.store(true, Ordering::Release);
     static SAID: std::sync::Once = std::sync::Once::new();
     SAID.call_once(|| {
         eprintln!(
@@ -163,7 +189,7 @@ impl Drop for GuardedActs {
     /// the world at its very end before this guard).
     fn drop(&mut self) {
         let acts = self.acts.take();
-        reading(CLOSING, || drop(acts));
+        let _ = reading(CLOSING, || drop(acts));
     }
 }
 
@@ -180,12 +206,11 @@ impl GuardedActs {
     /// [`GuardedActs::fault_shrunk`]).
     fn guard<T>(&mut self, robot: u32, f: impl FnOnce(&mut ActSource) -> T) -> Option<T> {
         let acts = self.acts.as_mut().expect("taken only in drop");
-        let (out, shrank) = reading(robot, || f(acts));
-        if shrank {
+        let out = reading(robot, || f(acts));
+        if out.is_none() {
             self.shrunk.push(robot);
-            return None;
         }
-        Some(out)
+        out
     }
 
     /// [`ActSource::arrived`].
@@ -251,12 +276,12 @@ mod tests {
         install().unwrap();
         let page = PAGE.load(Ordering::Relaxed);
         let mut f = tempfile_in_shm();
-        f.write_all(&vec![7u8; 2 * page]).unwrap();
+        f.write_all(&vec![7u8; 3 * page]).unwrap();
         // SAFETY: a fresh shared read-only mapping of the file, unmapped below.
         let p = unsafe {
             libc::mmap(
                 std::ptr::null_mut(),
-                2 * page,
+                3 * page,
                 libc::PROT_READ,
                 libc::MAP_SHARED,
                 f.as_raw_fd(),
@@ -266,15 +291,23 @@ mod tests {
         assert_ne!(p as *mut libc::c_void, libc::MAP_FAILED);
         // SAFETY: within the mapping.
         let read = |at: usize| unsafe { std::ptr::read_volatile(p.add(at)) };
-        let (v, shrank) = reading(3, || read(page + 1));
-        assert_eq!((v, shrank), (7, false));
+        assert_eq!(reading(3, || read(page + 1)), Some(7));
         f.set_len(0).unwrap();
-        let (v, shrank) = reading(3, || read(1) as u32 + read(page + 1) as u32);
-        assert_eq!((v, shrank), (0, true));
-        // The fault was reported once.
-        assert_eq!(reading(3, || read(1)), (0, false));
+        assert_eq!(reading(3, || read(1) as u32 + read(page + 1) as u32), None);
+        // The fault was reported once; the page is zeros from now on.
+        assert_eq!(reading(3, || read(1)), Some(0));
+        // A panic on the zeros (iceoryx2's on a zeroed allocator) is the shrink's.
+        let panics = || {
+            if read(2 * page) == 0 {
+                panic!("zeros");
+            }
+        };
+        assert_eq!(reading(3, panics), None);
+        // A panic without a shrink is not absorbed.
+        let other = std::panic::catch_unwind(|| reading(3, || panic!("a bug")));
+        assert!(other.is_err());
         // SAFETY: our mapping.
-        unsafe { libc::munmap(p as *mut libc::c_void, 2 * page) };
+        unsafe { libc::munmap(p as *mut libc::c_void, 3 * page) };
     }
 
     /// A file under /dev/shm (tmpfs, as iceoryx2's), removed at once (named `sw…` so a leak
