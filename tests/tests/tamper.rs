@@ -20,8 +20,9 @@ use std::time::{Duration, Instant};
 
 /// Robots of every run here.
 const ROBOTS: usize = 4;
-/// Ticks of every run (at [`TICK_HZ`]: a few seconds, time enough to tamper mid-run).
-const MAX_TICKS: &str = "300";
+/// Ticks of every run (at [`TICK_HZ`]: 10 s, time enough to tamper mid-run on a loaded
+/// machine).
+const MAX_TICKS: &str = "1000";
 const TICK_HZ: &str = "100";
 /// The robot whose files are tampered with.
 const VICTIM: usize = 1;
@@ -52,7 +53,24 @@ fn start(tag: &str) -> (Child, std::path::PathBuf, String, Vec<i32>) {
         &out,
         Some(&id),
     );
-    let entry = registry_entry(&out, ROBOTS);
+    let mut up = up;
+    let t = Instant::now();
+    let entry = loop {
+        if let Some(v) = registry_of(&out)
+            .filter(|v| v["agent_pids"].as_array().map(|a| a.len()) == Some(ROBOTS))
+        {
+            break v;
+        }
+        if up.try_wait().unwrap().is_some() {
+            let o = up.wait_with_output().unwrap();
+            panic!("the run ended before the test began: {}", stderr(&o));
+        }
+        assert!(
+            t.elapsed() < Duration::from_secs(60),
+            "no agents registered"
+        );
+        std::thread::sleep(Duration::from_millis(10));
+    };
     let pids: Vec<i32> = entry["agent_pids"]
         .as_array()
         .unwrap()
