@@ -219,6 +219,25 @@ pub fn run_typed(mut p: ProcessRun) -> Result<ProcessOutcome, RunError> {
     })
 }
 
+/// The barrier of the run this process supervises, while it runs (`bench restart` watches
+/// it: the segments have no name another thread could open).
+static SUPERVISED: std::sync::Mutex<Option<std::sync::Arc<TickBarrier>>> =
+    std::sync::Mutex::new(None);
+
+/// The tick barrier of the run this process supervises, if one runs.
+pub fn supervised_barrier() -> Option<std::sync::Arc<TickBarrier>> {
+    SUPERVISED.lock().unwrap_or_else(|e| e.into_inner()).clone()
+}
+
+/// Clears [`SUPERVISED`] when the supervision ends, however it ends.
+struct Supervised;
+
+impl Drop for Supervised {
+    fn drop(&mut self) {
+        *SUPERVISED.lock().unwrap_or_else(|e| e.into_inner()) = None;
+    }
+}
+
 fn supervise(
     p: &mut ProcessRun,
     prefix: &str,
@@ -227,7 +246,17 @@ fn supervise(
 ) -> Result<ProcessOutcome, String> {
     let sc = p.sc;
     let n = sc.run.robots;
-    let mut world = Command::new(bin("world"))
+    // The tick barrier: two sealed memfds, handed to the world and every agent (nothing of
+    // it in /dev/shm for an agent to open by name or truncate; docs/protocol.md section 4).
+    let (barrier, barrier_fds) =
+        TickBarrier::create(prefix, n).map_err(|e| format!("tick barrier: {e}"))?;
+    let barrier = std::sync::Arc::new(barrier);
+    *SUPERVISED.lock().unwrap_or_else(|e| e.into_inner()) = Some(barrier.clone());
+    let _supervised = Supervised;
+    let mut world = Command::new(bin("world"));
+    // The world and every agent inherit the barrier's descriptors (SWARM_BARRIER_FDS).
+    barrier_fds.pass_to(&mut world);
+    let mut world = world
         .args(["--run-id", p.run_id, "--prefix", prefix, "--run-dir"])
         .arg(p.run_dir)
         .args(p.live.then_some("--live"))
@@ -282,9 +311,14 @@ fn supervise(
         .subscriber_builder()
         .create()
         .map_err(|e| format!("status subscriber: {e:?}"))?;
-    let barrier = TickBarrier::open(prefix).map_err(|e| format!("tick barrier: {e}"))?;
+    // The world mapped the barrier (it does before READY): from now on nobody maps the
+    // world's segment writable, before any agent exists.
+    barrier_fds
+        .seal_worlds_segment()
+        .map_err(|e| e.to_string())?;
     let agent_command = |robot: u32| {
         let mut c = Command::new(bin("agent"));
+        barrier_fds.pass_to(&mut c);
         c.args([
             "--robot",
             &robot.to_string(),
@@ -322,16 +356,31 @@ fn supervise(
         entry.agent_starts.push(start);
     }
     registry::write(entry).map_err(|e| e.to_string())?;
+    // Writes and reads of the run's own segments are guarded: one truncated by a process of
+    // the user is read as zeros (no message) rather than SIGBUS the orchestrator, which left
+    // the run's files behind (world::shrink_guard).
+    world::shrink_guard::install().map_err(|e| e.to_string())?;
     let send_control = |kind: u32, robot: u32, value: u64, tick: u64| {
-        if let Ok(s) = control.loan_uninit() {
-            let _ = s
-                .write_payload(Control {
-                    kind,
-                    robot,
-                    value,
-                    tick,
-                })
-                .send();
+        if world::shrink_guard::control_is_lost() {
+            // Its segment shrank: nothing is sent on it any more (the world finds a dead
+            // robot by its ack deadline, and a stop is the SIGKILL after STOP_GRACE).
+            barrier.nudge_world();
+            return;
+        }
+        let sent = guarded(|| {
+            if let Ok(s) = control.loan_uninit() {
+                let _ = s
+                    .write_payload(Control {
+                        kind,
+                        robot,
+                        value,
+                        tick,
+                    })
+                    .send();
+            }
+        });
+        if sent.is_none() {
+            world::shrink_guard::control_lost();
         }
         barrier.nudge_world();
     };
@@ -442,8 +491,17 @@ fn supervise(
                 }
             }
         }
-        while let Ok(Some(s)) = status.receive() {
-            last = *s;
+        let newest = guarded(|| {
+            let mut newest = None;
+            while let Ok(Some(s)) = status.receive() {
+                newest = Some(*s);
+            }
+            newest
+        });
+        // A status read from a shrunk `world/state` segment (zeros) is not believed; the
+        // world, which writes that segment, dies of it (docs/protocol.md section 4).
+        if let Some(Some(s)) = newest {
+            last = s;
         }
         (p.on_status)(&last);
         if last_registry.elapsed() > REGISTRY_PERIOD {
@@ -496,8 +554,9 @@ fn supervise(
                 command: command_of(robot),
             });
     }
-    drop(status);
-    drop(control);
+    // Closing the ports touches their segments (one may have shrunk).
+    let _ = guarded(|| drop(status));
+    let _ = guarded(|| drop(control));
     drop(barrier);
     drop(node);
     Ok(ProcessOutcome {
@@ -505,6 +564,12 @@ fn supervise(
         shm_removed: 0,
         failed_robot,
     })
+}
+
+/// Runs `f`, which touches the run's own shared segments, under the SIGBUS guard: None when
+/// one shrank under it.
+fn guarded<T>(f: impl FnOnce() -> T) -> Option<T> {
+    world::shrink_guard::reading(world::shrink_guard::RUN_SEGMENTS, f)
 }
 
 /// An empty /dev/shm segment of the run older than this has lost its creator (one that lives

@@ -499,6 +499,13 @@ pub fn up(a: UpArgs) -> i32 {
                 exit::FAILED,
                 format!("the world process failed with exit code {c}"),
             )),
+            (None, Err(sig)) if sig == libc::SIGBUS => Err((
+                exit::FAILED,
+                format!(
+                    "the world process was killed by signal {sig} (SIGBUS: a shared segment of \
+                     the run was truncated under it; docs/protocol.md section 4)"
+                ),
+            )),
             (None, Err(sig)) => Err((
                 exit::FAILED,
                 format!("the world process was killed by signal {sig}"),

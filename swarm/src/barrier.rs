@@ -6,16 +6,26 @@
 //! VM); the data (Sense, Action, the air) stays on iceoryx2. The same slots tell the world exactly
 //! which robots acknowledged a tick, which the fault handling needs.
 //!
-//! Two segments, removed with the rest of the run (docs/protocol.md section 4):
+//! Two segments, anonymous files (memfds, `swarm::sealed`) the orchestrator makes and hands to
+//! the world and to every agent as inherited descriptors ([`FDS_ENV`]); nothing of the barrier
+//! is in /dev/shm, so no process can open it by name, and its seals hold for any descriptor of
+//! it (docs/protocol.md section 4):
 //!
-//! - `/dev/shm/<prefix>tick`, the world's: the release and shutdown words, the world's pid, and
-//!   per robot the kill order (world) and dead-up-to mark (orchestrator). An agent maps it
-//!   read-only ([`TickBarrier::open_agent`]): nothing an agent program writes through its
-//!   mappings can release a tick, stop the run or steer the orchestrator's SIGKILLs.
-//! - `/dev/shm/<prefix>acks`, the agents': the ack counter the world sleeps on, the ready
-//!   counter, and per robot the acknowledged tick and the attach counter.
+//! - the world's segment (`tick`): the release and shutdown words, the world's pid, and per
+//!   robot the kill order (world) and dead-up-to mark (orchestrator). Once the world and the
+//!   orchestrator mapped it, it is sealed against every new writable mapping and every write()
+//!   (`F_SEAL_FUTURE_WRITE`); an agent maps it read-only ([`TickBarrier::open_agent`]): no
+//!   agent program can release a tick, stop the run or steer the orchestrator's SIGKILLs.
+//! - the agents' segment (`acks`): the ack counter the world sleeps on, the ready counter, and
+//!   per robot the acknowledged tick and the attach counter.
+//!
+//! Both are sealed against shrinking and growing from their creation: no process can truncate
+//! them under the world or the orchestrator (which a file in /dev/shm allowed: SIGBUS).
 
 use crate::bell::EventBell;
+use crate::sealed::{Mapping, SealError, SIZE_SEALS};
+use rustix::fs::SealFlags;
+use std::os::fd::{AsFd, AsRawFd, BorrowedFd, OwnedFd};
 use std::sync::atomic::{AtomicU32, AtomicU64, Ordering};
 use std::time::{Duration, Instant};
 
@@ -50,101 +60,12 @@ struct AckHeader {
     ready: AtomicU32,
 }
 
-/// One shared-memory segment of the barrier, mapped.
-struct Segment {
-    base: *mut u8,
-    len: usize,
-}
-
-impl Drop for Segment {
-    fn drop(&mut self) {
-        // SAFETY: unmapping our own mapping.
-        unsafe {
-            libc::munmap(self.base as *mut libc::c_void, self.len);
-        }
-    }
-}
-
-impl Segment {
-    /// Creates `/dev/shm/<name>` of `len` zero bytes, mapped read-write. Fails if it exists.
-    fn create(name: &str, len: usize) -> std::io::Result<Segment> {
-        let c = std::ffi::CString::new(format!("/{name}")).expect("prefix has no NUL");
-        // SAFETY: plain POSIX calls with checked results.
-        unsafe {
-            let fd = libc::shm_open(
-                c.as_ptr(),
-                libc::O_CREAT | libc::O_EXCL | libc::O_RDWR,
-                0o600,
-            );
-            if fd < 0 {
-                return Err(std::io::Error::last_os_error());
-            }
-            if libc::ftruncate(fd, len as libc::off_t) != 0 {
-                let e = std::io::Error::last_os_error();
-                libc::close(fd);
-                return Err(e);
-            }
-            Self::map(fd, len, true)
-        }
-    }
-
-    /// Opens `/dev/shm/<name>` (read-only unless `writable`): its mapping and its length as
-    /// `fstat` gives it.
-    fn open(name: &str, writable: bool) -> std::io::Result<Segment> {
-        let c = std::ffi::CString::new(format!("/{name}")).expect("prefix has no NUL");
-        let flags = if writable {
-            libc::O_RDWR
-        } else {
-            libc::O_RDONLY
-        };
-        // SAFETY: plain POSIX calls with checked results.
-        unsafe {
-            let fd = libc::shm_open(c.as_ptr(), flags, 0);
-            if fd < 0 {
-                return Err(std::io::Error::last_os_error());
-            }
-            let mut st: libc::stat = std::mem::zeroed();
-            if libc::fstat(fd, &mut st) != 0 {
-                let e = std::io::Error::last_os_error();
-                libc::close(fd);
-                return Err(e);
-            }
-            Self::map(fd, st.st_size as usize, writable)
-        }
-    }
-
-    /// Maps `fd` (closed here) shared.
-    unsafe fn map(fd: i32, len: usize, writable: bool) -> std::io::Result<Segment> {
-        if len == 0 {
-            libc::close(fd);
-            return Ok(Segment {
-                base: std::ptr::NonNull::<u64>::dangling().as_ptr() as *mut u8,
-                len: 0,
-            });
-        }
-        let prot = if writable {
-            libc::PROT_READ | libc::PROT_WRITE
-        } else {
-            libc::PROT_READ
-        };
-        let p = libc::mmap(std::ptr::null_mut(), len, prot, libc::MAP_SHARED, fd, 0);
-        libc::close(fd);
-        if p == libc::MAP_FAILED {
-            return Err(std::io::Error::last_os_error());
-        }
-        Ok(Segment {
-            base: p as *mut u8,
-            len,
-        })
-    }
-}
-
 /// A mapping of the run's barrier segments.
 pub struct TickBarrier {
     /// The world's segment (read-only in an agent).
-    ctl: Segment,
+    ctl: Mapping,
     /// The agents' segment.
-    ack: Segment,
+    ack: Mapping,
     robots: u32,
 }
 
@@ -152,35 +73,75 @@ pub struct TickBarrier {
 unsafe impl Send for TickBarrier {}
 unsafe impl Sync for TickBarrier {}
 
-/// Why the barrier segment could not be created or opened.
+/// Why the barrier segments could not be made or opened.
 #[derive(Debug, thiserror::Error)]
 pub enum BarrierError {
-    #[error("create the tick barrier /dev/shm/{segment}: {source}")]
-    Create {
-        segment: String,
-        source: std::io::Error,
-    },
-    #[error("open the tick barrier /dev/shm/{segment}: {source}")]
-    Open {
-        segment: String,
-        source: std::io::Error,
-    },
+    /// Making, sealing, checking or mapping a segment failed (the segment and fd are named).
+    #[error("tick barrier: {0}")]
+    Seal(#[from] SealError),
+    /// The process was not started with the barrier's descriptors.
+    #[error(
+        "tick barrier: {FDS_ENV} = {value:?} does not name two open descriptors \"<tick fd>,<acks \
+         fd>\" (the orchestrator hands them to the world and agents it starts; \
+         docs/protocol.md section 4)"
+    )]
+    NoFds { value: String },
     /// The segment is smaller than its header: not a barrier of this runtime.
-    #[error("the tick barrier /dev/shm/{segment} is too small: {bytes} bytes")]
+    #[error("the tick barrier segment {segment} is too small: {bytes} bytes")]
     TooSmall { segment: String, bytes: usize },
-    /// The world has not finished writing the segment (or it is not a barrier at all).
-    #[error("the tick barrier /dev/shm/{segment} is not initialised")]
+    /// The segment was never initialised (not a barrier of this runtime).
+    #[error("the tick barrier segment {segment} is not initialised")]
     Uninitialised { segment: String },
 }
 
-/// The world's segment's name in /dev/shm.
+/// The environment variable that names the barrier's inherited descriptors, `<tick>,<acks>`
+/// (decimal fd numbers), in the world and in every agent (docs/protocol.md section 4).
+pub const FDS_ENV: &str = "SWARM_BARRIER_FDS";
+
+/// The world's segment's memfd name (shown as `/memfd:<name>` in /proc/<pid>/fd).
 fn segment(prefix: &str) -> String {
     format!("{prefix}tick")
 }
 
-/// The agents' segment's name in /dev/shm.
+/// The agents' segment's memfd name.
 fn ack_segment(prefix: &str) -> String {
     format!("{prefix}acks")
+}
+
+/// The seals the world's segment carries once the world and the orchestrator mapped it:
+/// fixed size, no new writable mapping nor write(), no further seal.
+pub const TICK_SEALS: SealFlags = SIZE_SEALS
+    .union(SealFlags::FUTURE_WRITE)
+    .union(SealFlags::SEAL);
+/// The seals of the agents' segment, from its creation: fixed size, no further seal (nobody
+/// can seal it against the writable mappings every agent needs).
+pub const ACKS_SEALS: SealFlags = SIZE_SEALS.union(SealFlags::SEAL);
+
+/// The run's barrier segments as the orchestrator holds them: the memfds it hands to the
+/// world and to every agent it starts (restarted ones too).
+pub struct BarrierFds {
+    tick: OwnedFd,
+    acks: OwnedFd,
+    prefix: String,
+}
+
+impl BarrierFds {
+    /// Makes `cmd`'s child inherit both descriptors, named by [`FDS_ENV`].
+    pub fn pass_to(&self, cmd: &mut std::process::Command) {
+        let (t, a) = (self.tick.as_raw_fd(), self.acks.as_raw_fd());
+        cmd.env(FDS_ENV, format!("{t},{a}"));
+        crate::sealed::pass_to(cmd, &[t, a]);
+    }
+
+    /// Seals the world's segment against every new writable mapping and write(): called once
+    /// the world and the orchestrator mapped it, before any agent starts. From then on no
+    /// process can write the release, shutdown or kill-order words but through those two
+    /// mappings, whatever descriptor of the segment it gets (even through /proc/<pid>/fd).
+    pub fn seal_worlds_segment(&self) -> Result<(), BarrierError> {
+        let name = segment(&self.prefix);
+        crate::sealed::seal(self.tick.as_fd(), &name, TICK_SEALS)?;
+        Ok(())
+    }
 }
 
 pub enum Wake {
@@ -235,62 +196,102 @@ impl TickBarrier {
         std::mem::size_of::<AckHeader>() + ACK_SLOT_BYTES * robots as usize
     }
 
-    /// Creates both segments (world side). Fails if either exists.
-    pub fn create(prefix: &str, robots: u32) -> Result<TickBarrier, BarrierError> {
-        let create = |name: String, len: usize| {
-            Segment::create(&name, len).map_err(|source| BarrierError::Create {
-                segment: name,
-                source,
-            })
+    /// Makes both segments (the orchestrator, the benchmarks' parents): memfds of their fixed
+    /// sizes (sealed so), mapped read-write, the world's header initialised (its `world_pid`
+    /// this process's until the world writes its own). The descriptors are for
+    /// [`BarrierFds::pass_to`].
+    pub fn create(prefix: &str, robots: u32) -> Result<(TickBarrier, BarrierFds), BarrierError> {
+        let make = |name: String, len: usize| -> Result<(OwnedFd, Mapping), BarrierError> {
+            let fd = crate::sealed::create(&name, len)?;
+            let map = Mapping::map(fd.as_fd(), &name, len, true)?;
+            Ok((fd, map))
         };
-        let ctl = create(segment(prefix), Self::ctl_len(robots))?;
-        let ack = create(ack_segment(prefix), Self::ack_len(robots))?;
+        let (tick, ctl) = make(segment(prefix), Self::ctl_len(robots))?;
+        let (acks, ack) = make(ack_segment(prefix), Self::ack_len(robots))?;
+        crate::sealed::seal(acks.as_fd(), &ack_segment(prefix), ACKS_SEALS)?;
         let b = TickBarrier { ctl, ack, robots };
         let h = b.header();
         // SAFETY: the segment is ours alone until the magic word is written below.
         unsafe { std::ptr::addr_of!(h.robots).cast_mut().write(robots) };
         h.world_pid.store(std::process::id(), Ordering::Relaxed);
         h.magic.store(MAGIC, Ordering::Release);
+        let fds = BarrierFds {
+            tick,
+            acks,
+            prefix: prefix.to_string(),
+        };
+        Ok((b, fds))
+    }
+
+    /// Maps the inherited segments read-write (the world, the benchmarks' children), and
+    /// records this process as the world.
+    pub fn open_world() -> Result<TickBarrier, BarrierError> {
+        let b = Self::open_as(SIZE_SEALS, true)?;
+        b.header()
+            .world_pid
+            .store(std::process::id(), Ordering::Release);
         Ok(b)
     }
 
-    /// Opens both segments read-write (the orchestrator, the benchmarks' children).
-    pub fn open(prefix: &str) -> Result<TickBarrier, BarrierError> {
-        Self::open_as(prefix, true)
+    /// Maps the inherited segments read-write without claiming the world's part (the
+    /// benchmarks' children).
+    pub fn open_inherited() -> Result<TickBarrier, BarrierError> {
+        Self::open_as(SIZE_SEALS, true)
     }
 
-    /// Opens the segments as an agent: the world's read-only, the agents' read-write.
-    pub fn open_agent(prefix: &str) -> Result<TickBarrier, BarrierError> {
-        Self::open_as(prefix, false)
+    /// Opens the segments as an agent, from the descriptors [`FDS_ENV`] names: the world's
+    /// read-only (refused unless sealed [`TICK_SEALS`]: nobody can map it writable any
+    /// more), the agents' read-write (refused unless its size is sealed). No argument: an
+    /// agent finds everything in its environment (docs/protocol.md section 4).
+    pub fn open_agent() -> Result<TickBarrier, BarrierError> {
+        Self::open_as(TICK_SEALS, false)
     }
 
-    fn open_as(prefix: &str, world_writable: bool) -> Result<TickBarrier, BarrierError> {
-        let open = |name: String, writable: bool| {
-            Segment::open(&name, writable).map_err(|source| BarrierError::Open {
-                segment: name,
-                source,
-            })
-        };
-        let ctl = open(segment(prefix), world_writable)?;
-        if ctl.len < std::mem::size_of::<Header>() {
+    /// The descriptors [`FDS_ENV`] names.
+    fn inherited_fds() -> Result<(BorrowedFd<'static>, BorrowedFd<'static>), BarrierError> {
+        let value = std::env::var(FDS_ENV).unwrap_or_default();
+        let fds = value
+            .split_once(',')
+            .and_then(|(t, a)| Some((t.parse().ok()?, a.parse().ok()?)))
+            .and_then(|(t, a)| Some((crate::sealed::inherited(t)?, crate::sealed::inherited(a)?)));
+        fds.ok_or(BarrierError::NoFds { value })
+    }
+
+    fn open_as(tick_seals: SealFlags, world_writable: bool) -> Result<TickBarrier, BarrierError> {
+        let (tick, acks) = Self::inherited_fds()?;
+        Self::open_fds(tick, acks, tick_seals, world_writable)
+    }
+
+    /// Checks the seals (`tick_seals` on the world's segment, the size seals on the agents')
+    /// and maps both segments.
+    fn open_fds(
+        tick: BorrowedFd,
+        acks: BorrowedFd,
+        tick_seals: SealFlags,
+        world_writable: bool,
+    ) -> Result<TickBarrier, BarrierError> {
+        let name = |fd: BorrowedFd, what: &str| format!("{what} (fd {})", fd.as_raw_fd());
+        let (tick_name, acks_name) = (name(tick, "tick"), name(acks, "acks"));
+        let ctl_len = crate::sealed::check(tick, &tick_name, tick_seals)?;
+        if ctl_len < std::mem::size_of::<Header>() {
             return Err(BarrierError::TooSmall {
-                segment: segment(prefix),
-                bytes: ctl.len,
+                segment: tick_name,
+                bytes: ctl_len,
             });
         }
-        let ack = open(ack_segment(prefix), true)?;
-        let robots = ((ctl.len - std::mem::size_of::<Header>()) / CTL_SLOT_BYTES) as u32;
-        if ack.len < Self::ack_len(robots) {
+        let ack_len = crate::sealed::check(acks, &acks_name, SIZE_SEALS)?;
+        let robots = ((ctl_len - std::mem::size_of::<Header>()) / CTL_SLOT_BYTES) as u32;
+        if ack_len < Self::ack_len(robots) {
             return Err(BarrierError::TooSmall {
-                segment: ack_segment(prefix),
-                bytes: ack.len,
+                segment: acks_name,
+                bytes: ack_len,
             });
         }
+        let ctl = Mapping::map(tick, &tick_name, ctl_len, world_writable)?;
+        let ack = Mapping::map(acks, &acks_name, ack_len, true)?;
         let b = TickBarrier { ctl, ack, robots };
         if b.header().magic.load(Ordering::Acquire) != MAGIC || b.header().robots != robots {
-            return Err(BarrierError::Uninitialised {
-                segment: segment(prefix),
-            });
+            return Err(BarrierError::Uninitialised { segment: tick_name });
         }
         Ok(b)
     }
@@ -298,12 +299,12 @@ impl TickBarrier {
     fn header(&self) -> &Header {
         // SAFETY: the mapping is at least size_of::<Header>() (checked when opened) and page
         // aligned.
-        unsafe { &*(self.ctl.base as *const Header) }
+        unsafe { &*(self.ctl.base() as *const Header) }
     }
 
     fn ack_header(&self) -> &AckHeader {
         // SAFETY: as above, for the agents' segment.
-        unsafe { &*(self.ack.base as *const AckHeader) }
+        unsafe { &*(self.ack.base() as *const AckHeader) }
     }
 
     /// Robot `robot`'s words in the world's segment: 0 = the attach number (the value of
@@ -315,7 +316,7 @@ impl TickBarrier {
         assert!(robot < self.robots, "robot {robot} out of range");
         let at = std::mem::size_of::<Header>() + CTL_SLOT_BYTES * robot as usize + 8 * w;
         // SAFETY: slots follow the header, 8-byte aligned, within the length checked at open.
-        unsafe { &*(self.ctl.base.add(at) as *const AtomicU64) }
+        unsafe { &*(self.ctl.base().add(at) as *const AtomicU64) }
     }
 
     /// Robot `robot`'s words in the agents' segment: 0 = acknowledged tick + 1; 1 = agent
@@ -324,7 +325,7 @@ impl TickBarrier {
         assert!(robot < self.robots, "robot {robot} out of range");
         let at = std::mem::size_of::<AckHeader>() + ACK_SLOT_BYTES * robot as usize + 8 * w;
         // SAFETY: as above, for the agents' segment.
-        unsafe { &*(self.ack.base.add(at) as *const AtomicU64) }
+        unsafe { &*(self.ack.base().add(at) as *const AtomicU64) }
     }
 
     fn slot(&self, robot: u32) -> &AtomicU64 {
@@ -542,64 +543,64 @@ impl TickBarrier {
     }
 }
 
-/// Removes the segments' names (the mappings stay valid until dropped).
-pub fn unlink(prefix: &str) {
-    for name in [segment(prefix), ack_segment(prefix)] {
-        let c = std::ffi::CString::new(format!("/{name}")).expect("prefix has no NUL");
-        // SAFETY: plain POSIX call.
-        unsafe {
-            libc::shm_unlink(c.as_ptr());
-        }
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
 
-    /// A segment of `len` zero bytes under the name `name`.
-    fn raw_segment(name: &str, len: usize) {
-        let name = std::ffi::CString::new(format!("/{name}")).unwrap();
-        // SAFETY: plain POSIX calls; the fd is closed at once.
-        unsafe {
-            let fd = libc::shm_open(name.as_ptr(), libc::O_CREAT | libc::O_RDWR, 0o600);
-            assert!(fd >= 0);
-            assert_eq!(libc::ftruncate(fd, len as libc::off_t), 0);
-            libc::close(fd);
-        }
+    /// Opens `fds` as an agent would.
+    fn agent(fds: &BarrierFds) -> Result<TickBarrier, BarrierError> {
+        TickBarrier::open_fds(fds.tick.as_fd(), fds.acks.as_fd(), TICK_SEALS, false)
+    }
+
+    /// Opens `fds` as the world or a benchmark's child would.
+    fn world(fds: &BarrierFds) -> Result<TickBarrier, BarrierError> {
+        TickBarrier::open_fds(fds.tick.as_fd(), fds.acks.as_fd(), SIZE_SEALS, true)
     }
 
     #[test]
-    fn errors_name_the_segment() {
-        let prefix = format!("swbe{}_", std::process::id());
-        struct Unlink(String);
-        impl Drop for Unlink {
-            fn drop(&mut self) {
-                unlink(&self.0);
-            }
-        }
-        let _unlink = Unlink(prefix.clone());
-        let seg = format!("{prefix}tick");
-        let e = TickBarrier::open(&prefix).err().expect("no segment yet");
-        assert!(matches!(e, BarrierError::Open { .. }), "{e}");
-        assert!(e.to_string().contains(&format!("/dev/shm/{seg}")), "{e}");
+    fn errors_name_the_segment_and_what_is_wrong() {
+        // No descriptors in the environment (this test process was not started so).
+        let e = TickBarrier::open_agent().err().expect("no fds");
+        assert!(matches!(e, BarrierError::NoFds { .. }), "{e}");
+        assert!(e.to_string().contains(FDS_ENV), "{e}");
 
-        let _b = TickBarrier::create(&prefix, 2).unwrap();
-        let e = TickBarrier::create(&prefix, 2).err().expect("exists");
-        assert!(matches!(e, BarrierError::Create { ref segment, .. } if *segment == seg));
-        unlink(&prefix);
+        let (_w, fds) = TickBarrier::create("swbe_", 2).unwrap();
+        // The world's segment is not sealed against writes yet: an agent refuses it.
+        let e = agent(&fds).err().expect("not sealed yet");
+        assert!(
+            matches!(e, BarrierError::Seal(SealError::Unsealed { ref missing, .. })
+                if missing.contains(SealFlags::FUTURE_WRITE)),
+            "{e}"
+        );
+        assert!(e.to_string().contains("tick (fd"), "{e}");
 
-        raw_segment(&seg, 8);
-        let e = TickBarrier::open(&prefix).err().expect("too small");
+        // A memfd anybody could resize: refused before it is mapped.
+        let loose = |len: usize| {
+            let fd =
+                rustix::fs::memfd_create("loose", rustix::fs::MemfdFlags::ALLOW_SEALING).unwrap();
+            rustix::fs::ftruncate(&fd, len as u64).unwrap();
+            fd
+        };
+        let tick = loose(std::mem::size_of::<Header>() + CTL_SLOT_BYTES);
+        let e = TickBarrier::open_fds(tick.as_fd(), fds.acks.as_fd(), SIZE_SEALS, true)
+            .err()
+            .expect("unsealed");
+        assert!(
+            matches!(e, BarrierError::Seal(SealError::Unsealed { .. })),
+            "{e}"
+        );
+
+        // Sealed, but too small, or never initialised.
+        let small = crate::sealed::create("small", 8).unwrap();
+        let e = TickBarrier::open_fds(small.as_fd(), fds.acks.as_fd(), SIZE_SEALS, true)
+            .err()
+            .expect("too small");
         assert!(matches!(e, BarrierError::TooSmall { bytes: 8, .. }), "{e}");
-        unlink(&prefix);
-
-        // Big enough, but its magic word was never written.
-        raw_segment(&seg, std::mem::size_of::<Header>() + CTL_SLOT_BYTES);
-        raw_segment(&ack_segment(&prefix), TickBarrier::ack_len(1));
-        let e = TickBarrier::open(&prefix).err().expect("uninitialised");
+        let blank = crate::sealed::create("blank", TickBarrier::ctl_len(2)).unwrap();
+        let e = TickBarrier::open_fds(blank.as_fd(), fds.acks.as_fd(), SIZE_SEALS, true)
+            .err()
+            .expect("uninitialised");
         assert!(matches!(e, BarrierError::Uninitialised { .. }), "{e}");
-        unlink(&prefix);
     }
 
     /// The layouts docs/protocol.md section 4 gives.
@@ -624,39 +625,75 @@ mod tests {
         assert_eq!(MAGIC.to_be_bytes(), *b"SWARMTK4");
     }
 
-    /// An agent maps the world's segment read-only (its release, shutdown and kill-order
-    /// words cannot be written through it) and the agents' segment read-write.
+    /// Once sealed, the world's segment cannot be written but through the mappings made
+    /// before the seal: not through a new writable mapping, write(), a descriptor opened again
+    /// through /proc/self/fd, nor an agent's read-only mapping made writable. Neither segment
+    /// can be resized, nor sealed further.
     #[test]
-    fn an_agent_maps_the_worlds_words_read_only() {
-        let prefix = format!("swbr{}_", std::process::id());
-        let _w = TickBarrier::create(&prefix, 2).unwrap();
-        let a = TickBarrier::open_agent(&prefix).unwrap();
+    fn the_worlds_words_are_out_of_an_agents_reach() {
+        use rustix::mm::{MapFlags, MprotectFlags, ProtFlags};
+        let (w, fds) = TickBarrier::create("swbr_", 2).unwrap();
+        fds.seal_worlds_segment().unwrap();
+        let a = agent(&fds).unwrap();
         a.mark_ready(1);
-        assert_eq!(a.attach_count(1), 1);
-        let maps = std::fs::read_to_string("/proc/self/maps").unwrap();
-        let perms = |name: &str| -> Vec<String> {
-            maps.lines()
-                .filter(|l| l.ends_with(&format!("/dev/shm/{name}")))
-                .map(|l| l.split_whitespace().nth(1).unwrap().to_string())
-                .collect()
+        assert_eq!(w.attach_count(1), 1);
+        // The mappings made before the seal still write.
+        w.order_kill(1, 7);
+        assert_eq!(a.kill_order(1), 7);
+
+        let len = TickBarrier::ctl_len(2);
+        let refused = |r: rustix::io::Result<()>, what: &str| {
+            assert!(r.is_err(), "{what} was allowed");
         };
-        // The world's own mapping and the agent's, of each segment.
-        let mut ctl = perms(&segment(&prefix));
-        ctl.sort();
-        assert_eq!(ctl, ["r--s", "rw-s"], "{maps}");
-        assert_eq!(perms(&ack_segment(&prefix)), ["rw-s", "rw-s"], "{maps}");
-        unlink(&prefix);
+        let reopened = std::fs::OpenOptions::new()
+            .read(true)
+            .write(true)
+            .open(format!("/proc/self/fd/{}", fds.tick.as_raw_fd()))
+            .unwrap();
+        for fd in [fds.tick.as_fd(), reopened.as_fd()] {
+            refused(rustix::io::write(fd, &[1u8; 8]).map(|_| ()), "write");
+            refused(rustix::io::pwrite(fd, &[1u8; 8], 20).map(|_| ()), "pwrite");
+            refused(rustix::fs::ftruncate(fd, 0), "shrink");
+            refused(rustix::fs::ftruncate(fd, 1 << 20), "grow");
+            // SAFETY: a new mapping, unmapped at once if it was made.
+            let m = unsafe {
+                rustix::mm::mmap(
+                    std::ptr::null_mut(),
+                    len,
+                    ProtFlags::READ | ProtFlags::WRITE,
+                    MapFlags::SHARED,
+                    fd,
+                    0,
+                )
+            };
+            if let Ok(p) = m {
+                // SAFETY: our own mapping.
+                unsafe { rustix::mm::munmap(p, len).unwrap() };
+            }
+            refused(m.map(|_| ()), "a writable shared mapping");
+        }
+        // The agent's read-only mapping cannot be made writable.
+        // SAFETY: mprotect of the agent's own mapping; refused, so nothing changes.
+        let r = unsafe { rustix::mm::mprotect(a.ctl.base() as *mut _, len, MprotectFlags::WRITE) };
+        refused(r, "mprotect(PROT_WRITE) of the agent's mapping");
+        // The agents' segment: written by agents, never resized, never sealed further.
+        refused(rustix::fs::ftruncate(&fds.acks, 0), "shrink acks");
+        refused(rustix::fs::ftruncate(&fds.acks, 1 << 20), "grow acks");
+        refused(
+            rustix::fs::fcntl_add_seals(&fds.acks, SealFlags::FUTURE_WRITE),
+            "seal acks",
+        );
+        assert_eq!(w.kill_order(1), 7);
+        assert!(!w.is_shutdown());
     }
 
     #[test]
     fn release_ack_round_across_threads() {
-        let prefix = format!("swtest{}_", std::process::id());
-        let w = TickBarrier::create(&prefix, 3).unwrap();
+        let (w, fds) = TickBarrier::create("swtest_", 3).unwrap();
         let agents: Vec<_> = (0..3u32)
             .map(|i| {
-                let p = prefix.clone();
+                let b = world(&fds).unwrap();
                 std::thread::spawn(move || {
-                    let b = TickBarrier::open(&p).unwrap();
                     b.mark_ready(i);
                     let mut done = 0;
                     let mut seen = vec![];
@@ -684,7 +721,6 @@ mod tests {
             }
         }
         w.shutdown();
-        unlink(&prefix);
         for a in agents {
             assert_eq!(a.join().unwrap(), (0..50).collect::<Vec<u64>>());
         }

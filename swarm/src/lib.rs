@@ -30,6 +30,7 @@ pub mod radio;
 pub mod recording;
 pub mod scenario;
 pub mod scenario_shape;
+pub mod sealed;
 pub mod sections;
 pub mod sense_pack;
 pub mod streams;

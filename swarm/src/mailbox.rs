@@ -65,6 +65,15 @@ impl Air {
         self.headers.len()
     }
 
+    /// Drops every message after the first `len` (those of a sender found faulty after they
+    /// were appended).
+    pub fn truncate(&mut self, len: usize) {
+        if let Some(&(_, at)) = self.headers.get(len) {
+            self.bytes.truncate(at);
+        }
+        self.headers.truncate(len);
+    }
+
     pub fn is_empty(&self) -> bool {
         self.headers.is_empty()
     }

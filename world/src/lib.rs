@@ -14,6 +14,7 @@ pub mod output;
 pub mod placement;
 pub mod process;
 pub mod sensing;
+pub mod shrink_guard;
 pub mod svg;
 pub mod world;
 

@@ -1,6 +1,7 @@
 //! The world process: drives `World` over iceoryx2 and the tick barrier.
 
 use crate::output::{RunOutputs, Timing};
+use crate::shrink_guard::GuardedActs;
 use crate::world::World;
 use iceoryx2::port::subscriber::Subscriber;
 use iceoryx2::prelude::*;
@@ -131,7 +132,19 @@ fn drain_control(
     barrier: &TickBarrier,
     drivers: &Drivers,
 ) {
-    while let Ok(Some(c)) = sub.receive() {
+    // `run/control` is the orchestrator's segment: truncated, the world stops reading it
+    // rather than die of SIGBUS (shrink_guard; docs/protocol.md section 4).
+    while !crate::shrink_guard::control_is_lost() {
+        let c = crate::shrink_guard::reading(crate::shrink_guard::RUN_SEGMENTS, || {
+            sub.receive().ok().flatten().map(|c| *c)
+        });
+        let Some(c) = c else {
+            crate::shrink_guard::control_lost();
+            break;
+        };
+        let Some(c) = c else {
+            break;
+        };
         match c.kind {
             // A scheduled kill reaped before the world began its tick: begin_tick records it
             // (same tick, same cause) so the run stays reproducible.
@@ -265,7 +278,10 @@ pub fn run(args: &WorldArgs) -> Result<i32> {
     // Sense frames: every robot's record packed into one `world/sense` sample a tick.
     let mut senses = transport::SenseSink::create(&node, sc)?;
     // Actions: one `robot/<i>/act` service a robot.
-    let mut acts = transport::ActSource::create(&node, sc)?;
+    // Every read of robot r's act service is guarded: a segment that shrinks under it makes r
+    // a fault, not a SIGBUS of the world (shrink_guard).
+    crate::shrink_guard::install()?;
+    let mut acts = GuardedActs::new(transport::ActSource::create(&node, sc)?);
     let mut air = transport::AirSink::create(&node, sc)?;
     let status_svc = transport::status_service(&node, true)?;
     let status_pub = status_svc
@@ -277,7 +293,15 @@ pub fn run(args: &WorldArgs) -> Result<i32> {
         .subscriber_builder()
         .create()
         .map_err(|e| format!("control subscriber: {e:?}"))?;
-    let barrier = TickBarrier::create(&args.prefix, n)?;
+    // The barrier's segments, inherited from the orchestrator (docs/protocol.md section 4).
+    let barrier = TickBarrier::open_world()?;
+    if barrier.robots() != n {
+        return Err(format!(
+            "the tick barrier has {} robot slots, the scenario {n} robots",
+            barrier.robots()
+        )
+        .into());
+    }
     // runtime.barrier = "iox2-event": the barrier's wake-ups go through iceoryx2 events.
     let bell = match sc.runtime.barrier {
         swarm::scenario::BarrierKind::Futex => None,
@@ -411,6 +435,9 @@ pub fn run(args: &WorldArgs) -> Result<i32> {
                 }
                 (actions[i], late[i]) = acts.take_realtime(i as u32, k, clock.since[i], &mut sent);
             }
+            if acts.fault_shrunk(&mut world) {
+                drivers.order_kills(&world, &barrier);
+            }
             let rec = world.apply_with_late(&actions, &late, &sent);
             outputs.push(&rec, &world)?;
             tick_ns.push(t_tick.elapsed().as_nanos() as u64);
@@ -451,6 +478,10 @@ pub fn run(args: &WorldArgs) -> Result<i32> {
             // tick k; the ack counter and words only say when to look (docs/protocol.md
             // section 5): what another agent writes there cannot make the world skip a robot.
             let now_acked = world.live_robots().filter(|&i| acts.arrived(i, k)).count();
+            if acts.fault_shrunk(&mut world) {
+                drivers.order_kills(&world, &barrier);
+                continue;
+            }
             if now_acked == world.alive_count() as usize {
                 break;
             }
@@ -484,6 +515,9 @@ pub fn run(args: &WorldArgs) -> Result<i32> {
             if world.alive[i] {
                 *a = acts.take(i as u32, k, &mut sent);
             }
+        }
+        if acts.fault_shrunk(&mut world) {
+            drivers.order_kills(&world, &barrier);
         }
         let rec = world.apply(&actions, &sent);
         outputs.push(&rec, &world)?;

@@ -33,6 +33,7 @@ use serde::Serialize;
 use std::os::unix::process::CommandExt;
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
+use swarm::barrier::BarrierFds;
 
 #[derive(Args, Debug)]
 pub struct BenchArgs {
@@ -441,7 +442,7 @@ pub fn child(a: ChildArgs) -> i32 {
 /// when `piped`).
 fn spawn_child(
     kind: &str,
-    prefix: &str,
+    (prefix, barrier): (&str, &BarrierFds),
     index: u32,
     extra: &[String],
     piped: bool,
@@ -451,25 +452,27 @@ fn spawn_child(
         source,
     };
     let exe = std::env::current_exe().map_err(spawn_error)?;
-    Command::new(exe)
-        .args([
-            "__bench-child",
-            kind,
-            "--prefix",
-            prefix,
-            "--index",
-            &index.to_string(),
-        ])
-        .args(extra)
-        .stdin(Stdio::null())
-        .stdout(if piped {
-            Stdio::piped()
-        } else {
-            Stdio::inherit()
-        })
-        .process_group(0)
-        .spawn()
-        .map_err(spawn_error)
+    let mut cmd = Command::new(exe);
+    // The child opens the barrier from the descriptors it inherits (SWARM_BARRIER_FDS).
+    barrier.pass_to(&mut cmd);
+    cmd.args([
+        "__bench-child",
+        kind,
+        "--prefix",
+        prefix,
+        "--index",
+        &index.to_string(),
+    ])
+    .args(extra)
+    .stdin(Stdio::null())
+    .stdout(if piped {
+        Stdio::piped()
+    } else {
+        Stdio::inherit()
+    })
+    .process_group(0)
+    .spawn()
+    .map_err(spawn_error)
 }
 
 /// CLOCK_MONOTONIC in nanoseconds: one clock for every process of the machine, so a time

@@ -65,7 +65,7 @@ enum Phase {
 type Watch = Arc<Mutex<(Option<(u32, u64, u64, Instant)>, Option<Duration>)>>;
 
 /// Polls the barrier until the watched robot's replacement acknowledged a tick.
-fn watcher(prefix: String, watch: Watch, done: Arc<AtomicBool>) {
+fn watcher(watch: Watch, done: Arc<AtomicBool>) {
     let mut barrier = None;
     while !done.load(Ordering::Acquire) {
         std::thread::sleep(Duration::from_micros(100));
@@ -74,7 +74,7 @@ fn watcher(prefix: String, watch: Watch, done: Arc<AtomicBool>) {
             continue;
         };
         if barrier.is_none() {
-            barrier = swarm::barrier::TickBarrier::open(&prefix).ok();
+            barrier = processes::supervised_barrier();
         }
         let Some(b) = &barrier else {
             continue;
@@ -127,10 +127,10 @@ fn run(a: &Args) -> Result<Report, String> {
     let watch: Watch = Arc::default();
     let done = Arc::new(AtomicBool::new(false));
     let w = {
-        let (p, w, d) = (prefix.clone(), watch.clone(), done.clone());
-        std::thread::spawn(move || watcher(p, w, d))
+        let (w, d) = (watch.clone(), done.clone());
+        std::thread::spawn(move || watcher(w, d))
     };
-    let mut barrier: Option<swarm::barrier::TickBarrier> = None;
+    let mut barrier: Option<std::sync::Arc<swarm::barrier::TickBarrier>> = None;
     let out = processes::run(processes::ProcessRun {
         sc: &sc,
         run_id: &run_id,
@@ -153,7 +153,7 @@ fn run(a: &Args) -> Result<Report, String> {
                     return;
                 };
                 if barrier.is_none() {
-                    barrier = swarm::barrier::TickBarrier::open(&prefix).ok();
+                    barrier = processes::supervised_barrier();
                 }
                 let Some(b) = &barrier else {
                     return;

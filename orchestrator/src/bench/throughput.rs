@@ -248,7 +248,7 @@ fn one(
     ));
     let r = (|| -> BenchResult<Row> {
         let sc = scenario(n, size, air.unwrap_or_default());
-        let barrier = TickBarrier::create(&prefix, n)?;
+        let (barrier, fds) = TickBarrier::create(&prefix, n)?;
         let config = transport::run_config(&prefix)?;
         let node = transport::node(&config, "bench-tput")?;
         let radio = if enc.starts_with("raw") {
@@ -273,7 +273,7 @@ fn one(
         ];
         let mut children = Vec::new();
         for i in 0..n {
-            children.push(spawn_child("tput", &prefix, i, &extra, true)?);
+            children.push(spawn_child("tput", (&prefix, &fds), i, &extra, true)?);
         }
         let result = (|| -> BenchResult<Row> {
             let t = Instant::now();
@@ -360,7 +360,6 @@ fn one(
         tick::reap_children(children);
         result
     })();
-    swarm::barrier::unlink(&prefix);
     cleanup::remove_run(&prefix);
     check_no_leftovers(&prefix)?;
     r
@@ -602,7 +601,7 @@ pub fn child(a: &ChildArgs) -> i32 {
 fn child_run<M: Make>(a: &ChildArgs, air: AirTransport) -> BenchResult<()> {
     let (n, me) = (a.robots, a.index);
     let sc = scenario(n, a.size, air);
-    let barrier = TickBarrier::open(&a.prefix)?;
+    let barrier = TickBarrier::open_inherited()?;
     let config = transport::run_config(&a.prefix)?;
     let node = transport::node(&config, &format!("bench-tput-{me}"))?;
     let act_svc = transport::act_service(&node, me, false)?;
@@ -672,7 +671,7 @@ fn child_run<M: Make>(a: &ChildArgs, air: AirTransport) -> BenchResult<()> {
 fn child_raw(a: &ChildArgs, copy: bool) -> BenchResult<()> {
     let (n, me) = (a.robots, a.index);
     let sc = scenario(n, a.size, AirTransport::Iceoryx2);
-    let barrier = TickBarrier::open(&a.prefix)?;
+    let barrier = TickBarrier::open_inherited()?;
     let config = transport::run_config(&a.prefix)?;
     let node = transport::node(&config, &format!("bench-tput-{me}"))?;
     let own = raw_service(&node, me, &sc, false)?;

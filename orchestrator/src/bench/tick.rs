@@ -16,7 +16,7 @@ use iceoryx2::prelude::*;
 use serde::Serialize;
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
-use swarm::barrier::{TickBarrier, Wake};
+use swarm::barrier::{BarrierFds, TickBarrier, Wake};
 use swarm::cleanup;
 use swarm::scenario::{BarrierKind, Scenario};
 use swarm::transport::{self, EventCapacity, Reach, ServiceId, TransportError};
@@ -223,7 +223,12 @@ pub(super) fn run_processes(sc: &Scenario) -> BenchResult<(serde_json::Value, st
     Ok((s, dir))
 }
 
-fn spawn_children(kind: &str, prefix: &str, n: u32) -> BenchResult<Vec<Child>> {
+fn spawn_children(
+    kind: &str,
+    prefix: &str,
+    n: u32,
+    barrier: Option<&BarrierFds>,
+) -> BenchResult<Vec<Child>> {
     let spawn_error = |source| BenchError::Spawn {
         kind: kind.to_string(),
         source,
@@ -231,19 +236,22 @@ fn spawn_children(kind: &str, prefix: &str, n: u32) -> BenchResult<Vec<Child>> {
     let exe = std::env::current_exe().map_err(spawn_error)?;
     (0..n)
         .map(|i| {
-            Command::new(&exe)
-                .args([
-                    "__bench-child",
-                    kind,
-                    "--prefix",
-                    prefix,
-                    "--index",
-                    &i.to_string(),
-                ])
-                .stdin(Stdio::null())
-                .process_group(0)
-                .spawn()
-                .map_err(spawn_error)
+            let mut cmd = Command::new(&exe);
+            if let Some(b) = barrier {
+                b.pass_to(&mut cmd);
+            }
+            cmd.args([
+                "__bench-child",
+                kind,
+                "--prefix",
+                prefix,
+                "--index",
+                &i.to_string(),
+            ])
+            .stdin(Stdio::null())
+            .process_group(0)
+            .spawn()
+            .map_err(spawn_error)
         })
         .collect()
 }
@@ -352,7 +360,7 @@ fn raw_iox2(n: u32, rounds: u64) -> BenchResult<Stats> {
         let (down, up) = iox2_services(&node, n as usize)?;
         let notifier = notifier(&down)?;
         let listener = listener(&up)?;
-        let children = spawn_children("iox2", &prefix, n)?;
+        let children = spawn_children("iox2", &prefix, n, None)?;
         let t = Instant::now();
         while up.dynamic_config().number_of_notifiers() < n as usize {
             if t.elapsed() > Duration::from_secs(ATTACH_S) {
@@ -388,8 +396,8 @@ fn raw_iox2(n: u32, rounds: u64) -> BenchResult<Stats> {
 fn futex_floor(n: u32, rounds: u64) -> BenchResult<Stats> {
     let prefix = bench_prefix("futex");
     let result = (|| {
-        let b = TickBarrier::create(&prefix, n)?;
-        let children = spawn_children("futex", &prefix, n)?;
+        let (b, fds) = TickBarrier::create(&prefix, n)?;
+        let children = spawn_children("futex", &prefix, n, Some(&fds))?;
         let t = Instant::now();
         while b.ready_count() < n {
             if t.elapsed() > Duration::from_secs(ATTACH_S) {
@@ -416,7 +424,6 @@ fn futex_floor(n: u32, rounds: u64) -> BenchResult<Stats> {
         reap_children(children);
         Ok(stats(ns))
     })();
-    swarm::barrier::unlink(&prefix);
     cleanup::remove_run(&prefix);
     result
 }
@@ -425,7 +432,7 @@ fn futex_floor(n: u32, rounds: u64) -> BenchResult<Stats> {
 pub fn child(a: &ChildArgs) -> i32 {
     match a.kind.as_str() {
         "futex" => {
-            let Ok(b) = TickBarrier::open(&a.prefix) else {
+            let Ok(b) = TickBarrier::open_inherited() else {
                 return 1;
             };
             b.mark_ready(a.index);

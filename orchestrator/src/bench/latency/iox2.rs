@@ -224,7 +224,7 @@ pub(super) fn parent(p: &Parent) -> BenchResult<Vec<u64>> {
 
 /// The child: answers each sample with `size` bytes stamped when it sends them.
 pub(super) fn child(a: &ChildArgs, mode: Mode) -> BenchResult<()> {
-    let barrier = open_barrier(a)?;
+    let barrier = open_barrier()?;
     let config = transport::run_config(&a.prefix)?;
     let node = transport::node(&config, "bench-lat-1")?;
     let down = Way::reach(&node, DOWN, DOWN_EV, false)?;

@@ -165,7 +165,7 @@ fn cell(path: Path, size: usize, mode: Mode, rounds: u64) -> BenchResult<Vec<u64
     let warm = (rounds / 10).max(5);
     let total = rounds + warm;
     let r = (|| -> BenchResult<Vec<u64>> {
-        let barrier = TickBarrier::create(&prefix, 2)?;
+        let (barrier, fds) = TickBarrier::create(&prefix, 2)?;
         // Round 0 is "released" by the parent itself; expected = 1 arms the child's ack wait.
         barrier.release(0, 1);
         let extra = [
@@ -179,6 +179,7 @@ fn cell(path: Path, size: usize, mode: Mode, rounds: u64) -> BenchResult<Vec<u64
         let p = Parent {
             prefix: &prefix,
             barrier: &barrier,
+            fds: &fds,
             extra: &extra,
             kind: path.kind(),
             mode,
@@ -195,7 +196,6 @@ fn cell(path: Path, size: usize, mode: Mode, rounds: u64) -> BenchResult<Vec<u64
         };
         Ok(ns.into_iter().skip(warm as usize).collect())
     })();
-    swarm::barrier::unlink(&prefix);
     cleanup::remove_run(&prefix);
     check_no_leftovers(&prefix)?;
     r
@@ -205,6 +205,8 @@ fn cell(path: Path, size: usize, mode: Mode, rounds: u64) -> BenchResult<Vec<u64
 struct Parent<'a> {
     prefix: &'a str,
     barrier: &'a TickBarrier,
+    /// The barrier's descriptors, for the child.
+    fds: &'a swarm::barrier::BarrierFds,
     extra: &'a [String],
     kind: &'a str,
     mode: Mode,
@@ -218,7 +220,7 @@ const READY_S: u64 = 30;
 impl Parent<'_> {
     /// Starts the child and waits until it is ready (it marks itself in the barrier).
     fn spawn(&self) -> BenchResult<Child> {
-        let mut c = spawn_child(self.kind, self.prefix, 1, self.extra, false)?;
+        let mut c = spawn_child(self.kind, (self.prefix, self.fds), 1, self.extra, false)?;
         let t = Instant::now();
         while self.barrier.ready_count() < 1 {
             if let Ok(Some(status)) = c.try_wait() {
@@ -275,8 +277,8 @@ fn wait_parent<T>(
 }
 
 /// The child's end of the barrier.
-fn open_barrier(a: &ChildArgs) -> BenchResult<TickBarrier> {
-    TickBarrier::open(&a.prefix).map_err(BenchError::from)
+fn open_barrier() -> BenchResult<TickBarrier> {
+    TickBarrier::open_inherited().map_err(BenchError::from)
 }
 
 // ---- the child side ----

@@ -339,7 +339,7 @@ pub(super) fn parent<M: Payload>(p: &Parent) -> BenchResult<Vec<u64>> {
 /// a fresh stamp, in its act sample.
 pub(super) fn child<M: Payload>(a: &ChildArgs, mode: Mode) -> BenchResult<()> {
     let sc = latency_scenario(a.size);
-    let barrier = open_barrier(a)?;
+    let barrier = open_barrier()?;
     let config = transport::run_config(&a.prefix)?;
     let node = transport::node(&config, "bench-lat-1")?;
     let act_svc = transport::act_service(&node, 1, false)?;

@@ -76,7 +76,7 @@ pub(super) fn parent(p: &Parent) -> BenchResult<Vec<u64>> {
 /// The child: on each Action frame, writes a full Sense frame in place (as the world does)
 /// with its stamp, and sends it.
 pub(super) fn child(a: &ChildArgs, mode: Mode) -> BenchResult<()> {
-    let barrier = open_barrier(a)?;
+    let barrier = open_barrier()?;
     let config = transport::run_config(&a.prefix)?;
     let node = transport::node(&config, "bench-lat-1")?;
     let sense_svc = transport::sense_service(&node, 0, false)?;

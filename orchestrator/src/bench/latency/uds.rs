@@ -31,7 +31,7 @@ pub(super) fn parent(p: &Parent) -> BenchResult<Vec<u64>> {
     listener
         .set_nonblocking(true)
         .map_err(uds_error("set_nonblocking"))?;
-    let mut child = spawn_child(p.kind, p.prefix, 1, p.extra, false)?;
+    let mut child = spawn_child(p.kind, (p.prefix, p.fds), 1, p.extra, false)?;
     let t = Instant::now();
     let mut stream = loop {
         match listener.accept() {

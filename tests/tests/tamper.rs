@@ -1,0 +1,360 @@
+//! A hostile agent against a live run (issue 37 items 4 and 5): this test process, of the
+//! same user as the run's processes, does what an agent program could do with the files it
+//! can reach, and the run must end in at most a fault of the tampered robot.
+//!
+//! - The tick barrier: nothing in /dev/shm to open by name; the sealed memfds an agent
+//!   inherits, opened again read-write through /proc/<pid>/fd, cannot be written, resized or
+//!   mapped writable.
+//! - Robot r's act publisher data segment (or its connection to the world) truncated under
+//!   the world: robot r becomes a fault, every other robot completes, `up` exits normally and
+//!   /dev/shm is left as found.
+//! - The orchestrator's own `run/control` segment truncated: the run goes on.
+//! - The limit (docs/protocol.md section 4): the world's own Sense segment truncated kills the
+//!   world by SIGBUS; the run fails, named so, and still leaves nothing behind.
+
+use e2e::*;
+use std::os::fd::AsRawFd;
+use std::path::Path;
+use std::process::Child;
+use std::time::{Duration, Instant};
+
+/// Robots of every run here.
+const ROBOTS: usize = 4;
+/// Ticks of every run (at [`TICK_HZ`]: 10 s, time enough to tamper mid-run on a loaded
+/// machine).
+const MAX_TICKS: &str = "1000";
+const TICK_HZ: &str = "100";
+/// The robot whose files are tampered with.
+const VICTIM: usize = 1;
+/// A robot SIGSTOPped while robot [`VICTIM`]'s segment is truncated: the world then waits for
+/// it while holding the victim's action of the tick, so its next read of that action is a
+/// read of the truncated segment (and the victim, waiting for the next release, does not
+/// touch its own segment first).
+const STALLED: usize = 2;
+/// How long the stalled robot is stopped before the truncation (the victim sends its action
+/// in far less); well under the scenario's ack deadline.
+const STALL: Duration = Duration::from_millis(300);
+
+/// Starts a paced roam run of [`ROBOTS`] robots; returns it and the agent pids by robot.
+fn start(tag: &str) -> (Child, std::path::PathBuf, String, Vec<i32>) {
+    let out = tmp_dir(tag);
+    let id = own_run_id(tag);
+    let up = spawn_up_as(
+        &[
+            "--scenario",
+            roam(),
+            "--robots",
+            &ROBOTS.to_string(),
+            "--max-ticks",
+            MAX_TICKS,
+            "--tick-hz",
+            TICK_HZ,
+        ],
+        &out,
+        Some(&id),
+    );
+    let mut up = up;
+    let t = Instant::now();
+    let entry = loop {
+        if let Some(v) = registry_of(&out)
+            .filter(|v| v["agent_pids"].as_array().map(|a| a.len()) == Some(ROBOTS))
+        {
+            break v;
+        }
+        if up.try_wait().unwrap().is_some() {
+            let o = up.wait_with_output().unwrap();
+            panic!("the run ended before the test began: {}", stderr(&o));
+        }
+        assert!(
+            t.elapsed() < Duration::from_secs(60),
+            "no agents registered"
+        );
+        std::thread::sleep(Duration::from_millis(10));
+    };
+    let pids: Vec<i32> = entry["agent_pids"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|p| p.as_i64().unwrap() as i32)
+        .collect();
+    let prefix = swarm::transport::prefix_for(&id);
+    for (r, pid) in pids.iter().enumerate() {
+        let cmd = std::fs::read(format!("/proc/{pid}/cmdline")).unwrap_or_default();
+        let args: Vec<String> = cmd
+            .split(|&b| b == 0)
+            .map(|a| String::from_utf8_lossy(a).into_owned())
+            .collect();
+        assert!(
+            args.windows(2)
+                .any(|w| w[0] == "--robot" && w[1] == r.to_string())
+                && args.contains(&prefix),
+            "pid {pid} is not robot {r}'s agent: {args:?}"
+        );
+    }
+    // The run is ticking.
+    let t = Instant::now();
+    while registry_tick(&out) < 5 {
+        assert!(
+            t.elapsed() < Duration::from_secs(30),
+            "the run never ticked"
+        );
+        std::thread::sleep(Duration::from_millis(10));
+    }
+    (up, out, id, pids)
+}
+
+/// The barrier descriptors `pid` inherited (`SWARM_BARRIER_FDS=<tick>,<acks>`).
+fn barrier_fds(pid: i32) -> (i32, i32) {
+    let env = std::fs::read(format!("/proc/{pid}/environ")).unwrap();
+    let var = env
+        .split(|&b| b == 0)
+        .map(String::from_utf8_lossy)
+        .find_map(|v| v.strip_prefix("SWARM_BARRIER_FDS=").map(str::to_string))
+        .expect("agent has SWARM_BARRIER_FDS");
+    let (t, a) = var.split_once(',').unwrap();
+    (t.parse().unwrap(), a.parse().unwrap())
+}
+
+/// `pid`'s descriptor `fd`, opened again read-write through /proc.
+fn reopen(pid: i32, fd: i32) -> std::fs::File {
+    std::fs::OpenOptions::new()
+        .read(true)
+        .write(true)
+        .open(format!("/proc/{pid}/fd/{fd}"))
+        .unwrap_or_else(|e| panic!("open /proc/{pid}/fd/{fd} read-write: {e}"))
+}
+
+/// Whether a shared writable mapping of `f` is made (unmapped at once if so).
+fn maps_writable(f: &std::fs::File) -> bool {
+    let len = f.metadata().unwrap().len() as usize;
+    // SAFETY: a new mapping of our own, unmapped below.
+    let p = unsafe {
+        libc::mmap(
+            std::ptr::null_mut(),
+            len,
+            libc::PROT_READ | libc::PROT_WRITE,
+            libc::MAP_SHARED,
+            f.as_raw_fd(),
+            0,
+        )
+    };
+    if p == libc::MAP_FAILED {
+        return false;
+    }
+    // SAFETY: our mapping.
+    unsafe { libc::munmap(p, len) };
+    true
+}
+
+/// Robot `pid`'s own act publisher data segment: the one iceoryx2 `.data` file it maps
+/// read-write.
+fn own_data_segment(pid: i32) -> String {
+    let maps = std::fs::read_to_string(format!("/proc/{pid}/maps")).unwrap();
+    let own: Vec<&str> = maps
+        .lines()
+        .filter(|l| l.split_whitespace().nth(1) == Some("rw-s") && l.ends_with(".data"))
+        .filter_map(|l| l.split_whitespace().nth(5))
+        .collect();
+    assert_eq!(own.len(), 1, "{maps}");
+    own[0].to_string()
+}
+
+fn truncate(path: &str) {
+    std::fs::OpenOptions::new()
+        .write(true)
+        .open(path)
+        .and_then(|f| f.set_len(0))
+        .unwrap_or_else(|e| panic!("truncate {path}: {e}"));
+}
+
+fn signal(pid: i32, sig: i32) {
+    // SAFETY: a signal to an agent of this test's own run.
+    unsafe { libc::kill(pid, sig) };
+}
+
+/// The faults of the run in `out`: (robot, cause).
+fn faults(out: &Path) -> Vec<(u64, String)> {
+    summary(out)["faults"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|f| {
+            (
+                f["robot"].as_u64().unwrap(),
+                f["cause"].as_str().unwrap().to_string(),
+            )
+        })
+        .collect()
+}
+
+/// The run ended by itself with every tick, robot [`VICTIM`] at most faulted, and left
+/// nothing behind.
+fn assert_only_the_victim_hurt(up: Child, out: &Path, id: &str) -> Vec<(u64, String)> {
+    let o = up.wait_with_output().unwrap();
+    assert!(ended_by_itself(&o), "{}", stderr(&o));
+    let s = summary(out);
+    assert_eq!(s["end"], "completed", "{s}");
+    assert_eq!(s["ticks"].as_u64(), MAX_TICKS.parse().ok(), "{s}");
+    let f = faults(out);
+    assert!(f.iter().all(|(r, _)| *r == VICTIM as u64), "{f:?}");
+    assert!(
+        s["alive_at_end"].as_u64().unwrap() >= ROBOTS as u64 - 1,
+        "{s}"
+    );
+    assert!(shm_of_run(id).is_empty(), "{:?}", shm_of_run(id));
+    assert_left_nothing(out);
+    f
+}
+
+#[test]
+fn the_barrier_is_out_of_an_agents_reach() {
+    let _g = serial();
+    let (up, out, id, pids) = start("barrier");
+    let prefix = swarm::transport::prefix_for(&id);
+    // Nothing of the barrier in /dev/shm to open by name.
+    for name in ["tick", "acks"] {
+        let p = format!("/dev/shm/{prefix}{name}");
+        assert!(!Path::new(&p).exists(), "{p} exists");
+    }
+    let pid = pids[VICTIM];
+    let (tick_fd, acks_fd) = barrier_fds(pid);
+    // The world's segment (release, shutdown, kill orders): refused whatever the way in.
+    let tick = reopen(pid, tick_fd);
+    let len = tick.metadata().unwrap().len();
+    assert!(len > 0);
+    use std::os::unix::fs::FileExt;
+    assert!(
+        tick.write_at(&[0xff; 8], 16).is_err(),
+        "write to the tick segment"
+    );
+    assert!(tick.set_len(0).is_err(), "shrink the tick segment");
+    assert!(tick.set_len(len * 2).is_err(), "grow the tick segment");
+    assert!(
+        !maps_writable(&tick),
+        "writable mapping of the tick segment"
+    );
+    // The agents' segment: written through the agents' mappings, but never resized nor
+    // sealed further (a seal against writes would stop every agent).
+    let acks = reopen(pid, acks_fd);
+    let acks_len = acks.metadata().unwrap().len();
+    assert!(acks.set_len(0).is_err(), "shrink the acks segment");
+    assert!(acks.set_len(acks_len * 2).is_err(), "grow the acks segment");
+    // SAFETY: fcntl on our own descriptor.
+    let sealed = unsafe {
+        libc::fcntl(
+            acks.as_raw_fd(),
+            libc::F_ADD_SEALS,
+            libc::F_SEAL_FUTURE_WRITE,
+        )
+    };
+    assert_eq!(sealed, -1, "seal the acks segment against writes");
+    assert_eq!(tick.metadata().unwrap().len(), len);
+    assert_eq!(acks.metadata().unwrap().len(), acks_len);
+    drop((tick, acks));
+    let f = assert_only_the_victim_hurt(up, &out, &id);
+    assert!(f.is_empty(), "{f:?}");
+}
+
+#[test]
+fn a_truncated_act_segment_makes_only_its_robot_a_fault() {
+    let _g = serial();
+    let (up, out, id, pids) = start("act-data");
+    signal(pids[STALLED], libc::SIGSTOP);
+    std::thread::sleep(STALL);
+    truncate(&own_data_segment(pids[VICTIM]));
+    signal(pids[STALLED], libc::SIGCONT);
+    let f = assert_only_the_victim_hurt(up, &out, &id);
+    assert_eq!(f.len(), 1, "{f:?}");
+    assert!(
+        f[0].1
+            .contains(&format!("robot {VICTIM}'s act segment shrank")),
+        "{f:?}"
+    );
+}
+
+#[test]
+fn a_truncated_act_connection_hurts_only_its_robot() {
+    let _g = serial();
+    let (up, out, id, pids) = start("act-conn");
+    // The connection files of the victim's publisher (`<service>_<publisher>_<subscriber>`).
+    let data = own_data_segment(pids[VICTIM]);
+    let publisher = data
+        .trim_end_matches(".data")
+        .rsplit('_')
+        .next()
+        .unwrap()
+        .to_string();
+    let conns: Vec<String> = std::fs::read_dir("/dev/shm")
+        .unwrap()
+        .flatten()
+        .map(|e| e.path().display().to_string())
+        .filter(|p| p.contains(&format!("_{publisher}_")) && p.ends_with(".connection"))
+        .collect();
+    assert!(!conns.is_empty(), "no connection of {data}");
+    for c in &conns {
+        truncate(c);
+    }
+    let f = assert_only_the_victim_hurt(up, &out, &id);
+    assert_eq!(f.len(), 1, "{f:?}");
+}
+
+/// The orchestrator's own `run/control` publisher segment truncated, then an agent dies: the
+/// orchestrator's report of the death (and the world's read of it) see zeros rather than
+/// SIGBUS the orchestrator, which left the run's files behind; the world finds the dead robot
+/// by its ack deadline and the run completes.
+#[test]
+fn a_truncated_control_segment_leaves_the_orchestrator_standing() {
+    let _g = serial();
+    let (up, out, id, pids) = start("control");
+    let maps = std::fs::read_to_string(format!("/proc/{}/maps", up.id())).unwrap();
+    let control: Vec<&str> = maps
+        .lines()
+        .filter(|l| l.split_whitespace().nth(1) == Some("rw-s") && l.ends_with(".data"))
+        .filter_map(|l| l.split_whitespace().nth(5))
+        .collect();
+    assert_eq!(control.len(), 1, "{maps}");
+    truncate(control[0]);
+    signal(pids[VICTIM], libc::SIGKILL);
+    let f = assert_only_the_victim_hurt(up, &out, &id);
+    assert_eq!(f.len(), 1, "{f:?}");
+}
+
+/// The limit: nothing blames a robot for the world's own Sense segment, so the world dies of
+/// SIGBUS; the run fails, says so, and leaves nothing behind.
+#[test]
+fn a_truncated_sense_segment_fails_the_run_cleanly() {
+    let _g = serial();
+    let (up, out, id, _pids) = start("sense");
+    let world_pid = processes_mentioning(&swarm::transport::prefix_for(&id))
+        .into_iter()
+        .find(|p| {
+            std::fs::read_link(format!("/proc/{p}/exe"))
+                .is_ok_and(|e| e.file_name().is_some_and(|n| n == "world"))
+        })
+        .expect("world process");
+    let maps = std::fs::read_to_string(format!("/proc/{world_pid}/maps")).unwrap();
+    // The world's biggest writable .data segment is the Sense one (every robot's record).
+    let sense = maps
+        .lines()
+        .filter(|l| l.split_whitespace().nth(1) == Some("rw-s") && l.ends_with(".data"))
+        .filter_map(|l| l.split_whitespace().nth(5))
+        .max_by_key(|p| std::fs::metadata(p).map(|m| m.len()).unwrap_or(0))
+        .expect("the world's Sense segment")
+        .to_string();
+    truncate(&sense);
+    let o = up.wait_with_output().unwrap();
+    assert_eq!(
+        o.status.code(),
+        Some(exit::FAILED),
+        "{:?} {}",
+        o.status,
+        stderr(&o)
+    );
+    assert!(
+        stderr(&o).contains("world process was killed by signal 7 (SIGBUS"),
+        "{}",
+        stderr(&o)
+    );
+    assert!(shm_of_run(&id).is_empty(), "{:?}", shm_of_run(&id));
+    assert!(processes_mentioning(&swarm::transport::prefix_for(&id)).is_empty());
+}
