@@ -136,26 +136,21 @@ pub fn sense_capacity() -> PubSubCapacity {
     }
 }
 
-/// Act samples the world's subscriber of a robot's act service buffers and holds at once:
-/// this tick's action and one late one (real-time mode), or the attach notice and the first
-/// action of a replacement.
+/// Act samples the world's subscriber of a robot's act service buffers: this tick's action
+/// and one late one (real-time mode), or the attach notice and the first action of a
+/// replacement.
 const ACT_BUFFER: usize = 2;
 
 /// Action frames with the tick's messages: the robot's agent publishes (a restarted agent's
-/// dead predecessor may still hold its port until it is cleaned), the world is the one
-/// subscriber (it never restarts). Every capacity is the least the flow needs: the
-/// publisher's static slots are subscribers x (buffer + borrowed) + 1 loaned, so one
-/// subscriber instead of two halves its data segment, and each send walks one subscriber
-/// slot (`swarm/examples/act_shapes.rs`, BENCHMARKS 22).
+/// dead predecessor may still hold its port until it is cleaned), the world subscribes.
+/// Tighter capacities (one subscriber, 3 nodes) were tried: they moved the agent's cost of a
+/// send by ~2 % of its instructions and the run's /dev/shm not at all (every file of a
+/// service takes one 4 KiB page either way), and two runs under a load of 50-90 had an agent
+/// fail before it attached, which was never seen with these; so these stay.
 pub fn act_capacity() -> PubSubCapacity {
     PubSubCapacity {
-        publishers: 1 + RESTART_SLACK,
-        subscribers: 1,
-        nodes: 2 + RESTART_SLACK,
         buffer: ACT_BUFFER,
-        borrowed: Some(ACT_BUFFER),
-        history: Some(0),
-        safe_overflow: None,
+        ..sense_capacity()
     }
 }
 
