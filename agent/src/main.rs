@@ -54,7 +54,7 @@ fn main() {
         Err(e) => {
             // A restarted agent can start just as the run ends: its services are gone with
             // the run, which is no fault of the agent's. Say nothing then.
-            let run_over = swarm::barrier::TickBarrier::open_agent()
+            let run_over = swarm::barrier::TickBarrier::open_agent(&a.prefix)
                 .map(|b| b.is_shutdown())
                 .unwrap_or(true);
             if run_over {

@@ -72,7 +72,7 @@ fn run_loop<B: Behaviour>(args: &AgentArgs, mut rt: AgentRuntime<B>) -> Result<i
     // The air: the `radio/air` service (a sample held while a read or a zero-copy view
     // lasts).
     let mut air_in = transport::AirSource::open(&node, sc)?;
-    let barrier = TickBarrier::open_agent()?;
+    let barrier = TickBarrier::open_agent(&args.prefix)?;
     let world_pid = barrier.world_pid();
     let bell = match sc.runtime.barrier {
         swarm::scenario::BarrierKind::Futex => None,

@@ -86,6 +86,16 @@ pub enum BarrierError {
          docs/protocol.md section 4)"
     )]
     NoFds { value: String },
+    /// A descriptor [`FDS_ENV`] names is not the run's barrier segment.
+    #[error(
+        "tick barrier: fd {fd} is {found:?}, not this run's segment (the memfd {expected:?}; \
+         {FDS_ENV}, docs/protocol.md section 4)"
+    )]
+    NotThisRun {
+        fd: i32,
+        expected: String,
+        found: String,
+    },
     /// The segment is smaller than its header: not a barrier of this runtime.
     #[error("the tick barrier segment {segment} is too small: {bytes} bytes")]
     TooSmall { segment: String, bytes: usize },
@@ -239,12 +249,26 @@ impl TickBarrier {
         Self::open_as(SIZE_SEALS, true)
     }
 
-    /// Opens the segments as an agent, from the descriptors [`FDS_ENV`] names: the world's
-    /// read-only (refused unless sealed [`TICK_SEALS`]: nobody can map it writable any
-    /// more), the agents' read-write (refused unless its size is sealed). No argument: an
-    /// agent finds everything in its environment (docs/protocol.md section 4).
-    pub fn open_agent() -> Result<TickBarrier, BarrierError> {
-        Self::open_as(TICK_SEALS, false)
+    /// Opens the segments of the run with the iceoryx2 prefix `prefix` as an agent, from the
+    /// descriptors [`FDS_ENV`] names (refused unless they are that run's memfds): the world's
+    /// read-only (refused unless sealed [`TICK_SEALS`]: nobody can map it writable any more),
+    /// the agents' read-write (refused unless its size is sealed). docs/protocol.md section 4.
+    pub fn open_agent(prefix: &str) -> Result<TickBarrier, BarrierError> {
+        let (tick, acks) = Self::inherited_fds()?;
+        for (fd, name) in [(tick, segment(prefix)), (acks, ack_segment(prefix))] {
+            let found = std::fs::read_link(format!("/proc/self/fd/{}", fd.as_raw_fd()))
+                .map(|p| p.display().to_string())
+                .unwrap_or_default();
+            // A memfd's link reads "/memfd:<name> (deleted)".
+            if found != format!("/memfd:{name} (deleted)") {
+                return Err(BarrierError::NotThisRun {
+                    fd: fd.as_raw_fd(),
+                    expected: name,
+                    found,
+                });
+            }
+        }
+        Self::open_fds(tick, acks, TICK_SEALS, false)
     }
 
     /// The descriptors [`FDS_ENV`] names.
@@ -560,10 +584,25 @@ mod tests {
     #[test]
     fn errors_name_the_segment_and_what_is_wrong() {
         // No descriptors in the environment (this test process was not started so).
-        let e = TickBarrier::open_agent().err().expect("no fds");
+        let e = TickBarrier::open_agent("swbe_").err().expect("no fds");
         assert!(matches!(e, BarrierError::NoFds { .. }), "{e}");
         assert!(e.to_string().contains(FDS_ENV), "{e}");
 
+        let (_w, fds) = TickBarrier::create("swbe_", 2).unwrap();
+        // Another run's descriptors (or any other file) are refused by name. (The only test
+        // that sets the variable.)
+        let value = format!("{},{}", fds.tick.as_raw_fd(), fds.acks.as_raw_fd());
+        std::env::set_var(FDS_ENV, &value);
+        let e = TickBarrier::open_agent("swother_")
+            .err()
+            .expect("not this run's");
+        assert!(
+            matches!(e, BarrierError::NotThisRun { ref expected, .. } if expected == "swother_tick"),
+            "{e}"
+        );
+        fds.seal_worlds_segment().unwrap();
+        assert!(TickBarrier::open_agent("swbe_").is_ok());
+        std::env::remove_var(FDS_ENV);
         let (_w, fds) = TickBarrier::create("swbe_", 2).unwrap();
         // The world's segment is not sealed against writes yet: an agent refuses it.
         let e = agent(&fds).err().expect("not sealed yet");

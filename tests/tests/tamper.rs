@@ -324,7 +324,7 @@ fn a_truncated_control_segment_leaves_the_orchestrator_standing() {
 #[test]
 fn a_truncated_sense_segment_fails_the_run_cleanly() {
     let _g = serial();
-    let (up, out, id, _pids) = start("sense");
+    let (up, _out, id, _pids) = start("sense");
     let world_pid = processes_mentioning(&swarm::transport::prefix_for(&id))
         .into_iter()
         .find(|p| {

@@ -133,7 +133,12 @@ pub fn install() -> Result<(), GuardError> {
 /// either way its result is not to be believed: the caller makes the robot a fault, or gives
 /// up the run's segment, [`control_lost`]). A panic without a shrink is passed on.
 pub fn reading<T>(robot: u32, f: impl FnOnce() -> T) -> Option<T> {
-    READER.store(tid(), Ordering::Release);
+    thread_local! {
+        /// This thread's kernel id (one syscall per thread, not one per read: the world
+        /// guards every poll of every robot's act service).
+        static TID: u32 = tid();
+    }
+    READER.store(TID.with(|t| *t), Ordering::Release);
     READING.store(robot, Ordering::Release);
     // The handler runs on this thread: the marker is set before any of f's reads and cleared
     // after them, as the compiler emits them.
