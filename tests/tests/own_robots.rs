@@ -250,7 +250,9 @@ fn bad_agents_input_exits_2_naming_file_key_and_line() {
         extra: "",
     };
     let bad_params = BOIDS_PARAMS.replace("alignment = 0.125", "alignment = \"strong\"");
-    let cases: Vec<(&str, Vec<Entry>, &[&str], &str, &str)> = vec![
+    // (tag, entries, more flags, the key named, the start of the line named)
+    type Case<'a> = (&'a str, Vec<Entry<'a>>, &'a [&'a str], &'a str, &'a str);
+    let cases: Vec<Case> = vec![
         (
             "overlap",
             vec![entry("\"0..3\"", &boids, ""), entry("[5, 2]", &boids, "")],
