@@ -66,7 +66,12 @@ impl RealtimeClock {
 
     /// Receives what the live robots sent since the last look; true if every live robot's
     /// action of tick k arrived.
-    fn all_acked(&mut self, world: &World, acts: &mut transport::ActSource, k: u64) -> bool {
+    fn all_acked(
+        &mut self,
+        world: &World,
+        acts: &mut crate::shrink_guard::GuardedActs,
+        k: u64,
+    ) -> bool {
         let now = Instant::now();
         let mut all = true;
         for i in world.live_robots() {
@@ -219,7 +224,7 @@ pub fn monotonic_us() -> u64 {
 fn wait_realtime(
     clock: &mut RealtimeClock,
     world: &mut World,
-    acts: &mut transport::ActSource,
+    acts: &mut crate::shrink_guard::GuardedActs,
     barrier: &TickBarrier,
     bell: Option<&swarm::bell::EventBell>,
     (control, ctl, drivers): (

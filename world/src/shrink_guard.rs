@@ -240,16 +240,29 @@ impl GuardedActs {
         k: u64,
         since: u64,
         sent: &mut Air,
-        late_msgs: &mut Air,
     ) -> (Option<Action>, Option<Action>) {
         let before = sent.len();
-        let out = self.guard(robot, |a| {
-            a.take_realtime(robot, k, since, &mut *sent, late_msgs)
-        });
+        let out = self.guard(robot, |a| a.take_realtime(robot, k, since, &mut *sent));
         if out.is_none() {
             sent.truncate(before);
         }
         out.unwrap_or((None, None))
+    }
+
+    /// [`ActSource::attached`]; 0 (not attached) when the robot's segment shrank.
+    pub fn attached(&mut self, robot: u32) -> u64 {
+        self.guard(robot, |a| a.attached(robot)).unwrap_or(0)
+    }
+
+    /// [`ActSource::poll_realtime`]; no progress when the robot's segment shrank.
+    pub fn poll_realtime(&mut self, robot: u32, k: u64, since: u64) -> bool {
+        self.guard(robot, |a| a.poll_realtime(robot, k, since))
+            .unwrap_or(false)
+    }
+
+    /// [`ActSource::holds`].
+    pub fn holds(&mut self, robot: u32, k: u64) -> bool {
+        self.guard(robot, |a| a.holds(robot, k)).unwrap_or(false)
     }
 
     /// [`ActSource::discard`].
