@@ -71,12 +71,17 @@ fn main() {
         .skip(1)
         .map(|a| a.parse().expect("N ROUNDS"))
         .collect();
-    let (n, r) = (args.first().copied().unwrap_or(50), args.get(1).copied().unwrap_or(1000));
+    let (n, r) = (
+        args.first().copied().unwrap_or(50),
+        args.get(1).copied().unwrap_or(1000),
+    );
     set_log_level_from_env_or(LogLevel::Error);
     let prefix = format!("swactshape{}_", std::process::id());
     let mut config = Config::default();
     config.global.prefix = FileName::new(prefix.as_bytes()).unwrap();
-    config.global.set_root_path(&Path::new(b"/dev/shm/swactshape_iox2/").unwrap());
+    config
+        .global
+        .set_root_path(&Path::new(b"/dev/shm/swactshape_iox2/").unwrap());
     let node = NodeBuilder::new()
         .config(&config)
         .signal_handling_mode(SignalHandlingMode::Disabled)
@@ -116,7 +121,11 @@ fn main() {
     drop(node);
     // Everything of this program in /dev/shm starts with `swactshape`: leave none of it.
     let _ = std::fs::remove_dir_all("/dev/shm/swactshape_iox2");
-    for e in std::fs::read_dir("/dev/shm").into_iter().flatten().flatten() {
+    for e in std::fs::read_dir("/dev/shm")
+        .into_iter()
+        .flatten()
+        .flatten()
+    {
         if e.file_name().to_string_lossy().starts_with(&prefix) {
             let _ = std::fs::remove_file(e.path());
         }
