@@ -121,7 +121,7 @@ fn forge(prefix: String, stop: Arc<AtomicBool>) -> u64 {
     while !stop.load(Ordering::Acquire) {
         // The ack counter: cleared (the world's wake-ups lost), or far past any expected
         // count (the world woken for nothing); the ready counter likewise.
-        let c = if pass % 2 == 0 { 0 } else { 1 << 30 };
+        let c = if pass.is_multiple_of(2) { 0 } else { 1 << 30 };
         counter(0).store(c, Ordering::Release);
         counter(4).store(c, Ordering::Release);
         for r in 0..ROBOTS {

@@ -222,9 +222,8 @@ pub fn monotonic_us() -> u64 {
 /// then declares dead every robot silent for longer than `runtime.ack_deadline_ms` (per robot,
 /// from its last acknowledgement). Returns false on a stop request.
 fn wait_realtime(
-    clock: &mut RealtimeClock,
+    (clock, acts): (&mut RealtimeClock, &mut crate::shrink_guard::GuardedActs),
     world: &mut World,
-    acts: &mut crate::shrink_guard::GuardedActs,
     barrier: &TickBarrier,
     bell: Option<&swarm::bell::EventBell>,
     (control, ctl, drivers): (
@@ -418,9 +417,8 @@ pub fn run(args: &WorldArgs) -> Result<i32> {
         barrier.release_with(k, world.alive_count(), bell);
         if realtime {
             if !wait_realtime(
-                &mut clock,
+                (&mut clock, &mut acts),
                 &mut world,
-                &mut acts,
                 &barrier,
                 bell,
                 (&control, &mut ctl, &mut drivers),
@@ -473,10 +471,14 @@ pub fn run(args: &WorldArgs) -> Result<i32> {
         // lasts until it changes (a forged counter at or above the expected count would
         // otherwise return at once, and the world would spin).
         let mut missing_at: Option<u32> = None;
+        // A robot declared dead since the last look (a death report, the deadline): look
+        // again at once, as the remaining robots may all be done.
+        let mut look_now = false;
         loop {
-            match missing_at {
-                None => barrier.wait_acks_with(poll, bell),
-                Some(seen) => barrier.wait_ack_change_with(seen, poll, bell),
+            match (look_now, missing_at) {
+                (true, _) => {}
+                (false, None) => barrier.wait_acks_with(poll, bell),
+                (false, Some(seen)) => barrier.wait_ack_change_with(seen, poll, bell),
             }
             let seen = barrier.ack_count();
             // A robot is done with tick k when its own act service delivered its action of
@@ -495,6 +497,7 @@ pub fn run(args: &WorldArgs) -> Result<i32> {
                 acked = now_acked;
                 waited = Instant::now();
             }
+            let alive = world.alive_count();
             drain_control(&control, &mut world, &mut ctl, &barrier, &drivers);
             if ctl.stop {
                 // Ctrl-C while agents are slow (the first ticks make every radio link, which
@@ -513,6 +516,7 @@ pub fn run(args: &WorldArgs) -> Result<i32> {
                 }
                 drivers.order_kills(&world, &barrier);
             }
+            look_now = world.alive_count() != alive;
         }
         sent.clear();
         for (i, a) in actions.iter_mut().enumerate() {
