@@ -71,7 +71,7 @@ fn sigkilled_rust_boids_agents_are_restarted() {
     let sc = scenario_with_agents(&dir, "robots = 6", &[boids_entry("[3, 4, 5]")]);
     let out = dir.join("run");
     let id = own_run_id("own-restart");
-    let mut child = spawn_up_as(
+    let child = spawn_up_as(
         &[
             "--scenario",
             sc.to_str().unwrap(),
