@@ -75,8 +75,9 @@ pub enum KillError {
 }
 
 /// SIGKILLs the agents of `robots` (each once, however often it is named) in live run `run`
-/// (found in the run registry; only the recorded process, verified as this build's agent
-/// started at the recorded time). One line per robot: killed, or gone.
+/// (found in the run registry; only the recorded process, verified as this build's agent, or
+/// an `[[agents]]` program with the run's prefix in its arguments, started at the recorded
+/// time). One line per robot: killed, or gone.
 /// `orchestrator kill` and the viewer's kill button both come here.
 pub fn kill_robots(run: &str, robots: &[u32]) -> Result<Vec<String>, KillError> {
     let runs = live_runs()?;
@@ -106,7 +107,7 @@ pub fn kill_robots(run: &str, robots: &[u32]) -> Result<Vec<String>, KillError> 
     let mut seen = std::collections::BTreeSet::new();
     for &r in robots.iter().filter(|&&r| seen.insert(r)) {
         let pid = e.agent_pids[r as usize];
-        if !registry::is_ours(pid, e.agent_starts[r as usize], registry::AGENT) {
+        if !e.is_agent(pid, e.agent_starts[r as usize]) {
             lines.push(format!("robot {r}: process {pid} is gone (already dead?)"));
             continue;
         }

@@ -305,16 +305,30 @@ impl RunEntry {
 
     /// The run's world and agent processes still running (pid, binary), verified.
     pub fn live_children(&self) -> Vec<u32> {
-        std::iter::once((self.world_pid, self.world_start, WORLD))
+        let world = is_ours(self.world_pid, self.world_start, WORLD).then_some(self.world_pid);
+        world
+            .into_iter()
             .chain(
                 self.agent_pids
                     .iter()
                     .zip(&self.agent_starts)
-                    .map(|(&p, &s)| (p, s, AGENT)),
+                    .filter(|&(&p, &s)| self.is_agent(p, s))
+                    .map(|(&p, _)| p),
             )
-            .filter(|&(p, s, b)| is_ours(p, s, b))
-            .map(|(p, _, _)| p)
             .collect()
+    }
+
+    /// Whether `pid` is still the agent this run started at `start`: this build's agent
+    /// binary, or (an `[[agents]]` program of the user's, issue 38) a process started at that
+    /// time whose arguments hold this run's `--prefix`.
+    pub fn is_agent(&self, pid: u32, start: u64) -> bool {
+        is_ours(pid, start, AGENT)
+            || (pid != 0 && start != 0 && start_time(pid) == Some(start) && {
+                let cmdline = std::fs::read(format!("/proc/{pid}/cmdline")).unwrap_or_default();
+                cmdline
+                    .split(|&b| b == 0)
+                    .any(|arg| arg == self.prefix.as_bytes())
+            })
     }
 }
 

@@ -60,36 +60,67 @@ fn a_mixed_swarm_of_built_in_and_rust_boids_robots_runs_lock_step_and_repeats_ex
     let _ = std::fs::remove_dir_all(&dir);
 }
 
-/// A rust-boids agent SIGKILLed (a scheduled kill at tick 60) under `--on-fault restart`
-/// comes back: the fault is restarted, its log holds two starts, all robots end alive.
+/// rust-boids agents SIGKILLed under `--on-fault restart` come back: one by a scheduled kill
+/// (tick 60, the world's order), one by `orchestrator kill` from another terminal (as the
+/// viewer's button does). Both faults are restarted, each log holds two starts, all robots end
+/// alive.
 #[test]
-fn a_sigkilled_rust_boids_agent_is_restarted() {
+fn sigkilled_rust_boids_agents_are_restarted() {
     let _g = serial();
     let dir = tmp_dir("own-restart");
     let sc = scenario_with_agents(&dir, "robots = 6", &[boids_entry("[3, 4, 5]")]);
     let out = dir.join("run");
-    let o = up_file(
-        &sc,
+    let id = own_run_id("own-restart");
+    let child = spawn_up_as(
         &[
+            "--scenario",
+            sc.to_str().unwrap(),
             "--max-ticks",
-            "300",
+            "400",
             "--tick-hz",
-            "200",
+            "100",
             "--on-fault",
             "restart",
             "--chaos-at",
             "60:4",
         ],
         &out,
+        Some(&id),
     );
+    let t = Instant::now();
+    while registry_tick(&out) < 150 && t.elapsed() < Duration::from_secs(30) {
+        std::thread::sleep(Duration::from_millis(10));
+    }
+    let k = Command::new(orchestrator())
+        .args(["kill", "--run", &id, "--robot", "5"])
+        .output()
+        .unwrap();
+    assert!(
+        stdout(&k).contains("killed robot 5"),
+        "{} {}",
+        stdout(&k),
+        stderr(&k)
+    );
+    let o = child.wait_with_output().unwrap();
     assert_eq!(o.status.code(), Some(exit::COMPLETE), "{}", stderr(&o));
     let s = summary(&out);
-    assert_every_kill_restarted(&s, 1);
-    assert_eq!(s["faults"][0]["robot"].as_u64(), Some(4), "{s}");
+    assert_every_kill_restarted(&s, 2);
+    let robots: Vec<u64> = s["faults"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|f| f["robot"].as_u64().unwrap())
+        .collect();
+    assert_eq!(robots, [4, 5], "{s}");
     assert_eq!(s["alive_at_end"].as_u64(), Some(6), "{s}");
-    let log = std::fs::read_to_string(out.join("logs/robot-4.log")).unwrap();
-    assert_eq!(log.matches("--- swarm: agent start").count(), 2, "{log}");
-    assert!(log.contains("agent start 2 of robot 4"), "{log}");
+    for r in [4, 5] {
+        let log = std::fs::read_to_string(out.join(format!("logs/robot-{r}.log"))).unwrap();
+        assert_eq!(log.matches("--- swarm: agent start").count(), 2, "{log}");
+        assert!(
+            log.contains(&format!("agent start 2 of robot {r}")),
+            "{log}"
+        );
+    }
     assert_left_nothing(&out);
     let _ = std::fs::remove_dir_all(&dir);
 }
