@@ -1,11 +1,11 @@
-//! The robot side: behaviours (one per scenario) and the agent process loop.
+//! The robot side: the built-in behaviours (one per scenario); the agent process loop is
+//! `swarm::agent`.
 
 pub mod behaviours;
 pub mod cbca;
 pub mod formation;
 pub mod hunt;
 pub mod kernels;
-pub mod process;
 pub mod search;
 
 pub use behaviours::{dispatch, BehaviourVisitor};

@@ -13,6 +13,7 @@ compile_error!(
     "the swarm runtime is Linux-only (futex, /proc, /dev/shm); build it on Linux (README.md)"
 );
 
+pub mod agent;
 pub mod air;
 pub mod barrier;
 pub mod behaviour;

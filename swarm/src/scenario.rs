@@ -4,6 +4,7 @@ use serde::{Deserialize, Serialize};
 use std::fmt;
 use std::path::Path;
 
+pub use crate::sections::agents::{AgentEntry, RobotSet};
 pub use crate::sections::formation::FormationSection;
 pub use crate::sections::hunt::HuntSection;
 pub use crate::sections::roam::{RoamParams, ROAM_BEACON_OVERHEAD};
@@ -37,6 +38,10 @@ pub struct Scenario {
     /// read and validated by the agent crate's `cbca` behaviour. Left out when empty.
     #[serde(default, skip_serializing_if = "toml::Table::is_empty")]
     pub cbca: toml::Table,
+    /// `[[agents]]`: robots run by the user's own programs (sections/agents.rs); the robots
+    /// no entry lists run `run.behaviour`. Left out when empty.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub agents: Vec<AgentEntry>,
 }
 
 #[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
@@ -863,7 +868,8 @@ impl Scenario {
             0,
             MAX_RESTARTS as u64,
         )?;
-        self.validate_faults(&|key, message| c.err(key, message))
+        self.validate_faults(&|key, message| c.err(key, message))?;
+        crate::sections::agents::validate(&self.agents, self.run.robots, &c)
     }
 
     /// The sections of one behaviour or mission (`[roam]`, `[search]`, `[formation]`,

@@ -2,6 +2,7 @@
 //! both read. One file per section; the section's validation lives with its owners (the
 //! behaviour in the agent crate, the mission in the world crate).
 
+pub mod agents;
 pub mod formation;
 pub mod hunt;
 pub mod hunt_checks;

@@ -1,83 +1,45 @@
-//! The agent process: one robot, one behaviour, over iceoryx2 and the tick barrier.
+//! The agent loop: attach to the run, then each released tick read the Sense frame and the
+//! inbox in place, step the behaviour, send the action, ack (moved here from the built-in
+//! agent binary so that any program runs the same loop: issue 38).
 
-use crate::behaviours::{dispatch, BehaviourVisitor};
+use super::{AgentError, EXIT_OK, EXIT_WORLD_GONE};
+use crate::air::ActTx;
+use crate::barrier::{TickBarrier, Wake};
+use crate::scenario::Scenario;
+use crate::transport;
+use crate::{AgentRuntime, Behaviour, Received};
 use std::sync::atomic::AtomicUsize;
 use std::sync::Arc;
 use std::time::Duration;
-use swarm::air::ActTx;
-use swarm::barrier::{BarrierError, TickBarrier, Wake};
-use swarm::scenario::Scenario;
-use swarm::transport::{self, TransportError};
-use swarm::{AgentRuntime, Behaviour, Received};
-
-/// Why an agent process stopped before the run ended.
-#[derive(Debug, thiserror::Error)]
-pub enum AgentError {
-    /// An iceoryx2 call failed (which service, and iceoryx2's error, are in it).
-    #[error(transparent)]
-    Transport(#[from] TransportError),
-    /// The run's tick barrier segment could not be opened.
-    #[error(transparent)]
-    Barrier(#[from] BarrierError),
-}
-
-pub type Result<T> = std::result::Result<T, AgentError>;
-
-pub struct AgentArgs {
-    pub robot: u32,
-    pub prefix: String,
-    pub scenario: Scenario,
-}
-
-/// Exit codes of the agent process.
-pub const EXIT_OK: i32 = 0;
-pub const EXIT_WORLD_GONE: i32 = 3;
-pub const EXIT_SETUP: i32 = 4;
 
 fn world_alive(pid: u32) -> bool {
     // SAFETY: signal 0 only checks for existence.
     pid != 0 && unsafe { libc::kill(pid as i32, 0) } == 0
 }
 
-struct Run<'a>(&'a AgentArgs);
-
-impl BehaviourVisitor for Run<'_> {
-    type Out = Result<i32>;
-    fn visit<B: Behaviour + Send + 'static>(self, make: &dyn Fn(u32) -> B) -> Result<i32>
-    where
-        B::Msg: Send + Sync,
-    {
-        run_loop(
-            self.0,
-            AgentRuntime::new(&self.0.scenario, self.0.robot, make(self.0.robot)),
-        )
-    }
-}
-
-pub fn run(args: &AgentArgs) -> Result<i32> {
-    dispatch(&args.scenario, Run(args))
-}
-
-fn run_loop<B: Behaviour>(args: &AgentArgs, mut rt: AgentRuntime<B>) -> Result<i32> {
-    let sc = &args.scenario;
-    let robot = args.robot;
-    let config = transport::run_config(&args.prefix)?;
+pub(super) fn run_loop<B: Behaviour>(
+    prefix: &str,
+    sc: &Scenario,
+    robot: u32,
+    mut rt: AgentRuntime<B>,
+) -> Result<i32, AgentError> {
+    let config = transport::run_config(prefix)?;
     let node = transport::node(&config, &format!("agent-{robot}"))?;
     // Sense frames: this robot's record in the world's `world/sense` sample, copied into
     // `frame`.
     let mut sense_in = transport::SenseSource::open(&node, robot)?;
-    let mut frame = swarm::frames::Sense::zeroed();
+    let mut frame = crate::frames::Sense::zeroed();
     // Actions: this robot's own `robot/<i>/act` service.
     let mut act_out = transport::ActSink::open(&node, sc, robot)?;
     // The air: the `radio/air` service (a sample held while a read or a zero-copy view
     // lasts).
     let mut air_in = transport::AirSource::open(&node, sc)?;
-    let barrier = TickBarrier::open_agent(&args.prefix)?;
+    let barrier = TickBarrier::open_agent(prefix)?;
     let world_pid = barrier.world_pid();
     let bell = match sc.runtime.barrier {
-        swarm::scenario::BarrierKind::Futex => None,
-        swarm::scenario::BarrierKind::Iox2Event => {
-            Some(swarm::bell::EventBell::agent(&node, barrier.robots())?)
+        crate::scenario::BarrierKind::Futex => None,
+        crate::scenario::BarrierKind::Iox2Event => {
+            Some(crate::bell::EventBell::agent(&node, barrier.robots())?)
         }
     };
     let bell = bell.as_ref();
@@ -91,7 +53,7 @@ fn run_loop<B: Behaviour>(args: &AgentArgs, mut rt: AgentRuntime<B>) -> Result<i
     // that tick (a copy of the Sense, the decoded list of the air) rather than losing them
     // when it reads the next time. In lock-step the world publishes tick k + 1 only after
     // every ack of tick k, so none of this ever happens.
-    let mut ahead_sense: Option<Box<swarm::frames::Sense>> = None;
+    let mut ahead_sense: Option<Box<crate::frames::Sense>> = None;
     let mut ahead_inbox: Vec<Received<B::Msg>> = Vec::new();
     let mut ahead_air: Option<(u64, u32)> = None;
     let mut done = barrier.acked_up_to(robot);
@@ -113,19 +75,19 @@ fn run_loop<B: Behaviour>(args: &AgentArgs, mut rt: AgentRuntime<B>) -> Result<i
         // one). Draining in a loop could hold two samples at once when the world publishes
         // the next tick's in between (real-time mode), beyond the air's borrow limit.
         let got = sense_in.receive(&mut frame)?;
-        let latest: Option<&swarm::frames::Sense> = got.map(|_| &*frame);
+        let latest: Option<&crate::frames::Sense> = got.map(|_| &*frame);
         if let Some(s) = latest.filter(|s| s.robot == robot && s.tick > k) {
             // The world is past tick k already: keep this Sense for its own tick.
             let mut copy = ahead_sense
                 .take()
-                .unwrap_or_else(swarm::frames::Sense::zeroed);
+                .unwrap_or_else(crate::frames::Sense::zeroed);
             copy.as_mut().clone_from(s);
             ahead_sense = Some(copy);
             done = k + 1;
             continue;
         }
         let kept = ahead_sense.take();
-        let sense: &swarm::frames::Sense = match (latest, &kept) {
+        let sense: &crate::frames::Sense = match (latest, &kept) {
             (Some(s), _) => s,
             // Not for us yet (a restarted agent attaching mid-tick): wait for the next one.
             (None, None) => {
