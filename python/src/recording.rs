@@ -102,7 +102,10 @@ pub fn read_recording(py: Python<'_>, path: std::path::PathBuf) -> PyResult<Py<P
     d.set_item("radio_fields", PyList::new(py, RADIO_FIELDS)?)?;
     let radio: Vec<u64> = ticks.iter().flat_map(|t| radio_row(&t.radio)).collect();
     d.set_item("radio", bytes_of(py, &radio))?;
-    let radio_bytes: Vec<u64> = ticks.iter().flat_map(|t| radio_row(&t.radio_bytes)).collect();
+    let radio_bytes: Vec<u64> = ticks
+        .iter()
+        .flat_map(|t| radio_row(&t.radio_bytes))
+        .collect();
     d.set_item("radio_bytes", bytes_of(py, &radio_bytes))?;
     Ok(d.unbind())
 }

@@ -6,9 +6,31 @@
   orchestrator's command line, run from Python.
 - ``swarm.run(Behaviour)``: the entry point of a Python robot program named by a scenario's
   ``[[agents]]`` entry (see ``swarm.agent``).
+
+The run readers (pandas) are imported on first use: a robot program that only needs
+``swarm.run`` starts without them (50 agents start at once).
 """
 
-from .recording import Recording
-from .cli import CliError, Experiment, Run, experiment, orchestrator, up
+import importlib
 
-__all__ = ["Recording", "CliError", "Experiment", "Run", "experiment", "orchestrator", "up"]
+from .agent import EXIT_BEHAVIOUR_FAULT, Agent, Command, Message, Outbox, Sense, run
+
+#: Names imported from their module on first use (module, name).
+_LAZY = {
+    "Recording": "recording",
+    "CliError": "cli",
+    "Experiment": "cli",
+    "Run": "cli",
+    "experiment": "cli",
+    "orchestrator": "cli",
+    "up": "cli",
+}
+
+__all__ = [*_LAZY, "Agent", "Command", "Message", "Outbox", "Sense", "run",
+           "EXIT_BEHAVIOUR_FAULT"]
+
+
+def __getattr__(name):
+    if name in _LAZY:
+        return getattr(importlib.import_module(f".{_LAZY[name]}", __name__), name)
+    raise AttributeError(f"module 'swarm' has no attribute {name!r}")
