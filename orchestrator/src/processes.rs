@@ -322,7 +322,7 @@ fn supervise(
         entry.agent_starts.push(start);
     }
     registry::write(entry).map_err(|e| e.to_string())?;
-    let send_control = |kind: u32, robot: u32, value: u64, tick: u64| {
+    let send_control = |kind: u32, robot: u32, value: u64, tick: u64, status: i32| {
         if let Ok(s) = control.loan_uninit() {
             let _ = s
                 .write_payload(Control {
@@ -330,6 +330,8 @@ fn supervise(
                     robot,
                     value,
                     tick,
+                    status,
+                    reserved: 0,
                 })
                 .send();
         }
@@ -395,7 +397,7 @@ fn supervise(
                         status: describe(st),
                         command: command_of(robot),
                     });
-                    send_control(CONTROL_STOP, 0, 0, last.tick);
+                    send_control(CONTROL_STOP, 0, 0, last.tick, 0);
                     stop_sent = Some(Instant::now());
                     continue;
                 }
@@ -405,6 +407,7 @@ fn supervise(
                 robot,
                 monotonic_us(),
                 barrier.current_tick(),
+                st,
             );
             // A start failure under the limit is retried without using up a restart.
             let budget = !attached || restarts[r] < sc.faults.max_restarts;
@@ -455,7 +458,7 @@ fn supervise(
             last_registry = Instant::now();
         }
         if signals::interrupted() && stop_sent.is_none() {
-            send_control(CONTROL_STOP, 0, 0, last.tick);
+            send_control(CONTROL_STOP, 0, 0, last.tick, 0);
             stop_sent = Some(Instant::now());
         }
         if let Some(t) = stop_sent {

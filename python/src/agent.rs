@@ -18,7 +18,7 @@ use swarm::{Behaviour, Command, Outbox, Received, Sense};
 
 /// Exit code of a Python agent whose `step` raised (or returned something that is no
 /// command): the robot ends as a fault; the traceback is on its stderr (its log).
-pub const EXIT_BEHAVIOUR_FAULT: i32 = 5;
+pub use swarm::agent::EXIT_BEHAVIOUR_FAULT;
 /// 64-bit words drawn from the robot's user stream 0 (`Agent::rng(0)`) to seed the behaviour's
 /// NumPy generator (`np.random.SeedSequence(words)`).
 const SEED_WORDS: usize = 4;
