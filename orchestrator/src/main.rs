@@ -1,5 +1,7 @@
 //! `orchestrator`: starts, watches, hurts and measures swarm runs.
 
+mod agent_programs;
+mod agent_spawn;
 mod bench;
 mod clean;
 mod completions;
@@ -11,6 +13,7 @@ mod experiment_formation;
 mod experiment_hunt;
 mod export;
 mod inprocess;
+mod logs;
 mod outcome;
 mod outdir;
 mod phase;
@@ -57,6 +60,8 @@ enum Cmd {
     /// Write a run's recording as CSV (one row per robot and tick), its events as CSV, or
     /// MCAP (for Foxglove).
     Export(export::ExportArgs),
+    /// Print the agents' output (stdout and stderr, one log per robot in the run folder).
+    Logs(logs::LogsArgs),
     /// Print a shell's completion script, e.g. `orchestrator completions bash`.
     Completions(completions::CompletionsArgs),
     /// (internal) A benchmark child process.
@@ -96,6 +101,7 @@ fn main() {
         Cmd::View(a) => view::view(a),
         Cmd::Export(a) => export::export(a),
         Cmd::Completions(a) => completions::print(a),
+        Cmd::Logs(a) => logs::logs(a),
         Cmd::Clean => match clean::clean_dead_runs() {
             Ok(r) => {
                 for line in &r.ignored {

@@ -1,5 +1,6 @@
 //! The multi-process executor: one world process and one agent process per robot.
 
+use crate::agent_spawn::{self, Launcher};
 use crate::registry::{self, RegistryError, RunEntry};
 use crate::signals;
 use std::collections::BTreeMap;
@@ -59,14 +60,18 @@ pub struct ProcessOutcome {
 #[derive(Debug, Clone, thiserror::Error)]
 #[error(
     "robot {robot} failed: its agent exited before attaching to the run {times} time(s) in a \
-     row (last: {status}); command: {command}"
+     row (last: {status}); command: {command}{log}"
 )]
 pub struct RobotFailure {
     pub robot: u32,
     pub times: u32,
-    /// How the last one ended ("exit code 3", "signal 9").
+    /// How the last one ended ("exit code 3", "signal 9", "did not attach within 2 s").
     pub status: String,
     pub command: String,
+    /// The last one's exit code, if it exited (2: it refused its input, e.g. its params).
+    pub exit_code: Option<i32>,
+    /// The robot's log and its last lines ("" when empty), shown under the message.
+    pub log: String,
 }
 
 /// Why a run of processes could not be run.
@@ -107,6 +112,9 @@ struct Agent {
     robot: u32,
     /// The robot's attach count when this agent was started.
     base: u64,
+    /// When it was started, and how long it may take to attach (`[[agents]]` programs).
+    started: Instant,
+    attach_timeout: Option<Duration>,
 }
 
 /// Decoded waitpid status.
@@ -283,29 +291,25 @@ fn supervise(
         .create()
         .map_err(|e| format!("status subscriber: {e:?}"))?;
     let barrier = TickBarrier::open(prefix).map_err(|e| format!("tick barrier: {e}"))?;
-    let agent_command = |robot: u32| {
-        let mut c = Command::new(bin("agent"));
-        c.args([
-            "--robot",
-            &robot.to_string(),
-            "--prefix",
-            prefix,
-            "--run-id",
-            p.run_id,
-            "--scenario",
-        ])
-        .arg(scenario_path);
-        c
+    let launcher = Launcher {
+        sc,
+        prefix,
+        run_id: p.run_id,
+        scenario_path,
+        run_dir: p.run_dir,
     };
+    // Agents started per robot (the marks in its log count them).
+    let mut starts = vec![0u32; n as usize];
     // (pid, start time) of a new agent of `robot`.
-    let spawn_agent = |robot: u32| -> Result<(u32, u64), String> {
-        agent_command(robot)
-            .stdin(Stdio::null())
-            .stdout(Stdio::null())
-            .process_group(0)
-            .spawn()
-            .map(|c| (c.id(), registry::start_time(c.id()).unwrap_or(0)))
-            .map_err(|e| format!("cannot start {}: {e}", bin("agent").display()))
+    let mut spawn_agent = |robot: u32, tick: u64| -> Result<(u32, u64), String> {
+        starts[robot as usize] += 1;
+        launcher.spawn(robot, starts[robot as usize], tick)
+    };
+    let new_agent = |robot: u32, base: u64| Agent {
+        robot,
+        base,
+        started: Instant::now(),
+        attach_timeout: launcher.attach_timeout(robot),
     };
     // pid -> (robot, the robot's attach count when it was spawned): only one agent of a
     // robot lives at a time (a replacement starts after its predecessor is reaped), so the
@@ -316,8 +320,8 @@ fn supervise(
             // Ctrl-C while the agents start: the loop below stops the world at once.
             break;
         }
-        let (pid, start) = spawn_agent(i)?;
-        agents.insert(pid, Agent { robot: i, base: 0 });
+        let (pid, start) = spawn_agent(i, 0)?;
+        agents.insert(pid, new_agent(i, 0));
         entry.agent_pids.push(pid);
         entry.agent_starts.push(start);
     }
@@ -346,14 +350,25 @@ fn supervise(
     let mut start_failures = vec![0u32; n as usize];
     // How the last of them ended.
     let mut last_failure = vec![String::new(); n as usize];
-    let command_of = |robot: u32| {
-        let cmd = agent_command(robot);
-        std::iter::once(cmd.get_program())
-            .chain(cmd.get_args())
-            .map(|a| a.to_string_lossy().into_owned())
-            .collect::<Vec<_>>()
-            .join(" ")
+    // A robot none of whose agents attached: the report names its command and quotes its log.
+    let failure = |robot: u32, times: u32, status: String, exit_code: Option<i32>| {
+        let tail = launcher.log_tail(robot);
+        let log = agent_spawn::log_path(p.run_dir, robot);
+        RobotFailure {
+            robot,
+            times,
+            status,
+            command: launcher.describe(robot),
+            exit_code,
+            log: if tail.is_empty() {
+                format!("; its log: {} (empty)", log.display())
+            } else {
+                format!("; its log: {}, ending:\n{tail}", log.display())
+            },
+        }
     };
+    // Agents killed for not attaching within their attach timeout (pid -> the timeout).
+    let mut timed_out: BTreeMap<u32, Duration> = BTreeMap::new();
     let start_failure_limit = if restart { START_FAILURES } else { 1 };
     let mut failed_robot: Option<RobotFailure> = None;
     // The last kill order of each robot acted on (see TickBarrier::order_kill).
@@ -369,9 +384,10 @@ fn supervise(
                 world_exit = exit_of(st);
                 break 'outer;
             }
-            let Some(Agent { robot, base }) = agents.remove(&pid) else {
+            let Some(Agent { robot, base, .. }) = agents.remove(&pid) else {
                 continue;
             };
+            let timeout = timed_out.remove(&pid);
             let attached = barrier.attach_count(robot) > base;
             // It can attach no more and no other agent of the robot lives: every attach so
             // far is of a dead agent. Written before the report, which the world checks
@@ -389,14 +405,22 @@ fn supervise(
                 // Exited before it attached, however it exited (exit code 0 included: the
                 // world would wait for it until runtime.startup_timeout_s).
                 start_failures[r] += 1;
-                last_failure[r] = describe(st);
-                if start_failures[r] >= start_failure_limit {
-                    failed_robot = Some(RobotFailure {
+                last_failure[r] = match timeout {
+                    Some(t) => format!(
+                        "did not attach within {} s ([[agents]] attach_timeout_s), killed",
+                        t.as_secs_f64()
+                    ),
+                    None => describe(st),
+                };
+                // One that never attaches is not waited for again.
+                if start_failures[r] >= start_failure_limit || timeout.is_some() {
+                    let code = exit_of(st).ok().filter(|_| timeout.is_none());
+                    failed_robot = Some(failure(
                         robot,
-                        times: start_failures[r],
-                        status: describe(st),
-                        command: command_of(robot),
-                    });
+                        start_failures[r],
+                        last_failure[r].clone(),
+                        code,
+                    ));
                     send_control(CONTROL_STOP, 0, 0, last.tick, 0);
                     stop_sent = Some(Instant::now());
                     continue;
@@ -420,11 +444,11 @@ fn supervise(
                 // before the next death is reaped, so at most one dead agent's ports per
                 // robot are ever left.
                 let base = barrier.attach_count(robot);
-                let (pid, start) = spawn_agent(robot)?;
+                let (pid, start) = spawn_agent(robot, barrier.current_tick())?;
                 if attached {
                     restarts[r] += 1;
                 }
-                agents.insert(pid, Agent { robot, base });
+                agents.insert(pid, new_agent(robot, base));
                 entry.agent_pids[r] = pid;
                 entry.agent_starts[r] = start;
                 registry::write(entry).map_err(|e| e.to_string())?;
@@ -436,6 +460,14 @@ fn supervise(
         // over. A kill scheduled while the robot is already dead (its restart under way) is
         // void: the world orders nothing.
         for (&pid, a) in &agents {
+            // An `[[agents]]` program alive but not attached after its attach timeout.
+            if let Some(t) = a.attach_timeout {
+                let waiting = barrier.attach_count(a.robot) == a.base;
+                if waiting && a.started.elapsed() > t && !timed_out.contains_key(&pid) {
+                    timed_out.insert(pid, t);
+                    kill(pid);
+                }
+            }
             let r = a.robot as usize;
             let order = barrier.kill_order(a.robot);
             if order > kill_done[r] {
@@ -492,11 +524,13 @@ fn supervise(
     if failed_robot.is_none() {
         failed_robot = (0..n)
             .find(|&i| start_failures[i as usize] > 0 && barrier.attach_count(i) == 0)
-            .map(|robot| RobotFailure {
-                robot,
-                times: start_failures[robot as usize],
-                status: last_failure[robot as usize].clone(),
-                command: command_of(robot),
+            .map(|robot| {
+                failure(
+                    robot,
+                    start_failures[robot as usize],
+                    last_failure[robot as usize].clone(),
+                    None,
+                )
             });
     }
     drop(status);

@@ -312,6 +312,21 @@ pub fn resolve(a: &UpArgs) -> Result<Scenario, ConfigError> {
                 .into(),
         });
     }
+    if a.executor == Executor::Inprocess && !sc.agents.is_empty() {
+        // The in-process executor runs the built-in behaviours on the world's threads; a
+        // program of the user's is a process of its own.
+        let key = "agents";
+        return Err(ConfigError {
+            source: swarm::key_lines::locate(&key_source(key), key),
+            key: key.into(),
+            message: format!(
+                "lists {} program(s) of your own: they run as processes, which --executor \
+                 inprocess does not start; use --executor processes (the default)",
+                sc.agents.len()
+            ),
+        });
+    }
+    crate::agent_programs::check_found(&sc, &key_source)?;
     expand_kills(&mut sc);
     Ok(sc)
 }
@@ -493,6 +508,11 @@ pub fn up(a: UpArgs) -> i32 {
             e => (exit::FAILED, e.to_string()),
         })
         .and_then(|o| match (o.failed_robot, o.world_exit) {
+            // A program that refused its input (its params: exit 2, the agent SDK's bad
+            // input) is bad input of this run too.
+            (Some(f), _) if f.exit_code == Some(swarm::agent::EXIT_BAD_INPUT) => {
+                Err((exit::BAD_INPUT, f.to_string()))
+            }
             (Some(f), _) => Err((exit::FAILED, f.to_string())),
             (None, Ok(0)) => Ok(()),
             (None, Ok(c)) => Err((

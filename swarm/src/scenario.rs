@@ -557,7 +557,22 @@ impl Scenario {
             key: String::new(),
             message,
         })?;
-        Scenario::parse(&text, &source)
+        let mut sc = Scenario::parse(&text, &source)?;
+        // `[[agents]]` paths are relative to the file's folder, wherever the program runs.
+        if !sc.agents.is_empty() {
+            let dir = path
+                .parent()
+                .filter(|d| !d.as_os_str().is_empty())
+                .unwrap_or(Path::new("."));
+            let dir = std::fs::canonicalize(dir).unwrap_or_else(|_| dir.to_path_buf());
+            let file = dir.join(path.file_name().unwrap_or_default());
+            crate::sections::agents::resolve_paths(
+                &mut sc.agents,
+                &dir,
+                &file.display().to_string(),
+            );
+        }
+        Ok(sc)
     }
 
     /// Robots with a body: agents 0..bodies() (the stations come after them).

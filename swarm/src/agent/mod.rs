@@ -200,9 +200,7 @@ impl Agent {
 /// The whole `main` of an agent program: parses `std::env::args`, builds the behaviour with
 /// `make` (an error there is printed with the robot id and exits [`EXIT_BAD_INPUT`]), runs
 /// it, and exits with the agent exit codes.
-pub fn main<B: Behaviour, E: std::fmt::Display>(
-    make: impl FnOnce(&Agent) -> Result<B, E>,
-) -> ! {
+pub fn main<B: Behaviour, E: std::fmt::Display>(make: impl FnOnce(&Agent) -> Result<B, E>) -> ! {
     let agent = match Agent::from_args(std::env::args().skip(1)) {
         Ok(a) => a,
         // --help, --version and argument errors as clap prints them.

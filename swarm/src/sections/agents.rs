@@ -6,6 +6,7 @@
 //! robots = "10..20"              # half-open range (10 to 19); "10..=19" or [10, 12, 15] too
 //! command = ["target/release/rust-boids", "--verbose"]  # program and arguments, no shell
 //! cwd = "."                      # optional; default: the scenario file's folder
+//! attach_timeout_s = 30          # optional: start-to-attach limit of one agent (DEFAULT_ATTACH_TIMEOUT_S)
 //! [agents.params]                # optional: the program's own table (`Agent::params`)
 //! cohesion = 0.01
 //! ```
@@ -24,6 +25,14 @@ use std::path::Path;
 /// Most `[[agents]]` entries a scenario may hold: one a robot at most (MAX_ROBOTS).
 pub const MAX_AGENT_ENTRIES: usize = crate::scenario::MAX_ROBOTS as usize;
 
+/// How long an agent program may take to attach to the run (`attach_timeout_s`) unless its
+/// entry says otherwise. [chosen] A Rust agent attaches in milliseconds and a Python one
+/// (interpreter, NumPy import) in well under a second; 30 s leaves room for 50 of them
+/// starting at once on 2 loaded cores, and is far below runtime.startup_timeout_s (120 s).
+pub const DEFAULT_ATTACH_TIMEOUT_S: f64 = 30.0;
+/// Largest `attach_timeout_s` (an hour: longer than any start-up).
+pub const MAX_ATTACH_TIMEOUT_S: f64 = 3600.0;
+
 /// One `[[agents]]` entry.
 #[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
 #[serde(deny_unknown_fields)]
@@ -36,6 +45,11 @@ pub struct AgentEntry {
     /// The program's working directory (default: the scenario file's folder).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub cwd: Option<String>,
+    /// How long one agent of this program may take from its start to attaching to the run
+    /// before the orchestrator kills it and fails the run naming the robot and the command
+    /// (default [`DEFAULT_ATTACH_TIMEOUT_S`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub attach_timeout_s: Option<f64>,
     /// The program's own parameters, read with `swarm::agent::Agent::params`.
     #[serde(default, skip_serializing_if = "toml::Table::is_empty")]
     pub params: toml::Table,
@@ -50,7 +64,10 @@ pub struct AgentEntry {
 #[derive(Clone, Debug, PartialEq)]
 pub enum RobotSet {
     /// `start..end` (end excluded).
-    Range { start: u32, end: u32 },
+    Range {
+        start: u32,
+        end: u32,
+    },
     List(Vec<u32>),
 }
 
@@ -193,11 +210,19 @@ pub fn validate(entries: &[AgentEntry], robots: u32, c: &Check) -> Result<(), Co
             Some(p) if p.trim().is_empty() => {
                 return Err(c.err(
                     &format!("{key}[0]"),
-                    "is an empty program name: allowed a program path or a name on PATH"
-                        .into(),
+                    "is an empty program name: allowed a program path or a name on PATH".into(),
                 ))
             }
             Some(_) => {}
+        }
+        if let Some(t) = e.attach_timeout_s {
+            c.range_f(
+                &format!("agents[{i}].attach_timeout_s"),
+                t,
+                0.0,
+                MAX_ATTACH_TIMEOUT_S,
+                true,
+            )?;
         }
         if let Some(cwd) = &e.cwd {
             if cwd.is_empty() {
@@ -212,6 +237,15 @@ pub fn validate(entries: &[AgentEntry], robots: u32, c: &Check) -> Result<(), Co
     Ok(())
 }
 
+impl AgentEntry {
+    /// This entry's attach timeout.
+    pub fn attach_timeout(&self) -> std::time::Duration {
+        std::time::Duration::from_secs_f64(
+            self.attach_timeout_s.unwrap_or(DEFAULT_ATTACH_TIMEOUT_S),
+        )
+    }
+}
+
 /// The index of the entry that runs `robot`, if any.
 pub fn entry_of(entries: &[AgentEntry], robot: u32) -> Option<usize> {
     entries.iter().position(|e| e.robots.contains(robot))
@@ -219,7 +253,8 @@ pub fn entry_of(entries: &[AgentEntry], robot: u32) -> Option<usize> {
 
 /// Makes every entry's program path (when relative and holding a `/`) and `cwd` absolute,
 /// against `dir` (the scenario file's folder), sets a missing `cwd` to `dir`, and records
-/// `source` (the scenario file) in each entry.
+/// `source` (the scenario file) in each entry that has none yet. Idempotent: the resolved
+/// scenario of a run folder, read back by the agents, keeps the user's file as `source`.
 pub fn resolve_paths(entries: &mut [AgentEntry], dir: &Path, source: &str) {
     let abs = |p: &str| -> String {
         let path = Path::new(p);
@@ -239,7 +274,9 @@ pub fn resolve_paths(entries: &mut [AgentEntry], dir: &Path, source: &str) {
             Some(c) => abs(c),
             None => dir.display().to_string(),
         });
-        e.source = Some(source.to_string());
+        if e.source.is_none() {
+            e.source = Some(source.to_string());
+        }
     }
 }
 
