@@ -79,6 +79,16 @@ cargo fmt --all -- --check
 cargo clippy --release --workspace --all-targets -- -D warnings
 # The e2e tests start the binaries (orchestrator, world, agent) from target/release.
 cargo build --release
+# The agent program examples (Cargo projects of their own, not workspace members): checked and
+# built like the workspace, into its target folder (their .cargo/config.toml says so, and
+# CARGO_TARGET_DIR makes sure), reusing its compiled dependencies; tests/tests/own_robots.rs
+# runs target/release/rust-boids.
+for example in examples/rust-boids; do
+  (cd "$example" &&
+    cargo fmt -- --check &&
+    CARGO_TARGET_DIR="$PWD/../../target" cargo clippy --release -- -D warnings &&
+    CARGO_TARGET_DIR="$PWD/../../target" cargo build --release)
+done
 cargo test --release
 # The Python package's tests (real runs of target/release/orchestrator).
 .venv/bin/python -m pytest -q python/tests

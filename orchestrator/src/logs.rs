@@ -129,7 +129,9 @@ pub fn logs(a: LogsArgs) -> i32 {
     };
     if let Some(r) = a.robot {
         let path = agent_spawn::log_path(&dir, r);
-        if !path.is_file() && !(a.follow && live_run(&a.run, Some(&dir)).is_some()) {
+        // Following a live run, a robot's log may not exist yet (its agent is starting).
+        let coming = a.follow && live_run(&a.run, Some(&dir)).is_some();
+        if !path.is_file() && !coming {
             eprintln!(
                 "error: --robot {r}: {} does not exist (robots with a log: {:?})",
                 path.display(),

@@ -3,6 +3,7 @@
 
 pub mod fuzz;
 pub mod fuzz_mutations;
+pub mod programs;
 
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Output, Stdio};

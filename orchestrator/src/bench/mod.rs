@@ -20,6 +20,7 @@
 mod error;
 mod latency;
 mod memory;
+mod own;
 mod realtime;
 mod restart;
 mod search;
@@ -265,12 +266,15 @@ pub fn bench(a: BenchArgs) -> i32 {
             print_machine();
             finish(
                 (|| -> BenchResult<()> {
-                    let rows = if realtime_only {
-                        Vec::new()
+                    let (rows, own_rows) = if realtime_only {
+                        (Vec::new(), Vec::new())
                     } else {
                         let rows = tick::bench_tick(&robots, ticks)?;
                         tick::print_table(&rows);
-                        rows
+                        println!();
+                        let own_rows = own::run(&robots, ticks)?;
+                        own::print(&own_rows);
+                        (rows, own_rows)
                     };
                     let cells = if no_realtime || rt.rates.is_empty() {
                         Vec::new()
@@ -284,7 +288,11 @@ pub fn bench(a: BenchArgs) -> i32 {
                     };
                     write_json(
                         &json,
-                        &serde_json::json!({ "lockstep": rows, "realtime": cells }),
+                        &serde_json::json!({
+                            "lockstep": rows,
+                            "own_programs": own_rows,
+                            "realtime": cells
+                        }),
                     )
                 })(),
                 "tick",

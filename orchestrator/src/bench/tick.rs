@@ -47,10 +47,10 @@ pub struct Row {
     pub futex_p99_us: f64,
 }
 
-struct Stats {
-    per_s: f64,
-    p50_us: f64,
-    p99_us: f64,
+pub(super) struct Stats {
+    pub per_s: f64,
+    pub p50_us: f64,
+    pub p99_us: f64,
 }
 
 fn stats(mut ns: Vec<u64>) -> Stats {
@@ -183,7 +183,7 @@ fn runtime(n: u32, ticks: u64, barrier: BarrierKind) -> BenchResult<Stats> {
 }
 
 /// Runs `sc` with the processes executor: the ticks it ran and its steady tick statistics.
-fn run_stats(sc: &Scenario) -> BenchResult<(u64, Stats)> {
+pub(super) fn run_stats(sc: &Scenario) -> BenchResult<(u64, Stats)> {
     let (s, dir) = run_processes(sc)?;
     let _ = std::fs::remove_dir_all(&dir);
     Ok((

@@ -59,3 +59,39 @@ fn locate(source: &str, key: &str) -> String {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[derive(serde::Deserialize, Debug)]
+    #[serde(deny_unknown_fields)]
+    struct P {
+        #[allow(dead_code)]
+        gain: f64,
+    }
+
+    #[test]
+    fn errors_name_the_users_file_the_key_path_and_the_line() {
+        let dir = std::env::temp_dir().join(format!("swarm-params-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let file = dir.join("s.toml");
+        let text = "[run]\nrobots = 4\n\n[[agents]]\nrobots = [0]\ncommand = [\"a\"]\n\n\
+                    [[agents]]\nrobots = [1]\ncommand = [\"b\"]\n[agents.params]\ngain = \"x\"\n";
+        std::fs::write(&file, text).unwrap();
+        let sc = crate::Scenario::load(&file).unwrap();
+        assert_eq!(sc.agents[1].source.as_deref(), Some(file.to_str().unwrap()));
+        let e = read::<P>(Some((1, &sc.agents[1])), "resolved.toml").unwrap_err();
+        assert_eq!(e.key, "agents[1].params.gain");
+        assert_eq!(e.source, format!("{}:12", file.display()));
+        // A missing field is reported on the entry (it has no params table).
+        let e = read::<P>(Some((0, &sc.agents[0])), "resolved.toml").unwrap_err();
+        assert_eq!(e.key, "agents[0].params");
+        assert!(e.message.contains("gain"), "{}", e.message);
+        assert!(e.source.starts_with(file.to_str().unwrap()), "{}", e.source);
+        // No entry: an empty table, the resolved file named.
+        let e = read::<P>(None, "resolved.toml").unwrap_err();
+        assert_eq!(e.source, "resolved.toml");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+}

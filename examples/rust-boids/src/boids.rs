@@ -1,0 +1,214 @@
+//! Reynolds flocking over the radio: every robot broadcasts its position each tick; from the
+//! positions it heard it steers towards its neighbours' centre (cohesion), along their mean
+//! velocity (alignment, each velocity from a neighbour's last two positions heard) and away
+//! from those too close (separation), and away from the obstacle and wall points it senses.
+//!
+//! The message is the built-in roam behaviour's beacon (a position, the same bytes), so boids
+//! and built-in roaming robots hear each other in a mixed swarm.
+
+use rand::Rng;
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+use swarm::agent::Agent;
+use swarm::scenario::{ConfigError, Kinematics};
+use swarm::{Behaviour, Command, Outbox, Received, Sense};
+
+/// The weights, from the `[agents.params]` table of the robot's `[[agents]]` entry.
+#[derive(Deserialize, Debug, Clone)]
+#[serde(deny_unknown_fields)]
+pub struct Params {
+    /// Pull towards the centre of the neighbours heard (per tick, per unit of distance).
+    pub cohesion: f64,
+    /// Pull towards the neighbours' mean velocity.
+    pub alignment: f64,
+    /// Push away from neighbours closer than `separation_radius` (per 1/distance).
+    pub separation: f64,
+    /// Distance below which neighbours push apart.
+    pub separation_radius: f64,
+    /// Push away from sensed obstacle and wall points closer than `separation_radius`.
+    pub avoid: f64,
+    /// Cruising speed, as a fraction of robot.v_max: the speed a boid keeps when nothing acts.
+    pub cruise: f64,
+}
+
+/// Why a boid cannot start.
+#[derive(Debug)]
+pub enum BoidsError {
+    Params(ConfigError),
+    Bad(String),
+}
+
+impl std::fmt::Display for BoidsError {
+    fn fmt(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+        match self {
+            BoidsError::Params(e) => write!(f, "{e}"),
+            BoidsError::Bad(s) => f.write_str(s),
+        }
+    }
+}
+
+impl From<ConfigError> for BoidsError {
+    fn from(e: ConfigError) -> BoidsError {
+        BoidsError::Params(e)
+    }
+}
+
+/// The beacon: the same shape as the built-in roam behaviour's.
+#[derive(Serialize, Deserialize, Debug, Clone, Copy)]
+pub struct Beacon {
+    pub pos: [f64; 2],
+}
+
+/// A neighbour as last heard: its position and the tick it was sent at.
+#[derive(Clone, Copy)]
+struct Heard {
+    pos: [f64; 2],
+    tick: u64,
+    vel: Option<[f64; 2]>,
+}
+
+pub struct Boids {
+    p: Params,
+    v_max: f64,
+    /// The velocity kept when no force acts (a random start heading at cruise speed).
+    cruise_vel: [f64; 2],
+    heard: BTreeMap<u32, Heard>,
+}
+
+impl Boids {
+    pub fn new(p: Params, a: &Agent) -> Result<Boids, BoidsError> {
+        let sc = a.scenario();
+        if sc.robot.kinematics != Kinematics::Holonomic {
+            return Err(BoidsError::Bad(
+                "boids command velocities: robot.kinematics must be holonomic".into(),
+            ));
+        }
+        for (name, v) in [
+            ("cohesion", p.cohesion),
+            ("alignment", p.alignment),
+            ("separation", p.separation),
+            ("separation_radius", p.separation_radius),
+            ("avoid", p.avoid),
+            ("cruise", p.cruise),
+        ] {
+            if !(v.is_finite() && v >= 0.0) {
+                return Err(BoidsError::Bad(format!(
+                    "params.{name} = {v}: allowed a number >= 0"
+                )));
+            }
+        }
+        if p.cruise > 1.0 {
+            return Err(BoidsError::Bad(format!(
+                "params.cruise = {}: allowed 0..=1 (a fraction of robot.v_max)",
+                p.cruise
+            )));
+        }
+        // The run's seeded stream of this robot: the same heading in every run of the seed.
+        let heading: f64 = a
+            .rng(0)
+            .gen_range(-std::f64::consts::PI..std::f64::consts::PI);
+        let v_max = sc.robot.v_max;
+        let s = p.cruise * v_max;
+        Ok(Boids {
+            cruise_vel: [s * heading.cos(), s * heading.sin()],
+            v_max,
+            p,
+            heard: BTreeMap::new(),
+        })
+    }
+}
+
+fn sub(a: [f64; 2], b: [f64; 2]) -> [f64; 2] {
+    [a[0] - b[0], a[1] - b[1]]
+}
+
+fn norm(a: [f64; 2]) -> f64 {
+    (a[0] * a[0] + a[1] * a[1]).sqrt()
+}
+
+impl Behaviour for Boids {
+    type Msg = Beacon;
+
+    fn step_refs(
+        &mut self,
+        sense: &Sense,
+        inbox: &[&Received<Beacon>],
+        out: &mut Outbox<Beacon>,
+    ) -> Command {
+        let me = sense.pos;
+        for r in inbox {
+            let prev = self.heard.get(&r.from).copied();
+            let vel = prev.and_then(|h| {
+                (r.tick > h.tick).then(|| {
+                    let dt = (r.tick - h.tick) as f64;
+                    let d = sub(r.msg.pos, h.pos);
+                    [d[0] / dt, d[1] / dt]
+                })
+            });
+            self.heard.insert(
+                r.from,
+                Heard {
+                    pos: r.msg.pos,
+                    tick: r.tick,
+                    vel: vel.or(prev.and_then(|h| h.vel)),
+                },
+            );
+        }
+        // Neighbours: those heard this tick (the radio's range decides who they are).
+        let now: Vec<Heard> = inbox.iter().map(|r| self.heard[&r.from]).collect();
+        let mut v = self.cruise_vel;
+        if !now.is_empty() {
+            let n = now.len() as f64;
+            let centre = now
+                .iter()
+                .fold([0.0, 0.0], |c, h| [c[0] + h.pos[0], c[1] + h.pos[1]]);
+            let to_centre = sub([centre[0] / n, centre[1] / n], me);
+            let vels: Vec<[f64; 2]> = now.iter().filter_map(|h| h.vel).collect();
+            let mean_vel = if vels.is_empty() {
+                sense.vel
+            } else {
+                let k = vels.len() as f64;
+                let s = vels
+                    .iter()
+                    .fold([0.0, 0.0], |c, v| [c[0] + v[0], c[1] + v[1]]);
+                [s[0] / k, s[1] / k]
+            };
+            let align = sub(mean_vel, sense.vel);
+            v[0] = sense.vel[0] + self.p.cohesion * to_centre[0] + self.p.alignment * align[0];
+            v[1] = sense.vel[1] + self.p.cohesion * to_centre[1] + self.p.alignment * align[1];
+            for h in &now {
+                let away = sub(me, h.pos);
+                let d = norm(away);
+                if d > 1e-9 && d < self.p.separation_radius {
+                    v[0] += self.p.separation * away[0] / (d * d);
+                    v[1] += self.p.separation * away[1] / (d * d);
+                }
+            }
+        }
+        let points = &sense.obstacle_points[..sense.n_obstacle_points as usize];
+        for &q in points {
+            let away = sub(me, q);
+            let d = norm(away);
+            if d > 1e-9 && d < self.p.separation_radius {
+                v[0] += self.p.avoid * away[0] / (d * d);
+                v[1] += self.p.avoid * away[1] / (d * d);
+            }
+        }
+        // Keep moving: below cruise speed, speed up along the current direction.
+        let s = norm(v);
+        let cruise = self.p.cruise * self.v_max;
+        if s < cruise && s > 1e-9 {
+            v = [v[0] * cruise / s, v[1] * cruise / s];
+        } else if s > self.v_max {
+            v = [v[0] * self.v_max / s, v[1] * self.v_max / s];
+        }
+        if s > 1e-9 {
+            self.cruise_vel = [v[0] * cruise / norm(v), v[1] * cruise / norm(v)];
+        }
+        out.broadcast(Beacon { pos: me });
+        Command {
+            cmd: v,
+            ..Default::default()
+        }
+    }
+}
