@@ -42,10 +42,14 @@ def scenario(folder: Path, name: str, robots: int, ticks: int) -> Path:
     return path
 
 
-def run(folder: Path, sc: Path) -> dict:
+def run(folder: Path, sc: Path) -> dict | None:
+    """The run's summary.json, or None (the CLI's message printed) if it failed."""
     out = folder / sc.stem
-    subprocess.run([str(ORCHESTRATOR), "up", "-s", str(sc), "-o", str(out), "-q"],
-                   check=True, capture_output=True)
+    p = subprocess.run([str(ORCHESTRATOR), "up", "-s", str(sc), "-o", str(out), "-q"],
+                       capture_output=True, text=True)
+    if p.returncode not in (0, 3):
+        print(f"{sc.stem}: exit code {p.returncode}: {p.stderr.strip()}", file=sys.stderr)
+        return None
     return json.loads((out / "summary.json").read_text())
 
 
@@ -63,6 +67,8 @@ def main() -> None:
         for n in sizes:
             for name in PROGRAMS:
                 s = run(folder, scenario(folder, name, n, a.ticks))
+                if s is None:
+                    continue
                 tps = s["steady_ticks_per_second"]
                 us = 1e6 / (tps * n)
                 per[(name, n)] = us
@@ -70,6 +76,8 @@ def main() -> None:
                       flush=True)
     print()
     for n in sizes:
+        if ("python-empty", n) not in per or ("rust-empty", n) not in per:
+            continue
         extra = per[("python-empty", n)] - per[("rust-empty", n)]
         print(f"N = {n}: a Python step costs the runtime {extra:.1f} us per robot-tick "
               "beyond a Rust one (empty behaviours)")

@@ -46,18 +46,25 @@ pub fn layout(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
     Ok(d)
 }
 
-/// `swarm._layout`'s (frombuffer, float64, nearby dtype, entity dtype), fetched once.
-static VIEWS: PyOnceLock<(Py<PyAny>, Py<PyAny>, Py<PyAny>, Py<PyAny>)> = PyOnceLock::new();
+/// What the array getters call, from `swarm._layout` (fetched once).
+struct Views {
+    frombuffer: Py<PyAny>,
+    float64: Py<PyAny>,
+    nearby: Py<PyAny>,
+    entity: Py<PyAny>,
+}
 
-fn views(py: Python<'_>) -> PyResult<&(Py<PyAny>, Py<PyAny>, Py<PyAny>, Py<PyAny>)> {
+static VIEWS: PyOnceLock<Views> = PyOnceLock::new();
+
+fn views(py: Python<'_>) -> PyResult<&Views> {
     VIEWS.get_or_try_init(py, || {
         let m = py.import("swarm._layout")?;
-        Ok((
-            m.getattr("frombuffer")?.unbind(),
-            m.getattr("FLOAT64")?.unbind(),
-            m.getattr("NEARBY")?.unbind(),
-            m.getattr("ENTITY")?.unbind(),
-        ))
+        Ok(Views {
+            frombuffer: m.getattr("frombuffer")?.unbind(),
+            float64: m.getattr("FLOAT64")?.unbind(),
+            nearby: m.getattr("NEARBY")?.unbind(),
+            entity: m.getattr("ENTITY")?.unbind(),
+        })
     })
 }
 
@@ -65,6 +72,12 @@ fn views(py: Python<'_>) -> PyResult<&(Py<PyAny>, Py<PyAny>, Py<PyAny>, Py<PyAny
 #[pyclass(name = "Sense", module = "swarm")]
 pub struct PySense {
     frame: Box<Sense>,
+}
+
+impl Default for PySense {
+    fn default() -> Self {
+        Self::new()
+    }
 }
 
 impl PySense {
@@ -104,7 +117,7 @@ impl PySense {
     ) -> PyResult<Bound<'py, PyAny>> {
         let py = slf.py();
         let v = views(py)?;
-        v.0.bind(py).call1((slf, dtype.bind(py), count, offset))
+        v.frombuffer.bind(py).call1((slf, dtype.bind(py), count, offset))
     }
 }
 
@@ -132,23 +145,42 @@ impl PySense {
     fn alive_robots(&self) -> u32 {
         self.frame.alive_robots
     }
+    /// (x, y) as a tuple of floats (plain Python, no NumPy).
+    #[getter]
+    fn xy(&self) -> (f64, f64) {
+        (self.frame.pos[0], self.frame.pos[1])
+    }
+    /// (vx, vy) as a tuple of floats.
+    #[getter]
+    fn vxy(&self) -> (f64, f64) {
+        (self.frame.vel[0], self.frame.vel[1])
+    }
+    /// The obstacle points as a list of (x, y) tuples (plain Python; `obstacles` is the
+    /// NumPy view).
+    fn obstacle_list(&self) -> Vec<(f64, f64)> {
+        self.frame
+            .obstacle_points()
+            .iter()
+            .map(|p| (p[0], p[1]))
+            .collect()
+    }
     /// (x, y): float64 array of 2 (a view).
     #[getter]
     fn pos<'py>(slf: &Bound<'py, Self>) -> PyResult<Bound<'py, PyAny>> {
-        let f64s = &views(slf.py())?.1;
+        let f64s = &views(slf.py())?.float64;
         Self::view(slf, f64s, 2, offset_of!(Sense, pos))
     }
     /// (vx, vy): float64 array of 2 (a view).
     #[getter]
     fn vel<'py>(slf: &Bound<'py, Self>) -> PyResult<Bound<'py, PyAny>> {
-        let f64s = &views(slf.py())?.1;
+        let f64s = &views(slf.py())?.float64;
         Self::view(slf, f64s, 2, offset_of!(Sense, vel))
     }
     /// Obstacle, wall and dead-robot points in sensing range: float64, n x 2 (a view).
     #[getter]
     fn obstacles<'py>(slf: &Bound<'py, Self>) -> PyResult<Bound<'py, PyAny>> {
         let n = slf.borrow().frame.obstacle_points().len();
-        let f64s = &views(slf.py())?.1;
+        let f64s = &views(slf.py())?.float64;
         let flat = Self::view(slf, f64s, 2 * n, offset_of!(Sense, obstacle_points))?;
         flat.call_method1("reshape", (n, 2))
     }
@@ -157,7 +189,7 @@ impl PySense {
     #[getter]
     fn nearby<'py>(slf: &Bound<'py, Self>) -> PyResult<Bound<'py, PyAny>> {
         let n = slf.borrow().frame.nearby().len();
-        let dt = &views(slf.py())?.2;
+        let dt = &views(slf.py())?.nearby;
         Self::view(slf, dt, n, offset_of!(Sense, nearby))
     }
     /// Mission entities sensed: structured array, fields `id`, `kind`, `flags` (uint32),
@@ -165,7 +197,7 @@ impl PySense {
     #[getter]
     fn entities<'py>(slf: &Bound<'py, Self>) -> PyResult<Bound<'py, PyAny>> {
         let n = slf.borrow().frame.entities().len();
-        let dt = &views(slf.py())?.3;
+        let dt = &views(slf.py())?.entity;
         Self::view(slf, dt, n, offset_of!(Sense, entities))
     }
 

@@ -24,14 +24,16 @@ built-in agent's. The GIL is released while the loop waits.
 - ``sense``: :class:`swarm.Sense`: ``tick``, ``robot``, ``heading``, ``alive_robots``,
   ``run_state`` and NumPy views of the frame: ``pos``, ``vel`` (2), ``obstacles`` (n x 2),
   ``nearby`` (fields ``robot``, ``pos``, ``vel``), ``entities`` (``id``, ``kind``, ``flags``,
-  ``pos``, ``value``). Read-only; a view kept past ``step`` stays as it was.
+  ``pos``, ``value``). Read-only; a view kept past ``step`` stays as it was. Without NumPy
+  (it is imported on first use; 50 agents importing it at once start slower): ``xy``,
+  ``vxy`` (tuples) and ``obstacle_list()`` (list of (x, y)).
 - ``inbox``: list of :class:`swarm.Message` (``sender``, ``tick``, ``seq``, ``sender_pos``,
   ``unicast``, ``data``: bytes), in (sender, seq) order.
 - ``out``: :class:`swarm.Outbox`: ``broadcast(data)``, ``send(robot, data)`` (bytes; False
   past ``radio.max_messages_per_tick``).
 - Return ``(a, b)``, :class:`swarm.Command` (``cmd``, ``report``, ``events``) or None (idle).
 
-Determinism: draw only from ``agent.rng`` (seeded from the robot's runtime stream, the same
+Determinism: draw only from ``agent.rng`` or ``agent.random`` (seeded from the robot's runtime stream, the same
 in every run of the seed). Python's own ``random``, ``numpy.random``'s global state, time or
 set/dict orders of objects that hash by id make a run differ from its rerun.
 
@@ -67,7 +69,8 @@ class Agent:
         run_id: the run's id; scenario: the resolved scenario (dict); params: this robot's
         ``[[agents]]`` entry's ``params`` table (dict, ``{}`` without one);
         rng: a NumPy Generator seeded from the robot's runtime stream (``Agent::rng(0)`` of
-        the Rust SDK): the only randomness that keeps runs reproducible.
+        the Rust SDK), or ``random``: a ``random.Random`` seeded from the same words: the
+        only randomness that keeps runs reproducible.
     """
 
     def __init__(self, info: Any):
@@ -78,6 +81,16 @@ class Agent:
         self.scenario: dict = tomllib.loads(info.scenario_toml)
         self.params: dict = json.loads(info.params_json)
         self._rng_words = list(info.rng_words)
+
+    @functools.cached_property
+    def random(self) -> "random.Random":
+        """A ``random.Random`` seeded from the same runtime stream words as :attr:`rng`: the
+        plain-Python seeded stream (no NumPy import, for programs that start fast). A
+        generator of its own; Python's global ``random`` is not it."""
+        import random
+
+        return random.Random(int.from_bytes(b"".join(w.to_bytes(8, "little")
+                                                     for w in self._rng_words), "little"))
 
     @functools.cached_property
     def rng(self):

@@ -47,6 +47,21 @@ fn python_agents(robots: &str, script: &Path) -> String {
     )
 }
 
+/// The Rust example's binary (scripts/test.sh builds examples/rust-boids into target/).
+fn rust_boids() -> String {
+    let p = bin_dir().join("rust-boids");
+    assert!(
+        p.exists(),
+        "no {}: build examples/rust-boids (scripts/test.sh does)",
+        p.display()
+    );
+    p.display().to_string()
+}
+
+/// rust-boids' weights (examples/rust-boids/boids.toml's).
+const RUST_BOIDS_PARAMS: &str = "[agents.params]\ncohesion = 0.01\nalignment = 0.125\n\
+    separation = 20.0\nseparation_radius = 25.0\navoid = 40.0\ncruise = 0.6\n";
+
 fn boids() -> PathBuf {
     repo().join("examples/python-boids/boids.py")
 }
@@ -170,5 +185,41 @@ fn a_step_that_raises_is_a_fault_with_its_traceback_in_the_log() {
     assert!(log.contains("ValueError: robot 2 gives up"), "{log}");
     assert!(log.contains("raises.py\", line 7, in step"), "{log}");
     assert_left_nothing(&out);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn a_mixed_swarm_of_built_in_rust_and_python_robots_repeats_byte_for_byte() {
+    let _g = serial();
+    let dir = tmp_dir("py-mixed");
+    let agents = format!(
+        "[[agents]]\nrobots = \"10..20\"\ncommand = [{:?}]\n{RUST_BOIDS_PARAMS}\n{}",
+        rust_boids(),
+        python_agents("20..30", &boids())
+    );
+    let sc = scenario(&dir, 30, 120, &agents);
+    let runs = [dir.join("a"), dir.join("b")];
+    for out in &runs {
+        let o = up(&["--scenario", sc.to_str().unwrap()], out);
+        assert!(ended_by_itself(&o), "{}", stderr(&o));
+        let s = summary(out);
+        assert_eq!(s["ticks"], 120);
+        assert_eq!(s["faults"].as_array().unwrap().len(), 0, "{s}");
+        assert_left_nothing(out);
+    }
+    assert!(same_recording(&runs[0], &runs[1]));
+    let (_, ticks) = swarm::recording::read_recording(
+        std::fs::File::open(runs[0].join("recording.bin")).unwrap(),
+    )
+    .unwrap();
+    // Every third of the swarm moved (each program's commands reached the world).
+    for third in [0..10, 10..20, 20..30] {
+        assert!(
+            third
+                .clone()
+                .any(|i| ticks[0].poses[i] != ticks[119].poses[i]),
+            "robots {third:?} never moved"
+        );
+    }
     let _ = std::fs::remove_dir_all(&dir);
 }
