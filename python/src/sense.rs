@@ -117,7 +117,9 @@ impl PySense {
     ) -> PyResult<Bound<'py, PyAny>> {
         let py = slf.py();
         let v = views(py)?;
-        v.frombuffer.bind(py).call1((slf, dtype.bind(py), count, offset))
+        v.frombuffer
+            .bind(py)
+            .call1((slf, dtype.bind(py), count, offset))
     }
 }
 
