@@ -52,7 +52,25 @@ need_foxglove_schemas() {
     (cd tests/foxglove && npm ci --no-audit --no-fund)
 }
 
-NEEDS=(need_rust_tools need_chromium need_tmux need_node need_foxglove_schemas)
+# The Python package (python/): a venv in the repository (.venv/, gitignored) with maturin,
+# NumPy, pandas, pytest and the package itself, built from this checkout. CARGO_TARGET_DIR:
+# maturin builds into the workspace's target/, so the package reuses the compiled crates. The
+# e2e tests of Python robots (tests/tests/python_agents.rs) run .venv/bin/python.
+PYTHON_PACKAGES=(maturin numpy pandas pytest)
+need_python() {
+  if ! python3 -c 'import sys; sys.exit(sys.version_info < (3, 11))' 2>/dev/null; then
+    apt_install python3
+  fi
+  if [ ! -x .venv/bin/python ]; then
+    python3 -m venv .venv 2>/dev/null || { apt_install python3-venv && python3 -m venv .venv; }
+  fi
+  .venv/bin/pip install -q "${PYTHON_PACKAGES[@]}"
+  # --no-build-isolation: the venv's maturin builds it (on PATH for pip's build hooks).
+  PATH="$PWD/.venv/bin:$PATH" CARGO_TARGET_DIR="$PWD/target" \
+    .venv/bin/pip install -q --no-build-isolation ./python
+}
+
+NEEDS=(need_rust_tools need_chromium need_tmux need_node need_foxglove_schemas need_python)
 for need in "${NEEDS[@]}"; do
   "$need"
 done
@@ -72,3 +90,5 @@ for example in examples/rust-boids; do
     CARGO_TARGET_DIR="$PWD/../../target" cargo build --release)
 done
 cargo test --release
+# The Python package's tests (real runs of target/release/orchestrator).
+.venv/bin/python -m pytest -q python/tests

@@ -364,7 +364,7 @@ fn supervise(
     // the user is read as zeros (no message) rather than SIGBUS the orchestrator, which left
     // the run's files behind (world::shrink_guard).
     world::shrink_guard::install().map_err(|e| e.to_string())?;
-    let send_control = |kind: u32, robot: u32, value: u64, tick: u64| {
+    let send_control = |kind: u32, robot: u32, value: u64, tick: u64, status: i32| {
         if world::shrink_guard::control_is_lost() {
             // Its segment shrank: nothing is sent on it any more (the world finds a dead
             // robot by its ack deadline, and a stop is the SIGKILL after STOP_GRACE).
@@ -379,6 +379,8 @@ fn supervise(
                         robot,
                         value,
                         tick,
+                        status,
+                        reserved: 0,
                     })
                     .send();
             }
@@ -468,7 +470,7 @@ fn supervise(
                         last_failure[r].clone(),
                         code,
                     ));
-                    send_control(CONTROL_STOP, 0, 0, last.tick);
+                    send_control(CONTROL_STOP, 0, 0, last.tick, 0);
                     stop_sent = Some(Instant::now());
                     continue;
                 }
@@ -478,6 +480,7 @@ fn supervise(
                 robot,
                 monotonic_us(),
                 barrier.current_tick(),
+                st,
             );
             // A start failure under the limit is retried without using up a restart.
             let budget = !attached || restarts[r] < sc.faults.max_restarts;
@@ -545,7 +548,7 @@ fn supervise(
             last_registry = Instant::now();
         }
         if signals::interrupted() && stop_sent.is_none() {
-            send_control(CONTROL_STOP, 0, 0, last.tick);
+            send_control(CONTROL_STOP, 0, 0, last.tick, 0);
             stop_sent = Some(Instant::now());
         }
         if let Some(t) = stop_sent {

@@ -301,6 +301,10 @@ pub struct Control {
     pub value: u64,
     /// For ROBOT_DIED: the last tick the orchestrator had seen when it reaped the process.
     pub tick: u64,
+    /// For ROBOT_DIED: the process's wait status (waitpid), for the fault's cause
+    /// (`swarm::agent::exit_cause`).
+    pub status: i32,
+    pub reserved: u32,
 }
 
 pub const CONTROL_ROBOT_DIED: u32 = 1;

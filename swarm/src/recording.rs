@@ -119,6 +119,56 @@ pub enum Event {
     Progress { done: u32, total: u32 },
 }
 
+/// An event's fields as the exports and the Python reader show them: one place, so the CSV
+/// export (`orchestrator export --format events`) and `swarm.Recording.events` agree.
+impl Event {
+    /// The snake_case name (robot_died, robot_restarted, action_rejected, move_blocked,
+    /// entity_done, declared, deadline_missed, progress).
+    pub fn name(&self) -> &'static str {
+        match self {
+            Event::RobotDied { .. } => "robot_died",
+            Event::RobotRestarted { .. } => "robot_restarted",
+            Event::ActionRejected { .. } => "action_rejected",
+            Event::MoveBlocked { .. } => "move_blocked",
+            Event::EntityDone { .. } => "entity_done",
+            Event::Declared { .. } => "declared",
+            Event::DeadlineMissed { .. } => "deadline_missed",
+            Event::Progress { .. } => "progress",
+        }
+    }
+    /// The robot it is about (None: the mission's own, its progress).
+    pub fn robot(&self) -> Option<u32> {
+        match self {
+            Event::RobotDied { robot, .. }
+            | Event::RobotRestarted { robot }
+            | Event::ActionRejected { robot, .. }
+            | Event::MoveBlocked { robot }
+            | Event::EntityDone { robot, .. }
+            | Event::Declared { robot, .. }
+            | Event::DeadlineMissed { robot } => Some(*robot),
+            Event::Progress { .. } => None,
+        }
+    }
+    /// The mission entity (entity_done only).
+    pub fn entity(&self) -> Option<u32> {
+        match self {
+            Event::EntityDone { entity, .. } => Some(*entity),
+            _ => None,
+        }
+    }
+    /// The cause of a death, the reason of a rejection, the flags of a declaration, the
+    /// progress as "done of total"; empty for the others.
+    pub fn detail(&self) -> String {
+        match self {
+            Event::RobotDied { cause, .. } => cause.clone(),
+            Event::ActionRejected { reason, .. } => format!("{reason:?}"),
+            Event::Declared { flags, .. } => format!("flags {flags:#x}"),
+            Event::Progress { done, total } => format!("{done} of {total}"),
+            _ => String::new(),
+        }
+    }
+}
+
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct TickRecord {
     pub tick: u64,

@@ -165,7 +165,10 @@ fn drain_control(
                 let detection_ms = monotonic_us().saturating_sub(c.value) as f64 / 1e3;
                 world.mark_dead(
                     c.robot,
-                    "process died (reaped by orchestrator)",
+                    &format!(
+                        "process died (reaped by orchestrator): {}",
+                        swarm::agent::exit_cause(c.status)
+                    ),
                     Some(c.tick),
                     Some(detection_ms),
                 );

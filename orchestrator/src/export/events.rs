@@ -34,46 +34,17 @@ pub struct Described {
 
 impl Described {
     pub fn of(e: &Event) -> Described {
-        let d = |name, robot, detail: String, severity| Described {
-            name,
-            robot: Some(robot),
-            entity: None,
-            detail,
-            severity,
+        let severity = match e {
+            Event::RobotDied { .. } => Severity::Error,
+            Event::ActionRejected { .. } | Event::DeadlineMissed { .. } => Severity::Warning,
+            _ => Severity::Info,
         };
-        match e {
-            Event::RobotDied { robot, cause } => {
-                d("robot_died", *robot, cause.clone(), Severity::Error)
-            }
-            Event::RobotRestarted { robot } => {
-                d("robot_restarted", *robot, String::new(), Severity::Info)
-            }
-            Event::ActionRejected { robot, reason } => d(
-                "action_rejected",
-                *robot,
-                format!("{reason:?}"),
-                Severity::Warning,
-            ),
-            Event::MoveBlocked { robot } => {
-                d("move_blocked", *robot, String::new(), Severity::Info)
-            }
-            Event::EntityDone { entity, robot } => Described {
-                entity: Some(*entity),
-                ..d("entity_done", *robot, String::new(), Severity::Info)
-            },
-            Event::Declared { robot, flags } => d(
-                "declared",
-                *robot,
-                format!("flags {flags:#x}"),
-                Severity::Info,
-            ),
-            Event::DeadlineMissed { robot } => {
-                d("deadline_missed", *robot, String::new(), Severity::Warning)
-            }
-            Event::Progress { done, total } => Described {
-                robot: None,
-                ..d("progress", 0, format!("{done} of {total}"), Severity::Info)
-            },
+        Described {
+            name: e.name(),
+            robot: e.robot(),
+            entity: e.entity(),
+            detail: e.detail(),
+            severity,
         }
     }
     /// One line for a log: "robot 3 robot_died: process died".

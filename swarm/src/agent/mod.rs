@@ -39,6 +39,25 @@ pub const EXIT_BAD_INPUT: i32 = 2;
 pub const EXIT_WORLD_GONE: i32 = 3;
 /// The run's services or barrier could not be opened.
 pub const EXIT_SETUP: i32 = 4;
+/// The behaviour failed (the Python package's agent: `step` raised; the traceback is in the
+/// robot's log). The robot ends as a fault, as a crash does.
+pub const EXIT_BEHAVIOUR_FAULT: i32 = 5;
+
+/// How an agent process ended, for a fault's cause: its wait status (waitpid) in words.
+pub fn exit_cause(status: i32) -> String {
+    if libc::WIFEXITED(status) {
+        match libc::WEXITSTATUS(status) {
+            EXIT_BEHAVIOUR_FAULT => format!(
+                "exit code {EXIT_BEHAVIOUR_FAULT}, its behaviour raised an exception (the \
+                 traceback is in the robot's log)"
+            ),
+            c => format!("exit code {c}"),
+        }
+    } else {
+        let sig = libc::WTERMSIG(status);
+        format!("signal {sig}")
+    }
+}
 
 /// The first stream number of the user's own random streams ([`Agent::rng`]): above every
 /// stream the runtime uses (`crate::streams`), so user draws never shift the runtime's.
