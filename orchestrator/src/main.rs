@@ -10,6 +10,8 @@ mod experiment_cbca;
 mod experiment_formation;
 mod experiment_hunt;
 mod export;
+#[allow(dead_code)] // wired into `up` and `host` in the next commits
+mod hosts;
 mod inprocess;
 mod outcome;
 mod outdir;

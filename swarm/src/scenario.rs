@@ -37,6 +37,14 @@ pub struct Scenario {
     /// read and validated by the agent crate's `cbca` behaviour. Left out when empty.
     #[serde(default, skip_serializing_if = "toml::Table::is_empty")]
     pub cbca: toml::Table,
+    /// The world host's Zenoh listen endpoint in a run across hosts (`up --listen` overrides
+    /// it; default `sections::hosts::DEFAULT_LISTEN`). Never resolved into the run's files.
+    #[serde(default, skip_serializing)]
+    pub hosts_listen: Option<String>,
+    /// `[[hosts]]`: which robots run on which remote host (`sections::hosts`). Never resolved
+    /// into the run's files: where a robot runs changes no result.
+    #[serde(default, skip_serializing)]
+    pub hosts: Vec<crate::sections::hosts::HostSpec>,
 }
 
 #[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
@@ -863,7 +871,8 @@ impl Scenario {
             0,
             MAX_RESTARTS as u64,
         )?;
-        self.validate_faults(&|key, message| c.err(key, message))
+        self.validate_faults(&|key, message| c.err(key, message))?;
+        crate::sections::hosts::validate(self, &c)
     }
 
     /// The sections of one behaviour or mission (`[roam]`, `[search]`, `[formation]`,

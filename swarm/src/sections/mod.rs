@@ -3,6 +3,7 @@
 //! behaviour in the agent crate, the mission in the world crate).
 
 pub mod formation;
+pub mod hosts;
 pub mod hunt;
 pub mod hunt_checks;
 pub mod roam;
