@@ -10,7 +10,6 @@ mod experiment_cbca;
 mod experiment_formation;
 mod experiment_hunt;
 mod export;
-#[allow(dead_code)] // wired into `up` and `host` in the next commits
 mod hosts;
 mod inprocess;
 mod outcome;
@@ -61,6 +60,9 @@ enum Cmd {
     Export(export::ExportArgs),
     /// Print a shell's completion script, e.g. `orchestrator completions bash`.
     Completions(completions::CompletionsArgs),
+    /// Run this host's robots of a run across hosts: join the world's host at ENDPOINT and
+    /// serve the robots the scenario's `[[hosts]]` places on NAME.
+    Host(hosts::proxy::HostArgs),
     /// (internal) A benchmark child process.
     #[command(hide = true, name = "__bench-child")]
     BenchChild(bench::ChildArgs),
@@ -90,6 +92,7 @@ fn main() {
     }
     let code = match cli.cmd {
         Cmd::Up(a) => up::up(a),
+        Cmd::Host(a) => hosts::proxy::host(a),
         Cmd::Bench(a) => bench::bench(a),
         Cmd::BenchChild(a) => bench::child(a),
         Cmd::Status => control::status(),

@@ -5,7 +5,6 @@
 //! held back to be batched with the next).
 
 use super::HostsError;
-use std::sync::mpsc::Sender;
 use std::time::{Duration, Instant};
 use zenoh::qos::CongestionControl;
 use zenoh::{Session, Wait};
@@ -85,18 +84,18 @@ pub fn put(p: &zenoh::pubsub::Publisher<'static>, bytes: Vec<u8>) -> Result<(), 
     })
 }
 
-/// Subscribes `key`; every sample goes to `tx` as `(key, bytes)`.
+/// Subscribes `key`; `each(key, bytes)` gets every sample.
 pub fn subscribe(
     s: &Session,
     key: &str,
-    tx: Sender<(String, Vec<u8>)>,
+    each: impl Fn(String, Vec<u8>) + Send + Sync + 'static,
 ) -> Result<zenoh::pubsub::Subscriber<()>, HostsError> {
     s.declare_subscriber(key.to_string())
         .callback(move |sample| {
-            let _ = tx.send((
+            each(
                 sample.key_expr().to_string(),
                 sample.payload().to_bytes().into_owned(),
-            ));
+            )
         })
         .wait()
         .map_err(|e| HostsError::Zenoh {
@@ -105,25 +104,34 @@ pub fn subscribe(
         })
 }
 
-/// Watches the hosts' liveliness tokens: `tx` gets `(host, true)` when one appears (those
-/// already there included) and `(host, false)` when one goes (its proxy died or left).
-pub fn watch_hosts(
+/// Watches the liveliness tokens matching `key`: `each(key, true)` when one appears (those
+/// already there included), `each(key, false)` when one goes (its process died or left).
+pub fn watch(
     s: &Session,
-    tx: Sender<(String, bool)>,
+    key: &str,
+    each: impl Fn(String, bool) + Send + Sync + 'static,
 ) -> Result<zenoh::pubsub::Subscriber<()>, HostsError> {
     s.liveliness()
-        .declare_subscriber(super::wire::TOKENS)
+        .declare_subscriber(key.to_string())
         .history(true)
         .callback(move |sample| {
-            let key = sample.key_expr().to_string();
-            if let Some(h) = super::wire::host_of(&key) {
-                let alive = sample.kind() == zenoh::sample::SampleKind::Put;
-                let _ = tx.send((h.to_string(), alive));
-            }
+            let alive = sample.kind() == zenoh::sample::SampleKind::Put;
+            each(sample.key_expr().to_string(), alive)
         })
         .wait()
         .map_err(|e| HostsError::Zenoh {
-            what: "watch the hosts' liveliness".into(),
+            what: format!("watch the liveliness of {key}"),
+            message: e.to_string(),
+        })
+}
+
+/// Declares the liveliness token `key`: it exists while this process and its session live.
+pub fn token(s: &Session, key: &str) -> Result<zenoh::liveliness::LivelinessToken, HostsError> {
+    s.liveliness()
+        .declare_token(key.to_string())
+        .wait()
+        .map_err(|e| HostsError::Zenoh {
+            what: format!("declare the liveliness token {key}"),
             message: e.to_string(),
         })
 }

@@ -8,8 +8,15 @@
 //! them). Once a tick each remote host gets one Zenoh message and sends one back
 //! ([`wire`]), so a run across hosts gives the recording of the same run on one host.
 
+pub mod gateway;
+mod gateway_tick;
 pub mod link;
+pub mod proxy;
+mod proxy_agents;
+mod proxy_io;
 pub mod wire;
+
+pub use gateway::Hosts;
 
 /// Why a run across hosts could not start or go on.
 #[derive(Debug, thiserror::Error)]

@@ -18,6 +18,9 @@ pub fn token_key(name: &str) -> String {
 /// Every host's liveliness token.
 pub const TOKENS: &str = "swarm/hosts/*";
 
+/// The world host's liveliness token: a proxy whose world is gone ends its part of the run.
+pub const WORLD_TOKEN: &str = "swarm/world";
+
 /// World's host -> host `name`.
 pub fn down_key(name: &str) -> String {
     format!("swarm/hosts/{name}/down")
