@@ -207,7 +207,7 @@ fn thirty_robots_over_three_hosts_record_what_one_host_records() {
 }
 
 #[test]
-fn a_remote_agent_killed_under_restart_comes_back() {
+fn remote_agents_killed_under_restart_come_back() {
     let _g = serial();
     if !can_run() {
         return;
@@ -235,12 +235,28 @@ fn a_remote_agent_killed_under_restart_comes_back() {
     assert_eq!(pids.len(), 1, "robot 6's agent on h1: {pids:?}");
     // SAFETY: SIGKILL of the agent found above.
     unsafe { libc::kill(pids[0] as i32, libc::SIGKILL) };
+    // Robot 5 through `orchestrator kill`, as a user (or the viewer's button) would.
+    while registry_tick(&out) < 120 {
+        assert!(t.elapsed() < Duration::from_secs(90), "the run never reached tick 120");
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    let o = Command::new(orchestrator())
+        .args(["kill", "--run", &id, "--robot", "5"])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        String::from_utf8_lossy(&o.stdout).contains("ordered robot 5's agent on its host killed"),
+        "{}",
+        String::from_utf8_lossy(&o.stdout)
+    );
     let o = wait_out(run, Duration::from_secs(120));
     assert!(ended_by_itself(&o), "{}", stderr(&o));
     assert!(wait_out(proxy, Duration::from_secs(20)).status.success());
     let s = summary(&out);
-    assert_every_kill_restarted(&s, 1);
+    assert_every_kill_restarted(&s, 2);
     assert_eq!(s["faults"][0]["robot"], 6, "{s}");
+    assert_eq!(s["faults"][1]["robot"], 5, "{s}");
     assert_eq!(s["alive_at_end"], 8, "{s}");
     assert_nothing_left(&id, &["h1"]);
 }

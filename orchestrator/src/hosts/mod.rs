@@ -10,6 +10,7 @@
 
 pub mod gateway;
 mod gateway_tick;
+pub mod kill;
 pub mod link;
 pub mod proxy;
 mod proxy_agents;
