@@ -244,9 +244,9 @@ fn remote_agents_killed_under_restart_come_back() {
         .args(["kill", "--run", &id, "--robot", "5"])
         .output()
         .unwrap();
-    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(o.status.success(), "{:?} {}", o.status, stderr(&o));
     assert!(
-        String::from_utf8_lossy(&o.stdout).contains("ordered robot 5's agent on its host killed"),
+        String::from_utf8_lossy(&o.stdout).contains("killed robot 5 of run"),
         "{}",
         String::from_utf8_lossy(&o.stdout)
     );

@@ -16,5 +16,6 @@ pub fn kill_remote(prefix: &str, run_id: &str, robot: u32) -> String {
         return format!("robot {robot}: no live agent on its host (already dead?)");
     }
     barrier.order_kill(robot, attach);
-    format!("ordered robot {robot}'s agent on its host killed (run {run_id})")
+    // "killed ..." as for a local agent (stdout): its proxy SIGKILLs it within milliseconds.
+    format!("killed robot {robot} of run {run_id} (on its host: ordered through the barrier)")
 }
