@@ -537,7 +537,10 @@ const EMPTY_SEGMENT_AGE: Duration = Duration::from_millis(50);
 /// defunct, seen under dense kills during restarts. A watchdog thread removes the run's empty
 /// segments older than `EMPTY_SEGMENT_AGE` while the cleanup runs; the open then finds
 /// nothing and the cleanup goes on.
-pub(crate) fn cleanup_dead_agents(node: &iceoryx2::node::Node<iceoryx2::prelude::ipc::Service>, prefix: &str) {
+pub(crate) fn cleanup_dead_agents(
+    node: &iceoryx2::node::Node<iceoryx2::prelude::ipc::Service>,
+    prefix: &str,
+) {
     let t = Instant::now();
     let done = std::sync::atomic::AtomicBool::new(false);
     std::thread::scope(|s| {

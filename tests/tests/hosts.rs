@@ -52,11 +52,26 @@ impl Net {
             ip(&["netns", "add", ns]);
             ip(&["-n", ns, "link", "set", "lo", "up"]);
             ip(&[
-                "link", "add", &a, "netns", &world, "type", "veth", "peer", "name", &b, "netns",
-                ns,
+                "link", "add", &a, "netns", &world, "type", "veth", "peer", "name", &b, "netns", ns,
             ]);
-            ip(&["-n", &world, "addr", "add", &format!("10.{net}.{h}.1/24"), "dev", &a]);
-            ip(&["-n", ns, "addr", "add", &format!("10.{net}.{h}.2/24"), "dev", &b]);
+            ip(&[
+                "-n",
+                &world,
+                "addr",
+                "add",
+                &format!("10.{net}.{h}.1/24"),
+                "dev",
+                &a,
+            ]);
+            ip(&[
+                "-n",
+                ns,
+                "addr",
+                "add",
+                &format!("10.{net}.{h}.2/24"),
+                "dev",
+                &b,
+            ]);
             ip(&["-n", &world, "link", "set", &a, "up"]);
             ip(&["-n", ns, "link", "set", &b, "up"]);
         }
@@ -73,7 +88,13 @@ impl Net {
         Command::new("ip")
             .args(["netns", "exec", &self.hosts[h - 1]])
             .arg(orchestrator())
-            .args(["host", "--join", &self.endpoint(h), "--name", &format!("h{h}")])
+            .args([
+                "host",
+                "--join",
+                &self.endpoint(h),
+                "--name",
+                &format!("h{h}"),
+            ])
             .args(["--wait", "120"])
             .stdout(Stdio::null())
             .stderr(Stdio::piped())
@@ -111,7 +132,9 @@ impl Drop for Net {
 fn can_run() -> bool {
     // SAFETY: geteuid cannot fail.
     if unsafe { libc::geteuid() } != 0 {
-        eprintln!("skipped: runs across hosts are tested between network namespaces, which needs root");
+        eprintln!(
+            "skipped: runs across hosts are tested between network namespaces, which needs root"
+        );
         return false;
     }
     true
@@ -165,7 +188,10 @@ fn assert_nothing_left(run_id: &str, hosts: &[&str]) {
             .into_iter()
             .filter(|f| prefixes.iter().any(|p| f.starts_with(p)))
             .collect();
-        let procs: Vec<u32> = prefixes.iter().flat_map(|p| processes_mentioning(p)).collect();
+        let procs: Vec<u32> = prefixes
+            .iter()
+            .flat_map(|p| processes_mentioning(p))
+            .collect();
         if files.is_empty() && procs.is_empty() {
             return;
         }
@@ -201,7 +227,10 @@ fn thirty_robots_over_three_hosts_record_what_one_host_records() {
     assert_eq!(s["robots"], 30);
     assert!(s["ticks"].as_u64().unwrap() > 20, "{s}");
     assert!(s["messages"]["delivered"].as_u64().unwrap() > 0, "{s}");
-    assert!(same_recording(&a, &b), "the run across hosts records other bytes");
+    assert!(
+        same_recording(&a, &b),
+        "the run across hosts records other bytes"
+    );
     assert_nothing_left(&id, &["h1", "h2"]);
     assert_left_nothing(&b);
 }
@@ -226,7 +255,10 @@ fn remote_agents_killed_under_restart_come_back() {
     let run = net.up(&sc, &out, &id, &[]);
     let t = Instant::now();
     while registry_tick(&out) < 40 {
-        assert!(t.elapsed() < Duration::from_secs(60), "the run never reached tick 40");
+        assert!(
+            t.elapsed() < Duration::from_secs(60),
+            "the run never reached tick 40"
+        );
         std::thread::sleep(Duration::from_millis(20));
     }
     // Robot 6's agent, a child of host h1's proxy.
@@ -237,7 +269,10 @@ fn remote_agents_killed_under_restart_come_back() {
     unsafe { libc::kill(pids[0] as i32, libc::SIGKILL) };
     // Robot 5 through `orchestrator kill`, as a user (or the viewer's button) would.
     while registry_tick(&out) < 120 {
-        assert!(t.elapsed() < Duration::from_secs(90), "the run never reached tick 120");
+        assert!(
+            t.elapsed() < Duration::from_secs(90),
+            "the run never reached tick 120"
+        );
         std::thread::sleep(Duration::from_millis(20));
     }
     let o = Command::new(orchestrator())
@@ -275,14 +310,21 @@ fn a_killed_proxy_makes_its_robots_faults_and_the_run_goes_on() {
     let run = net.up(&sc, &out, &id, &[]);
     let t = Instant::now();
     while registry_tick(&out) < 40 {
-        assert!(t.elapsed() < Duration::from_secs(60), "the run never reached tick 40");
+        assert!(
+            t.elapsed() < Duration::from_secs(60),
+            "the run never reached tick 40"
+        );
         std::thread::sleep(Duration::from_millis(20));
     }
     p2.kill().unwrap();
     p2.wait().unwrap();
     let o = wait_out(run, Duration::from_secs(120));
     assert!(ended_by_itself(&o), "{}", stderr(&o));
-    assert!(stderr(&o).contains("host h2 left the run"), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("host h2 left the run"),
+        "{}",
+        stderr(&o)
+    );
     assert!(wait_out(p1, Duration::from_secs(20)).status.success());
     let s = summary(&out);
     assert_eq!(s["ticks"], 300, "the run went on to its end: {s}");
@@ -299,10 +341,15 @@ fn a_killed_proxy_makes_its_robots_faults_and_the_run_goes_on() {
     // ORPHAN_GRACE).
     let t = Instant::now();
     while !processes_mentioning(&proxy_prefix(&id, "h2")).is_empty() {
-        assert!(t.elapsed() < Duration::from_secs(10), "h2's agents outlived their proxy");
+        assert!(
+            t.elapsed() < Duration::from_secs(10),
+            "h2's agents outlived their proxy"
+        );
         std::thread::sleep(Duration::from_millis(50));
     }
-    assert!(!run_shm_entries().iter().all(|f| !f.starts_with(&proxy_prefix(&id, "h2"))));
+    assert!(!run_shm_entries()
+        .iter()
+        .all(|f| !f.starts_with(&proxy_prefix(&id, "h2"))));
     std::thread::sleep(Duration::from_secs(11));
     let o = Command::new(orchestrator()).arg("clean").output().unwrap();
     assert!(o.status.success(), "{}", stderr(&o));
@@ -334,7 +381,11 @@ fn a_host_that_never_joins_is_named_within_the_timeout() {
     let t = Instant::now();
     let o = wait_out(net.up(&sc, &out, &id, &[]), Duration::from_secs(30));
     assert_eq!(o.status.code(), Some(exit::FAILED), "{}", stderr(&o));
-    assert!(t.elapsed() < Duration::from_secs(15), "took {:?}", t.elapsed());
+    assert!(
+        t.elapsed() < Duration::from_secs(15),
+        "took {:?}",
+        t.elapsed()
+    );
     let e = stderr(&o);
     assert!(e.contains("host(s) h2 did not join"), "{e}");
     assert!(e.contains("startup_timeout_s = 3 s"), "{e}");

@@ -59,18 +59,30 @@ impl Hosts {
         let (tx, rx) = mpsc::channel();
         let mut keep: Vec<Box<dyn std::any::Any + Send>> = Vec::new();
         let live_tx = tx.clone();
-        keep.push(Box::new(link::watch(&session, wire::TOKENS, move |key, alive| {
-            if let Some(h) = wire::host_of(&key) {
-                let h = h.to_string();
-                let _ = live_tx.send(if alive { Event::Came(h) } else { Event::Gone(h) });
-            }
-        })?));
-        keep.push(Box::new(link::subscribe(&session, wire::UPS, move |key, bytes| {
-            if let Some(h) = wire::host_of(&key) {
-                let up = Up::decode(&bytes).unwrap_or_else(|e| Up::Failed(e.to_string()));
-                let _ = tx.send(Event::Up(h.to_string(), up));
-            }
-        })?));
+        keep.push(Box::new(link::watch(
+            &session,
+            wire::TOKENS,
+            move |key, alive| {
+                if let Some(h) = wire::host_of(&key) {
+                    let h = h.to_string();
+                    let _ = live_tx.send(if alive {
+                        Event::Came(h)
+                    } else {
+                        Event::Gone(h)
+                    });
+                }
+            },
+        )?));
+        keep.push(Box::new(link::subscribe(
+            &session,
+            wire::UPS,
+            move |key, bytes| {
+                if let Some(h) = wire::host_of(&key) {
+                    let up = Up::decode(&bytes).unwrap_or_else(|e| Up::Failed(e.to_string()));
+                    let _ = tx.send(Event::Up(h.to_string(), up));
+                }
+            },
+        )?));
         keep.push(Box::new(link::token(&session, wire::WORLD_TOKEN)?));
         let timeout = Duration::from_secs(sc.runtime.startup_timeout_s);
         let until = Instant::now() + timeout;
@@ -147,8 +159,8 @@ impl Hosts {
         let (sc, prefix) = (sc.clone(), prefix.to_string());
         let (stop, failure) = (self.stop.clone(), self.failure.clone());
         self.thread = Some(std::thread::spawn(move || {
-            let result = Gateway::open(&sc, &prefix, remotes, downs)
-                .and_then(|mut g| g.run(&events, &stop));
+            let result =
+                Gateway::open(&sc, &prefix, remotes, downs).and_then(|mut g| g.run(&events, &stop));
             if let Err(e) = result {
                 *failure.lock().expect("not poisoned") = Some(e.to_string());
             }

@@ -162,7 +162,12 @@ impl Gateway {
     }
 
     /// Tick `k`: one message to each host with live robots, one batch back from each.
-    fn tick(&mut self, k: u64, events: &Receiver<Event>, stop: &AtomicBool) -> Result<(), HostsError> {
+    fn tick(
+        &mut self,
+        k: u64,
+        events: &Receiver<Event>,
+        stop: &AtomicBool,
+    ) -> Result<(), HostsError> {
         let mut sense = None;
         while let Ok(Some(s)) = self.senses.receive() {
             sense = Some(s);
@@ -331,8 +336,7 @@ impl Gateway {
         if self.barrier.is_shutdown() {
             return;
         }
-        self.barrier
-            .set_dead_upto(r, self.barrier.attach_count(r));
+        self.barrier.set_dead_upto(r, self.barrier.attach_count(r));
         self.send_control(CONTROL_ROBOT_DIED, r);
     }
 

@@ -52,7 +52,9 @@ pub fn host(a: HostArgs) -> i32 {
     }
     let ok_name = !a.name.is_empty()
         && a.name.len() <= swarm::sections::hosts::MAX_HOST_NAME
-        && a.name.bytes().all(|b| b.is_ascii_alphanumeric() || b == b'-' || b == b'_');
+        && a.name
+            .bytes()
+            .all(|b| b.is_ascii_alphanumeric() || b == b'-' || b == b'_');
     if !ok_name {
         eprintln!(
             "error: --name {:?} is not a host name: allowed 1 to {} letters, digits, `-` and `_`",

@@ -69,7 +69,9 @@ impl Agents {
             .stdout(Stdio::null())
             .process_group(0)
             .spawn()
-            .map_err(|e| HostsError::Other(format!("cannot start {}: {e}", bin("agent").display())))?;
+            .map_err(|e| {
+                HostsError::Other(format!("cannot start {}: {e}", bin("agent").display()))
+            })?;
         let base = barrier.attach_count(robot);
         self.agents.insert(child.id(), Agent { robot, base });
         Ok(())

@@ -38,7 +38,11 @@ impl RobotSet {
         match self {
             RobotSet::List(v) => Ok(v.clone()),
             RobotSet::Range(s) => {
-                let bad = || format!("= {s:?} is not a range \"FROM..TO\" (TO excluded) nor a list of robots");
+                let bad = || {
+                    format!(
+                        "= {s:?} is not a range \"FROM..TO\" (TO excluded) nor a list of robots"
+                    )
+                };
                 let (a, b) = s.split_once("..").ok_or_else(bad)?;
                 let a: u32 = a.trim().parse().map_err(|_| bad())?;
                 let b: u32 = b.trim().parse().map_err(|_| bad())?;
@@ -110,7 +114,10 @@ pub fn validate(sc: &Scenario, c: &Check) -> Result<(), ConfigError> {
         if let Some(o) = sc.hosts[..h].iter().position(|o| o.name == spec.name) {
             return Err(c.err(
                 &key,
-                format!("= {:?} is also the name of hosts[{o}]: host names must differ", spec.name),
+                format!(
+                    "= {:?} is also the name of hosts[{o}]: host names must differ",
+                    spec.name
+                ),
             ));
         }
         let key = format!("hosts[{h}].robots");
@@ -131,7 +138,10 @@ pub fn validate(sc: &Scenario, c: &Check) -> Result<(), ConfigError> {
             if let Some(o) = *slot {
                 return Err(c.err(
                     &key,
-                    format!("names robot {r}, which hosts[{o}] ({:?}) runs already", sc.hosts[o].name),
+                    format!(
+                        "names robot {r}, which hosts[{o}] ({:?}) runs already",
+                        sc.hosts[o].name
+                    ),
                 ));
             }
             *slot = Some(h);
@@ -184,8 +194,10 @@ mod tests {
 
     #[test]
     fn bad_hosts_name_the_key_and_line() {
-        let e = parse("[[hosts]]\nname = \"a\"\nrobots = \"2..4\"\n[[hosts]]\nname = \"b\"\nrobots = [3]\n")
-            .unwrap_err();
+        let e = parse(
+            "[[hosts]]\nname = \"a\"\nrobots = \"2..4\"\n[[hosts]]\nname = \"b\"\nrobots = [3]\n",
+        )
+        .unwrap_err();
         assert_eq!(e.key, "hosts[1].robots");
         assert_eq!(e.source, "h.toml:6");
         assert!(e.message.contains("robot 3"), "{e}");
