@@ -70,7 +70,13 @@ need_python() {
     .venv/bin/pip install -q --no-build-isolation ./python
 }
 
-NEEDS=(need_rust_tools need_chromium need_tmux need_node need_foxglove_schemas need_python)
+# The runs across hosts (tests/tests/hosts.rs) put each "host" in a network namespace joined
+# by veth pairs, made with `ip` (and `tc netem` for scripts/bench-hosts.sh).
+need_iproute2() {
+  command -v ip >/dev/null && command -v tc >/dev/null || apt_install iproute2
+}
+
+NEEDS=(need_rust_tools need_chromium need_tmux need_node need_foxglove_schemas need_python need_iproute2)
 for need in "${NEEDS[@]}"; do
   "$need"
 done

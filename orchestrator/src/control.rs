@@ -107,6 +107,11 @@ pub fn kill_robots(run: &str, robots: &[u32]) -> Result<Vec<String>, KillError> 
     let mut seen = std::collections::BTreeSet::new();
     for &r in robots.iter().filter(|&&r| seen.insert(r)) {
         let pid = e.agent_pids[r as usize];
+        if pid == 0 {
+            // Its agent runs on another host (`[[hosts]]`).
+            lines.push(crate::hosts::kill::kill_remote(&e.prefix, &e.run_id, r));
+            continue;
+        }
         if !e.is_agent(pid, e.agent_starts[r as usize]) {
             lines.push(format!("robot {r}: process {pid} is gone (already dead?)"));
             continue;

@@ -12,6 +12,7 @@ mod experiment_cbca;
 mod experiment_formation;
 mod experiment_hunt;
 mod export;
+mod hosts;
 mod inprocess;
 mod logs;
 mod outcome;
@@ -40,6 +41,8 @@ struct Cli {
     cmd: Cmd,
 }
 
+// Parsed once per process: the size of the largest variant (`up`'s flags) costs nothing.
+#[allow(clippy::large_enum_variant)]
 #[derive(Subcommand)]
 enum Cmd {
     /// Run a scenario: one world process and one agent process per robot.
@@ -64,6 +67,9 @@ enum Cmd {
     Logs(logs::LogsArgs),
     /// Print a shell's completion script, e.g. `orchestrator completions bash`.
     Completions(completions::CompletionsArgs),
+    /// Run this host's robots of a run across hosts: join the world's host at ENDPOINT and
+    /// serve the robots the scenario's `[[hosts]]` places on NAME.
+    Host(hosts::proxy::HostArgs),
     /// (internal) A benchmark child process.
     #[command(hide = true, name = "__bench-child")]
     BenchChild(bench::ChildArgs),
@@ -93,6 +99,7 @@ fn main() {
     }
     let code = match cli.cmd {
         Cmd::Up(a) => up::up(a),
+        Cmd::Host(a) => hosts::proxy::host(a),
         Cmd::Bench(a) => bench::bench(a),
         Cmd::BenchChild(a) => bench::child(a),
         Cmd::Status => control::status(),

@@ -95,12 +95,12 @@ impl From<String> for RunError {
     }
 }
 
-fn bin(name: &str) -> PathBuf {
+pub(crate) fn bin(name: &str) -> PathBuf {
     registry::binary(name)
 }
 
 /// "exit code C" or "signal S" of a waitpid status.
-fn describe(status: i32) -> String {
+pub(crate) fn describe(status: i32) -> String {
     match exit_of(status) {
         Ok(c) => format!("exit code {c}"),
         Err(s) => format!("signal {s}"),
@@ -118,7 +118,7 @@ struct Agent {
 }
 
 /// Decoded waitpid status.
-fn exit_of(status: i32) -> Result<i32, i32> {
+pub(crate) fn exit_of(status: i32) -> Result<i32, i32> {
     if libc::WIFEXITED(status) {
         Ok(libc::WEXITSTATUS(status))
     } else {
@@ -126,7 +126,7 @@ fn exit_of(status: i32) -> Result<i32, i32> {
     }
 }
 
-fn kill(pid: u32) {
+pub(crate) fn kill(pid: u32) {
     // SAFETY: plain kill of our own child.
     unsafe {
         libc::kill(pid as i32, libc::SIGKILL);
@@ -146,7 +146,7 @@ fn exited(pid: u32) -> bool {
 }
 
 /// Reaps one exited child, if any.
-fn reap() -> Option<(u32, i32)> {
+pub(crate) fn reap() -> Option<(u32, i32)> {
     let mut status = 0;
     // SAFETY: waitpid on our own children with a valid status pointer.
     let pid = unsafe { libc::waitpid(-1, &mut status, libc::WNOHANG) };
@@ -261,6 +261,9 @@ fn supervise(
     let barrier = std::sync::Arc::new(barrier);
     *SUPERVISED.lock().unwrap_or_else(|e| e.into_inner()) = Some(barrier.clone());
     let _supervised = Supervised;
+    // A run across hosts (`[[hosts]]`): the declared hosts join before anything starts.
+    let mut hosts = crate::hosts::Hosts::wait(sc).map_err(|e| e.to_string())?;
+    let remote = swarm::sections::hosts::placement(sc);
     let mut world = Command::new(bin("world"));
     // The world and every agent inherit the barrier's descriptors (SWARM_BARRIER_FDS).
     barrier_fds.pass_to(&mut world);
@@ -324,6 +327,9 @@ fn supervise(
     barrier_fds
         .seal_worlds_segment()
         .map_err(|e| e.to_string())?;
+    if let Some(h) = hosts.as_mut() {
+        h.start(sc, p.run_id, prefix).map_err(|e| e.to_string())?;
+    }
     let launcher = Launcher {
         sc,
         prefix,
@@ -353,6 +359,12 @@ fn supervise(
         if signals::interrupted() {
             // Ctrl-C while the agents start: the loop below stops the world at once.
             break;
+        }
+        if remote[i as usize].is_some() {
+            // Its host's proxy runs its agent (crate::hosts).
+            entry.agent_pids.push(0);
+            entry.agent_starts.push(0);
+            continue;
         }
         let (pid, start) = spawn_agent(i, 0)?;
         agents.insert(pid, new_agent(i, 0));
@@ -591,6 +603,12 @@ fn supervise(
                 )
             });
     }
+    if let Some(h) = hosts.as_mut() {
+        h.finish();
+        if let Some(e) = h.failure() {
+            return Err(e);
+        }
+    }
     // Closing the ports touches their segments (one may have shrunk).
     let _ = guarded(|| drop(status));
     let _ = guarded(|| drop(control));
@@ -621,7 +639,10 @@ const EMPTY_SEGMENT_AGE: Duration = Duration::from_millis(50);
 /// defunct, seen under dense kills during restarts. A watchdog thread removes the run's empty
 /// segments older than `EMPTY_SEGMENT_AGE` while the cleanup runs; the open then finds
 /// nothing and the cleanup goes on.
-fn cleanup_dead_agents(node: &iceoryx2::node::Node<iceoryx2::prelude::ipc::Service>, prefix: &str) {
+pub(crate) fn cleanup_dead_agents(
+    node: &iceoryx2::node::Node<iceoryx2::prelude::ipc::Service>,
+    prefix: &str,
+) {
     let t = Instant::now();
     let done = std::sync::atomic::AtomicBool::new(false);
     std::thread::scope(|s| {

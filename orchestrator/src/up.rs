@@ -94,6 +94,10 @@ pub struct UpArgs {
     /// Port of --view (0: any free port).
     #[arg(long, default_value_t = 0, requires = "view")]
     pub view_port: u16,
+    /// A run across hosts (`[[hosts]]`): the Zenoh endpoint this host listens on for the
+    /// hosts' proxies, tcp/ADDRESS:PORT [scenario: hosts_listen].
+    #[arg(long, value_name = "ENDPOINT")]
+    pub listen: Option<String>,
     /// Record which messages each robot was handed every tick (sender, seq, size), for the
     /// viewer's "heard this tick" [scenario: runtime.record_deliveries].
     #[arg(long)]
@@ -189,6 +193,7 @@ pub(crate) const FLAG_KEYS: &[(&str, &str)] = &[
     ("runtime.tick_hz", "--tick-hz"),
     ("runtime.realtime_hz", "--realtime"),
     ("runtime.record_deliveries", "--record-deliveries"),
+    ("hosts_listen", "--listen"),
 ];
 
 /// The scenario with the flags applied and validated.
@@ -268,6 +273,9 @@ pub fn resolve(a: &UpArgs) -> Result<Scenario, ConfigError> {
     if let Some(v) = a.realtime {
         set("runtime.realtime_hz", &mut || sc.runtime.realtime_hz = v);
     }
+    if let Some(v) = &a.listen {
+        set("hosts_listen", &mut || sc.hosts_listen = Some(v.clone()));
+    }
     if a.record_deliveries {
         set("runtime.record_deliveries", &mut || {
             sc.runtime.record_deliveries = true
@@ -327,6 +335,16 @@ pub fn resolve(a: &UpArgs) -> Result<Scenario, ConfigError> {
         });
     }
     crate::agent_programs::check_found(&sc, &key_source)?;
+    if a.executor == Executor::Inprocess && !sc.hosts.is_empty() {
+        let key = "hosts";
+        return Err(ConfigError {
+            source: swarm::key_lines::locate(&key_source(key), key),
+            key: key.into(),
+            message: "places robots on other hosts, which needs the processes executor \
+                      (--executor inprocess was given)"
+                .into(),
+        });
+    }
     expand_kills(&mut sc);
     Ok(sc)
 }

@@ -42,6 +42,14 @@ pub struct Scenario {
     /// no entry lists run `run.behaviour`. Left out when empty.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub agents: Vec<AgentEntry>,
+    /// The world host's Zenoh listen endpoint in a run across hosts (`up --listen` overrides
+    /// it; default `sections::hosts::DEFAULT_LISTEN`). Never resolved into the run's files.
+    #[serde(default, skip_serializing)]
+    pub hosts_listen: Option<String>,
+    /// `[[hosts]]`: which robots run on which remote host (`sections::hosts`). Never resolved
+    /// into the run's files: where a robot runs changes no result.
+    #[serde(default, skip_serializing)]
+    pub hosts: Vec<crate::sections::hosts::HostSpec>,
 }
 
 #[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
@@ -884,7 +892,8 @@ impl Scenario {
             MAX_RESTARTS as u64,
         )?;
         self.validate_faults(&|key, message| c.err(key, message))?;
-        crate::sections::agents::validate(&self.agents, self.run.robots, &c)
+        crate::sections::agents::validate(&self.agents, self.run.robots, &c)?;
+        crate::sections::hosts::validate(self, &c)
     }
 
     /// The sections of one behaviour or mission (`[roam]`, `[search]`, `[formation]`,

@@ -4,6 +4,7 @@
 
 pub mod agents;
 pub mod formation;
+pub mod hosts;
 pub mod hunt;
 pub mod hunt_checks;
 pub mod roam;

@@ -1,0 +1,376 @@
+//! The gateway's tick: on the world's release of tick k it sends each remote host that has
+//! live robots one message (their Sense records, the air once) and waits for one batch back
+//! (their Actions), which it publishes on the robots' act services and acknowledges on the
+//! barrier, as each robot's agent would. Between ticks it mirrors the hosts' attaches and
+//! deaths into the world's barrier and control channel, and forwards the world's kill orders.
+
+use super::link;
+use super::wire::{Down, Up};
+use super::{gateway::Remote, HostsError};
+use iceoryx2::port::publisher::Publisher;
+use iceoryx2::port::subscriber::Subscriber;
+use iceoryx2::prelude::*;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::mpsc::{Receiver, RecvTimeoutError};
+use std::time::Duration;
+use swarm::barrier::{TickBarrier, Wake};
+use swarm::frames::{
+    Action, AirHeader, Control, Sense, SenseHeader, CONTROL_ROBOT_DIED, CONTROL_STOP,
+};
+use swarm::scenario::Scenario;
+use swarm::sense_pack::{unpack_into, SensePacker};
+use swarm::transport;
+
+/// What reaches the gateway from the hosts (Zenoh callbacks feed one channel).
+pub enum Event {
+    /// Host `name`'s proxy joined (its liveliness token appeared).
+    Came(String),
+    /// Host `name`'s proxy is gone (its token went: died, or its host or link did).
+    Gone(String),
+    /// A message of host `name`.
+    Up(String, Up),
+}
+
+/// How long the gateway sleeps at most between looks at the hosts' messages and the world's
+/// kill orders while no tick is under way. [chosen] Short against a tick's cost; the world
+/// waits for attaches in 2 ms slices too.
+const IDLE_POLL: Duration = Duration::from_millis(2);
+
+type Zpub = zenoh::pubsub::Publisher<'static>;
+
+struct Host {
+    remote: Remote,
+    down: Zpub,
+    /// Its proxy left: its robots are faults, nothing more is sent to it.
+    gone: bool,
+}
+
+pub struct Gateway {
+    _node: Node<ipc::Service>,
+    hosts: Vec<Host>,
+    /// Which host runs each robot (None: the world's host).
+    at: Vec<Option<usize>>,
+    barrier: TickBarrier,
+    senses: Subscriber<ipc::Service, [u8], SenseHeader>,
+    air: Subscriber<ipc::Service, [u8], AirHeader>,
+    acts: Vec<Option<Publisher<ipc::Service, [u8], Action>>>,
+    control: Publisher<ipc::Service, Control, ()>,
+    slot: usize,
+    /// The last kill order of each robot forwarded.
+    kill_done: Vec<u64>,
+    packer: SensePacker,
+    scratch: Box<Sense>,
+    _services: Vec<Box<dyn std::any::Any>>,
+}
+
+impl Gateway {
+    /// Opens the world's services and barrier for the remote robots.
+    pub fn open(
+        sc: &Scenario,
+        prefix: &str,
+        remotes: Vec<Remote>,
+        downs: Vec<Zpub>,
+    ) -> Result<Gateway, HostsError> {
+        let n = sc.run.robots;
+        let config = transport::run_config(prefix)?;
+        let node = transport::node(&config, "gateway")?;
+        let mut services: Vec<Box<dyn std::any::Any>> = Vec::new();
+        let senses_svc = transport::senses_service(&node, sc, false)?;
+        let senses = senses_svc
+            .subscriber_builder()
+            .buffer_size(1)
+            .create()
+            .map_err(|e| HostsError::Other(format!("world/sense subscriber: {e:?}")))?;
+        let air_svc = transport::air_service(&node, sc, false)?;
+        let air = air_svc
+            .subscriber_builder()
+            .buffer_size(1)
+            .create()
+            .map_err(|e| HostsError::Other(format!("radio/air subscriber: {e:?}")))?;
+        let control_svc = transport::control_service(&node, false)?;
+        let control = control_svc
+            .publisher_builder()
+            .create()
+            .map_err(|e| HostsError::Other(format!("run/control publisher: {e:?}")))?;
+        let mut at = vec![None; n as usize];
+        let mut acts: Vec<Option<_>> = (0..n).map(|_| None).collect();
+        for (h, r) in remotes.iter().enumerate() {
+            for &i in &r.robots {
+                at[i as usize] = Some(h);
+                let svc = transport::act_service(&node, i, false)?;
+                acts[i as usize] = Some(transport::act_publisher(&svc, sc)?);
+                services.push(Box::new(svc));
+            }
+        }
+        services.push(Box::new(senses_svc));
+        services.push(Box::new(air_svc));
+        services.push(Box::new(control_svc));
+        let hosts = remotes
+            .into_iter()
+            .zip(downs)
+            .map(|(remote, down)| Host {
+                remote,
+                down,
+                gone: false,
+            })
+            .collect();
+        Ok(Gateway {
+            _node: node,
+            hosts,
+            at,
+            barrier: TickBarrier::open(prefix)?,
+            senses,
+            air,
+            acts,
+            control,
+            slot: transport::act_slice_len(sc),
+            kill_done: vec![0; n as usize],
+            packer: SensePacker::default(),
+            scratch: Sense::zeroed(),
+            _services: services,
+        })
+    }
+
+    /// Serves the run until the world shuts it down or `stop` is set; then tells every host
+    /// the run is over.
+    pub fn run(&mut self, events: &Receiver<Event>, stop: &AtomicBool) -> Result<(), HostsError> {
+        let result = self.serve(events, stop);
+        for h in self.hosts.iter().filter(|h| !h.gone) {
+            let _ = link::put(&h.down, Down::Stop.encode());
+        }
+        result
+    }
+
+    fn serve(&mut self, events: &Receiver<Event>, stop: &AtomicBool) -> Result<(), HostsError> {
+        let mut done = 0;
+        loop {
+            if stop.load(Ordering::Acquire) {
+                return Ok(());
+            }
+            while let Ok(ev) = events.try_recv() {
+                self.handle(ev, None)?;
+            }
+            self.forward_kills()?;
+            let k = match self.barrier.wait_release(done, IDLE_POLL) {
+                Wake::Shutdown => return Ok(()),
+                Wake::Timeout => continue,
+                Wake::Tick(k) => k,
+            };
+            self.tick(k, events, stop)?;
+            done = k + 1;
+        }
+    }
+
+    /// Tick `k`: one message to each host with live robots, one batch back from each.
+    fn tick(
+        &mut self,
+        k: u64,
+        events: &Receiver<Event>,
+        stop: &AtomicBool,
+    ) -> Result<(), HostsError> {
+        let mut sense = None;
+        while let Ok(Some(s)) = self.senses.receive() {
+            sense = Some(s);
+        }
+        let mut air = None;
+        while let Ok(Some(s)) = self.air.receive() {
+            air = Some(s);
+        }
+        let Some(sense) = sense.filter(|s| s.user_header().tick == k) else {
+            return Ok(());
+        };
+        let (air_header, air_bytes) = match &air {
+            Some(a) if a.user_header().tick == k => (*a.user_header(), a.payload().to_vec()),
+            _ => (
+                AirHeader {
+                    tick: k,
+                    ..AirHeader::default()
+                },
+                Vec::new(),
+            ),
+        };
+        let n = self.at.len() as u32;
+        let mut waiting = vec![false; self.hosts.len()];
+        for (h, host) in self.hosts.iter().enumerate() {
+            if host.gone {
+                continue;
+            }
+            self.packer.begin(n);
+            let mut any = false;
+            for &r in &host.remote.robots {
+                if let Ok(true) = unpack_into(sense.payload(), r, &mut self.scratch) {
+                    self.packer.push(r, &self.scratch);
+                    any = true;
+                }
+            }
+            if !any {
+                continue;
+            }
+            let msg = Down::Tick {
+                tick: k,
+                sense: self.packer.bytes().to_vec(),
+                air_header,
+                air: air_bytes.clone(),
+            };
+            link::put(&host.down, msg.encode())?;
+            waiting[h] = true;
+        }
+        drop(sense);
+        drop(air);
+        while waiting.iter().any(|w| *w) {
+            if stop.load(Ordering::Acquire)
+                || self.barrier.is_shutdown()
+                || self.barrier.current_tick() > k
+            {
+                // The world went on without them (its ack deadline) or ended the run.
+                return Ok(());
+            }
+            match events.recv_timeout(IDLE_POLL) {
+                Ok(ev) => self.handle(ev, Some((k, &mut waiting)))?,
+                Err(RecvTimeoutError::Timeout) => {}
+                Err(RecvTimeoutError::Disconnected) => return Ok(()),
+            }
+            self.forward_kills()?;
+        }
+        Ok(())
+    }
+
+    fn host_index(&self, name: &str) -> Option<usize> {
+        self.hosts.iter().position(|h| h.remote.name == name)
+    }
+
+    /// One event; `tick`: the tick under way and which hosts' batches it still waits for.
+    fn handle(&mut self, ev: Event, tick: Option<(u64, &mut Vec<bool>)>) -> Result<(), HostsError> {
+        match ev {
+            Event::Came(_) => {}
+            Event::Gone(name) => {
+                let Some(h) = self.host_index(&name) else {
+                    return Ok(());
+                };
+                if self.hosts[h].gone {
+                    return Ok(());
+                }
+                self.hosts[h].gone = true;
+                if let Some((_, waiting)) = tick {
+                    waiting[h] = false;
+                }
+                if !self.barrier.is_shutdown() {
+                    eprintln!(
+                        "host {name} left the run (its proxy's liveliness token went): its \
+                         robots {:?} are faults",
+                        self.hosts[h].remote.robots
+                    );
+                    for r in self.hosts[h].remote.robots.clone() {
+                        self.died(r);
+                    }
+                }
+            }
+            Event::Up(name, up) => {
+                let Some(h) = self.host_index(&name) else {
+                    return Ok(());
+                };
+                match up {
+                    Up::Ready => {}
+                    Up::Attached { robot } if self.at.get(robot as usize) == Some(&Some(h)) => {
+                        self.barrier.mark_ready(robot);
+                    }
+                    Up::Died { robot, .. } if self.at.get(robot as usize) == Some(&Some(h)) => {
+                        self.died(robot);
+                    }
+                    Up::Batch { tick: t, acts } => {
+                        if let Some((k, waiting)) = tick {
+                            if t == k && waiting[h] {
+                                waiting[h] = false;
+                                self.deliver(h, k, acts)?;
+                            }
+                        }
+                    }
+                    Up::Failed(message) => {
+                        self.send_control(CONTROL_STOP, 0);
+                        return Err(HostsError::Host {
+                            host: name,
+                            message,
+                        });
+                    }
+                    _ => {}
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Publishes host `h`'s actions of tick `k` and acknowledges them, robot by robot.
+    fn deliver(&mut self, h: usize, k: u64, acts: Vec<super::wire::Act>) -> Result<(), HostsError> {
+        for a in acts {
+            let r = a.robot as usize;
+            if self.at.get(r) != Some(&Some(h)) {
+                continue;
+            }
+            let Some(publisher) = self.acts[r].as_ref() else {
+                continue;
+            };
+            let sample = publisher
+                .loan_slice_uninit(self.slot)
+                .map_err(|e| HostsError::Other(format!("robot/{r}/act loan: {e:?}")))?;
+            // SAFETY: the slot is shared memory of the publisher's data segment, mapped from
+            // tmpfs: its bytes are always initialised and every u8 value is valid; the world
+            // reads only the `radio_bytes` written below.
+            let mut sample = unsafe { sample.assume_init() };
+            let used = a.area.len().min(self.slot);
+            sample.payload_mut()[..used].copy_from_slice(&a.area[..used]);
+            *sample.user_header_mut() = Action {
+                radio_bytes: a.action.radio_bytes.min(used as u32),
+                ..a.action
+            };
+            sample
+                .send()
+                .map_err(|e| HostsError::Other(format!("robot/{r}/act send: {e:?}")))?;
+            self.barrier.ack(a.robot, k);
+        }
+        Ok(())
+    }
+
+    /// Robot `r`'s agent on its host is dead: reported to the world as the orchestrator
+    /// reports a local agent's death (every attach so far dead, then a ROBOT_DIED).
+    fn died(&mut self, r: u32) {
+        if self.barrier.is_shutdown() {
+            return;
+        }
+        self.barrier.set_dead_upto(r, self.barrier.attach_count(r));
+        self.send_control(CONTROL_ROBOT_DIED, r);
+    }
+
+    fn send_control(&self, kind: u32, robot: u32) {
+        if let Ok(s) = self.control.loan_uninit() {
+            let _ = s
+                .write_payload(Control {
+                    kind,
+                    robot,
+                    value: crate::processes::monotonic_us(),
+                    tick: self.barrier.current_tick(),
+                })
+                .send();
+        }
+        self.barrier.nudge_world();
+    }
+
+    /// The world's new kill orders of remote robots, to their hosts.
+    fn forward_kills(&mut self) -> Result<(), HostsError> {
+        for (r, at) in self.at.iter().enumerate() {
+            let Some(h) = *at else { continue };
+            let order = self.barrier.kill_order(r as u32);
+            if order > self.kill_done[r] {
+                self.kill_done[r] = order;
+                let host = &self.hosts[h];
+                if !host.gone {
+                    let kill = Down::Kill {
+                        robot: r as u32,
+                        attach: order,
+                    };
+                    link::put(&host.down, kill.encode())?;
+                }
+            }
+        }
+        Ok(())
+    }
+}
