@@ -223,3 +223,27 @@ fn a_mixed_swarm_of_built_in_rust_and_python_robots_repeats_byte_for_byte() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Rust boids (examples/rust-boids) and Python boids (examples/python-boids) speak one message
+/// (four little-endian f64): in a swarm of only the two, every message delivered decodes, none
+/// is malformed, and both halves hear enough to flock.
+#[test]
+fn rust_and_python_boids_understand_each_other() {
+    let _g = serial();
+    let dir = tmp_dir("py-interop");
+    let agents = format!(
+        "[[agents]]\nrobots = \"0..6\"\ncommand = [{:?}]\n{RUST_BOIDS_PARAMS}\n{}",
+        rust_boids(),
+        python_agents("6..12", &boids())
+    );
+    let sc = scenario(&dir, 12, 100, &agents);
+    let out = dir.join("run");
+    let o = up(&["--scenario", sc.to_str().unwrap()], &out);
+    assert!(ended_by_itself(&o), "{}", stderr(&o));
+    let s = summary(&out);
+    assert_eq!(s["faults"].as_array().unwrap().len(), 0, "{s}");
+    assert!(s["messages"]["delivered"].as_u64().unwrap() > 500, "{s}");
+    assert_eq!(s["messages"]["malformed"], 0, "{s}");
+    assert_left_nothing(&out);
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -1,14 +1,14 @@
-//! Reynolds flocking over the radio: every robot broadcasts its position each tick; from the
-//! positions it heard it steers towards its neighbours' centre (cohesion), along their mean
-//! velocity (alignment, each velocity from a neighbour's last two positions heard) and away
-//! from those too close (separation), and away from the obstacle and wall points it senses.
+//! Reynolds flocking over the radio: every robot broadcasts its position and velocity each
+//! tick; from what it heard it steers towards its neighbours' centre (cohesion), along their
+//! mean velocity (alignment) and away from those too close (separation), and away from the
+//! obstacle and wall points it senses.
 //!
-//! The message is the built-in roam behaviour's beacon (a position, the same bytes), so boids
-//! and built-in roaming robots hear each other in a mixed swarm.
+//! The message is the Python example's (examples/python-boids/boids.py): four little-endian
+//! f64, `x, y, vx, vy` (32 bytes), carried as `Msg = Vec<u8>`. So Rust and Python boids hear
+//! each other in a mixed swarm; anything else heard (another length) is ignored.
 
 use rand::Rng;
-use serde::{Deserialize, Serialize};
-use std::collections::BTreeMap;
+use serde::Deserialize;
 use swarm::agent::Agent;
 use swarm::scenario::{ConfigError, Kinematics};
 use swarm::{Behaviour, Command, Outbox, Received, Sense};
@@ -53,18 +53,39 @@ impl From<ConfigError> for BoidsError {
     }
 }
 
-/// The beacon: the same shape as the built-in roam behaviour's.
-#[derive(Serialize, Deserialize, Debug, Clone, Copy)]
-pub struct Beacon {
+/// Bytes of the boid message: four f64 (`x, y, vx, vy`), little-endian, as Python's
+/// `struct "<4d"`.
+pub const BOID_MSG_BYTES: usize = 32;
+
+/// A neighbour as heard this tick: its position and velocity.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Heard {
     pub pos: [f64; 2],
+    pub vel: [f64; 2],
 }
 
-/// A neighbour as last heard: its position and the tick it was sent at.
-#[derive(Clone, Copy)]
-struct Heard {
-    pos: [f64; 2],
-    tick: u64,
-    vel: Option<[f64; 2]>,
+/// The boid message's bytes: `x, y, vx, vy` as little-endian f64.
+pub fn encode(h: Heard) -> Vec<u8> {
+    [h.pos[0], h.pos[1], h.vel[0], h.vel[1]]
+        .iter()
+        .flat_map(|v| v.to_le_bytes())
+        .collect()
+}
+
+/// A boid message, or `None` when the bytes are not one (another robot program's message).
+pub fn decode(bytes: &[u8]) -> Option<Heard> {
+    if bytes.len() != BOID_MSG_BYTES {
+        return None;
+    }
+    let f = |i: usize| f64::from_le_bytes(bytes[8 * i..8 * i + 8].try_into().unwrap());
+    let h = Heard {
+        pos: [f(0), f(1)],
+        vel: [f(2), f(3)],
+    };
+    [h.pos[0], h.pos[1], h.vel[0], h.vel[1]]
+        .iter()
+        .all(|v| v.is_finite())
+        .then_some(h)
 }
 
 pub struct Boids {
@@ -72,7 +93,6 @@ pub struct Boids {
     v_max: f64,
     /// The velocity kept when no force acts (a random start heading at cruise speed).
     cruise_vel: [f64; 2],
-    heard: BTreeMap<u32, Heard>,
 }
 
 impl Boids {
@@ -113,7 +133,6 @@ impl Boids {
             cruise_vel: [s * heading.cos(), s * heading.sin()],
             v_max,
             p,
-            heard: BTreeMap::new(),
         })
     }
 }
@@ -127,35 +146,17 @@ fn norm(a: [f64; 2]) -> f64 {
 }
 
 impl Behaviour for Boids {
-    type Msg = Beacon;
+    type Msg = Vec<u8>;
 
     fn step_refs(
         &mut self,
         sense: &Sense,
-        inbox: &[&Received<Beacon>],
-        out: &mut Outbox<Beacon>,
+        inbox: &[&Received<Vec<u8>>],
+        out: &mut Outbox<Vec<u8>>,
     ) -> Command {
         let me = sense.pos;
-        for r in inbox {
-            let prev = self.heard.get(&r.from).copied();
-            let vel = prev.and_then(|h| {
-                (r.tick > h.tick).then(|| {
-                    let dt = (r.tick - h.tick) as f64;
-                    let d = sub(r.msg.pos, h.pos);
-                    [d[0] / dt, d[1] / dt]
-                })
-            });
-            self.heard.insert(
-                r.from,
-                Heard {
-                    pos: r.msg.pos,
-                    tick: r.tick,
-                    vel: vel.or(prev.and_then(|h| h.vel)),
-                },
-            );
-        }
-        // Neighbours: those heard this tick (the radio's range decides who they are).
-        let now: Vec<Heard> = inbox.iter().map(|r| self.heard[&r.from]).collect();
+        // Neighbours: the boids heard this tick (the radio's range decides who they are).
+        let now: Vec<Heard> = inbox.iter().filter_map(|r| decode(&r.msg)).collect();
         let mut v = self.cruise_vel;
         if !now.is_empty() {
             let n = now.len() as f64;
@@ -163,16 +164,10 @@ impl Behaviour for Boids {
                 .iter()
                 .fold([0.0, 0.0], |c, h| [c[0] + h.pos[0], c[1] + h.pos[1]]);
             let to_centre = sub([centre[0] / n, centre[1] / n], me);
-            let vels: Vec<[f64; 2]> = now.iter().filter_map(|h| h.vel).collect();
-            let mean_vel = if vels.is_empty() {
-                sense.vel
-            } else {
-                let k = vels.len() as f64;
-                let s = vels
-                    .iter()
-                    .fold([0.0, 0.0], |c, v| [c[0] + v[0], c[1] + v[1]]);
-                [s[0] / k, s[1] / k]
-            };
+            let s = now
+                .iter()
+                .fold([0.0, 0.0], |c, h| [c[0] + h.vel[0], c[1] + h.vel[1]]);
+            let mean_vel = [s[0] / n, s[1] / n];
             let align = sub(mean_vel, sense.vel);
             v[0] = sense.vel[0] + self.p.cohesion * to_centre[0] + self.p.alignment * align[0];
             v[1] = sense.vel[1] + self.p.cohesion * to_centre[1] + self.p.alignment * align[1];
@@ -205,10 +200,35 @@ impl Behaviour for Boids {
         if s > 1e-9 {
             self.cruise_vel = [v[0] * cruise / norm(v), v[1] * cruise / norm(v)];
         }
-        out.broadcast(Beacon { pos: me });
+        out.broadcast(encode(Heard {
+            pos: me,
+            vel: sense.vel,
+        }));
         Command {
             cmd: v,
             ..Default::default()
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_message_is_pythons_struct_4d() {
+        let h = Heard {
+            pos: [1.5, -2.0],
+            vel: [0.25, 3.0],
+        };
+        let b = encode(h);
+        assert_eq!(b.len(), BOID_MSG_BYTES);
+        // Python: struct.pack("<4d", 1.5, -2.0, 0.25, 3.0)[:8] == 1.5 as LE f64.
+        assert_eq!(&b[..8], &1.5f64.to_le_bytes());
+        assert_eq!(decode(&b), Some(h));
+        assert_eq!(decode(&b[..31]), None);
+        let mut nan = b.clone();
+        nan[..8].copy_from_slice(&f64::NAN.to_le_bytes());
+        assert_eq!(decode(&nan), None);
     }
 }
