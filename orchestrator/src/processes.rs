@@ -328,7 +328,8 @@ fn supervise(
         .seal_worlds_segment()
         .map_err(|e| e.to_string())?;
     if let Some(h) = hosts.as_mut() {
-        h.start(sc, p.run_id, prefix).map_err(|e| e.to_string())?;
+        h.start(sc, p.run_id, prefix, barrier.clone())
+            .map_err(|e| e.to_string())?;
     }
     let launcher = Launcher {
         sc,

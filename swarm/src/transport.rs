@@ -21,7 +21,7 @@ mod air_source;
 mod error;
 mod sense_source;
 mod service;
-pub use act_sink::{ActSink, ActSource};
+pub use act_sink::{attach_of, ActSink, ActSource, ATTACH_NOTICE};
 pub use air_source::{AirGot, AirSink, AirSource};
 pub use error::{Port, TransportError, TransportResult};
 pub use sense_source::{SenseSink, SenseSource};

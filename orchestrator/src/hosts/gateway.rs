@@ -13,6 +13,7 @@ use std::sync::mpsc::{self, Receiver};
 use std::sync::{Arc, Mutex};
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
+use swarm::barrier::TickBarrier;
 use swarm::scenario::Scenario;
 use zenoh::Session;
 
@@ -130,9 +131,16 @@ impl Hosts {
         }))
     }
 
-    /// Starts the gateway for the run (its world is READY: the services and the barrier
-    /// exist) and sends each host the run's start.
-    pub fn start(&mut self, sc: &Scenario, run_id: &str, prefix: &str) -> Result<(), HostsError> {
+    /// Starts the gateway for the run (its world is READY: the services exist) and sends
+    /// each host the run's start. `barrier` is the orchestrator's own mapping of the run's
+    /// barrier: the world's segment is sealed, so the gateway cannot map it writable itself.
+    pub fn start(
+        &mut self,
+        sc: &Scenario,
+        run_id: &str,
+        prefix: &str,
+        barrier: Arc<TickBarrier>,
+    ) -> Result<(), HostsError> {
         let mut downs = Vec::new();
         for r in &self.remotes {
             let p = link::publisher(&self.session, wire::down_key(&r.name))?;
@@ -159,8 +167,8 @@ impl Hosts {
         let (sc, prefix) = (sc.clone(), prefix.to_string());
         let (stop, failure) = (self.stop.clone(), self.failure.clone());
         self.thread = Some(std::thread::spawn(move || {
-            let result =
-                Gateway::open(&sc, &prefix, remotes, downs).and_then(|mut g| g.run(&events, &stop));
+            let result = Gateway::open(&sc, &prefix, barrier, remotes, downs)
+                .and_then(|mut g| g.run(&events, &stop));
             if let Err(e) = result {
                 *failure.lock().expect("not poisoned") = Some(e.to_string());
             }

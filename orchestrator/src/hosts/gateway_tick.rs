@@ -1,9 +1,12 @@
 //! The gateway's tick: on the world's release of tick k it sends each remote host that has
 //! live robots one message (their Sense records, the air once) and waits for one batch back
 //! (their Actions), which it publishes on the robots' act services and acknowledges on the
-//! barrier, as each robot's agent would. Between ticks it mirrors the hosts' attaches and
-//! deaths into the world's barrier and control channel, and forwards the world's kill orders.
+//! barrier, as each robot's agent would. Between ticks it mirrors the hosts' attaches (an
+//! attach notice on the robot's act service, as an agent sends) and deaths into the world's
+//! barrier and control channel, and forwards the world's kill orders and those of
+//! `orchestrator kill` ([`KillServer`]) to the robots' hosts.
 
+use super::kill::{KillServer, NO_LIVE_AGENT};
 use super::link;
 use super::wire::{Down, Up};
 use super::{gateway::Remote, HostsError};
@@ -12,6 +15,7 @@ use iceoryx2::port::subscriber::Subscriber;
 use iceoryx2::prelude::*;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::{Receiver, RecvTimeoutError};
+use std::sync::Arc;
 use std::time::Duration;
 use swarm::barrier::{TickBarrier, Wake};
 use swarm::frames::{
@@ -19,7 +23,7 @@ use swarm::frames::{
 };
 use swarm::scenario::Scenario;
 use swarm::sense_pack::{unpack_into, SensePacker};
-use swarm::transport;
+use swarm::transport::{self, ActSink};
 
 /// What reaches the gateway from the hosts (Zenoh callbacks feed one channel).
 pub enum Event {
@@ -38,6 +42,11 @@ const IDLE_POLL: Duration = Duration::from_millis(2);
 
 type Zpub = zenoh::pubsub::Publisher<'static>;
 
+/// The wait status reported to the world for the robots of a host that left the run (its
+/// proxy's liveliness token went): as if SIGKILLed, which is how a proxy's end stops its
+/// agents; the gateway says on stderr which host left.
+const LINK_LOST_STATUS: i32 = libc::SIGKILL;
+
 struct Host {
     remote: Remote,
     down: Zpub,
@@ -50,12 +59,15 @@ pub struct Gateway {
     hosts: Vec<Host>,
     /// Which host runs each robot (None: the world's host).
     at: Vec<Option<usize>>,
-    barrier: TickBarrier,
+    /// The orchestrator's own mapping of the run's barrier (the world's segment is sealed
+    /// against any other writable one).
+    barrier: Arc<TickBarrier>,
     senses: Subscriber<ipc::Service, [u8], SenseHeader>,
     air: Subscriber<ipc::Service, [u8], AirHeader>,
-    acts: Vec<Option<Publisher<ipc::Service, [u8], Action>>>,
+    /// Each remote robot's act service, written as its agent would.
+    acts: Vec<Option<ActSink>>,
     control: Publisher<ipc::Service, Control, ()>,
-    slot: usize,
+    kills: KillServer,
     /// The last kill order of each robot forwarded.
     kill_done: Vec<u64>,
     packer: SensePacker,
@@ -64,10 +76,12 @@ pub struct Gateway {
 }
 
 impl Gateway {
-    /// Opens the world's services and barrier for the remote robots.
+    /// Opens the world's services for the remote robots; `barrier` is the run's, as the
+    /// orchestrator mapped it.
     pub fn open(
         sc: &Scenario,
         prefix: &str,
+        barrier: Arc<TickBarrier>,
         remotes: Vec<Remote>,
         downs: Vec<Zpub>,
     ) -> Result<Gateway, HostsError> {
@@ -97,9 +111,7 @@ impl Gateway {
         for (h, r) in remotes.iter().enumerate() {
             for &i in &r.robots {
                 at[i as usize] = Some(h);
-                let svc = transport::act_service(&node, i, false)?;
-                acts[i as usize] = Some(transport::act_publisher(&svc, sc)?);
-                services.push(Box::new(svc));
+                acts[i as usize] = Some(ActSink::open(&node, sc, i)?);
             }
         }
         services.push(Box::new(senses_svc));
@@ -115,15 +127,15 @@ impl Gateway {
             })
             .collect();
         Ok(Gateway {
+            kills: KillServer::create(&node)?,
             _node: node,
             hosts,
             at,
-            barrier: TickBarrier::open(prefix)?,
+            barrier,
             senses,
             air,
             acts,
             control,
-            slot: transport::act_slice_len(sc),
             kill_done: vec![0; n as usize],
             packer: SensePacker::default(),
             scratch: Sense::zeroed(),
@@ -261,7 +273,7 @@ impl Gateway {
                         self.hosts[h].remote.robots
                     );
                     for r in self.hosts[h].remote.robots.clone() {
-                        self.died(r);
+                        self.died(r, LINK_LOST_STATUS);
                     }
                 }
             }
@@ -272,10 +284,16 @@ impl Gateway {
                 match up {
                     Up::Ready => {}
                     Up::Attached { robot } if self.at.get(robot as usize) == Some(&Some(h)) => {
-                        self.barrier.mark_ready(robot);
+                        // The world believes only the notice on the robot's act service.
+                        let attach = self.barrier.mark_ready(robot);
+                        if let Some(sink) = self.acts[robot as usize].as_mut() {
+                            sink.attach(attach)?;
+                        }
                     }
-                    Up::Died { robot, .. } if self.at.get(robot as usize) == Some(&Some(h)) => {
-                        self.died(robot);
+                    Up::Died { robot, status, .. }
+                        if self.at.get(robot as usize) == Some(&Some(h)) =>
+                    {
+                        self.died(robot, status);
                     }
                     Up::Batch { tick: t, acts } => {
                         if let Some((k, waiting)) = tick {
@@ -286,7 +304,7 @@ impl Gateway {
                         }
                     }
                     Up::Failed(message) => {
-                        self.send_control(CONTROL_STOP, 0);
+                        self.send_control(CONTROL_STOP, 0, 0);
                         return Err(HostsError::Host {
                             host: name,
                             message,
@@ -306,41 +324,38 @@ impl Gateway {
             if self.at.get(r) != Some(&Some(h)) {
                 continue;
             }
-            let Some(publisher) = self.acts[r].as_ref() else {
+            let Some(sink) = self.acts[r].as_mut() else {
                 continue;
             };
-            let sample = publisher
-                .loan_slice_uninit(self.slot)
-                .map_err(|e| HostsError::Other(format!("robot/{r}/act loan: {e:?}")))?;
-            // SAFETY: the slot is shared memory of the publisher's data segment, mapped from
-            // tmpfs: its bytes are always initialised and every u8 value is valid; the world
-            // reads only the `radio_bytes` written below.
-            let mut sample = unsafe { sample.assume_init() };
-            let used = a.area.len().min(self.slot);
-            sample.payload_mut()[..used].copy_from_slice(&a.area[..used]);
-            *sample.user_header_mut() = Action {
-                radio_bytes: a.action.radio_bytes.min(used as u32),
-                ..a.action
-            };
-            sample
-                .send()
-                .map_err(|e| HostsError::Other(format!("robot/{r}/act send: {e:?}")))?;
+            // Never an attach notice: those cross as `Up::Attached` only.
+            if transport::attach_of(&a.action).is_some() {
+                continue;
+            }
+            sink.send(|area| {
+                let used = a.area.len().min(area.len());
+                area[..used].copy_from_slice(&a.area[..used]);
+                Action {
+                    radio_bytes: a.action.radio_bytes.min(used as u32),
+                    ..a.action
+                }
+            })?;
             self.barrier.ack(a.robot, k);
         }
         Ok(())
     }
 
-    /// Robot `r`'s agent on its host is dead: reported to the world as the orchestrator
-    /// reports a local agent's death (every attach so far dead, then a ROBOT_DIED).
-    fn died(&mut self, r: u32) {
+    /// Robot `r`'s agent on its host is dead (wait status `status`): reported to the world as
+    /// the orchestrator reports a local agent's death (every attach so far dead, then a
+    /// ROBOT_DIED).
+    fn died(&mut self, r: u32, status: i32) {
         if self.barrier.is_shutdown() {
             return;
         }
         self.barrier.set_dead_upto(r, self.barrier.attach_count(r));
-        self.send_control(CONTROL_ROBOT_DIED, r);
+        self.send_control(CONTROL_ROBOT_DIED, r, status);
     }
 
-    fn send_control(&self, kind: u32, robot: u32) {
+    fn send_control(&self, kind: u32, robot: u32, status: i32) {
         if let Ok(s) = self.control.loan_uninit() {
             let _ = s
                 .write_payload(Control {
@@ -348,14 +363,35 @@ impl Gateway {
                     robot,
                     value: crate::processes::monotonic_us(),
                     tick: self.barrier.current_tick(),
+                    status,
+                    reserved: 0,
                 })
                 .send();
         }
         self.barrier.nudge_world();
     }
 
-    /// The world's new kill orders of remote robots, to their hosts.
+    /// `orchestrator kill`'s orders for remote robots: each robot's live agent (its latest
+    /// attach, not known dead) is ordered killed in the barrier, as the world orders it, and
+    /// so forwarded by [`Gateway::forward_kills`].
+    fn take_kill_requests(&self) -> Result<(), HostsError> {
+        self.kills.serve(|r| {
+            if !matches!(self.at.get(r as usize), Some(Some(_))) {
+                return NO_LIVE_AGENT;
+            }
+            let attach = self.barrier.attach_count(r);
+            if attach == 0 || attach <= self.barrier.dead_upto(r) {
+                return NO_LIVE_AGENT;
+            }
+            self.barrier.order_kill(r, attach);
+            attach
+        })
+    }
+
+    /// The world's (and `orchestrator kill`'s) new kill orders of remote robots, to their
+    /// hosts.
     fn forward_kills(&mut self) -> Result<(), HostsError> {
+        self.take_kill_requests()?;
         for (r, at) in self.at.iter().enumerate() {
             let Some(h) = *at else { continue };
             let order = self.barrier.kill_order(r as u32);

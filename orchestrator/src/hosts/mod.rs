@@ -40,6 +40,11 @@ pub enum HostsError {
     Transport(#[from] swarm::transport::TransportError),
     #[error(transparent)]
     Barrier(#[from] swarm::barrier::BarrierError),
+    #[error(
+        "the run's {service} service did not answer within {seconds} s (is its orchestrator \
+         still running?)"
+    )]
+    Unanswered { service: &'static str, seconds: u64 },
     #[error("{0}")]
     Other(String),
 }

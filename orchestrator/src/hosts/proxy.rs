@@ -28,6 +28,11 @@ pub struct HostArgs {
     /// Seconds to keep trying to reach the world's host and to wait for a run.
     #[arg(long, value_name = "SECONDS", default_value_t = JOIN_PATIENCE_S)]
     pub wait: u64,
+    /// The folder in which the run's folder (`swarm-host-NAME-RUN`: the run's scenario and
+    /// its robots' logs, `logs/robot-<i>.log`) is made; it stays after the run. Default: the
+    /// system's temporary folder.
+    #[arg(long, value_name = "DIR")]
+    pub out: Option<PathBuf>,
 }
 
 /// How long a proxy waits for the world's host and its run by default. [chosen] Long enough
@@ -135,17 +140,25 @@ fn run(
     // Its own prefix: on one machine (the tests' namespaces share /dev/shm) the world's
     // host's files and each proxy's never meet.
     let prefix = swarm::transport::prefix_for(&format!("{run_id}@{}", a.name));
-    let dir = std::env::temp_dir().join(format!("swarm-host-{}-{run_id}", a.name));
+    let dir = a
+        .out
+        .clone()
+        .unwrap_or_else(std::env::temp_dir)
+        .join(format!("swarm-host-{}-{run_id}", a.name));
     let scenario_path: PathBuf = dir.join("scenario.toml");
     std::fs::create_dir_all(&dir)
         .and_then(|_| std::fs::write(&scenario_path, text))
         .map_err(|e| HostsError::Other(format!("{}: {e}", scenario_path.display())))?;
-    let mut agents = Agents::new(&sc, &prefix, run_id, scenario_path);
+    let mut agents = Agents::new(&sc, &prefix, run_id, scenario_path, dir.clone());
     let result = LocalWorld::create(&sc, &prefix, robots)
         .and_then(|mut world| serve_run(&sc, robots, &mut world, &mut agents, rx, tell));
     agents.kill_all();
     swarm::cleanup::remove_run(&prefix);
-    let _ = std::fs::remove_dir_all(&dir);
+    eprintln!(
+        "host {}: run {run_id} over; its robots' logs: {}",
+        a.name,
+        dir.join(crate::agent_spawn::LOGS_DIR).display()
+    );
     result
 }
 
@@ -158,7 +171,7 @@ fn serve_run(
     tell: &mut dyn FnMut(Up) -> Result<(), HostsError>,
 ) -> Result<(), HostsError> {
     for &r in robots {
-        agents.spawn(r, &world.barrier)?;
+        agents.spawn(r, world)?;
     }
     tell(Up::Ready)?;
     let deadline = Duration::from_millis(sc.runtime.ack_deadline_ms);
@@ -166,7 +179,7 @@ fn serve_run(
         if signals::interrupted() {
             break;
         }
-        agents.supervise(&world.barrier, &world.node, tell)?;
+        agents.supervise(world, tell)?;
         let msg = match rx.recv_timeout(POLL) {
             Ok(m) => m,
             Err(RecvTimeoutError::Timeout) => continue,
@@ -179,6 +192,7 @@ fn serve_run(
                 air_header,
                 air,
             }) => {
+                agents.tick = tick;
                 world.publish(tick, sc.run.robots, &sense, air_header, &air)?;
                 let live: Vec<u32> = robots_in(&sense)
                     .into_iter()
@@ -191,7 +205,7 @@ fn serve_run(
                 let acts = live.iter().filter_map(|&r| world.take(r, tick)).collect();
                 tell(Up::Batch { tick, acts })?;
             }
-            Msg::Down(Down::Kill { robot, attach }) => agents.kill(robot, attach, &world.barrier),
+            Msg::Down(Down::Kill { robot, attach }) => agents.kill(robot, attach, world),
             Msg::Down(Down::Stop) | Msg::WorldGone => break,
             Msg::Down(Down::Start { .. }) => {}
             Msg::Bad(m) => return Err(HostsError::Other(m)),
@@ -228,13 +242,11 @@ fn wait_tick(
             return Ok(true);
         }
         world.barrier.wait_acks(POLL);
-        let dead = agents.supervise(&world.barrier, &world.node, tell)?;
+        let dead = agents.supervise(world, tell)?;
         wait.retain(|r| !dead.contains(r));
         while let Ok(m) = rx.try_recv() {
             match m {
-                Msg::Down(Down::Kill { robot, attach }) => {
-                    agents.kill(robot, attach, &world.barrier)
-                }
+                Msg::Down(Down::Kill { robot, attach }) => agents.kill(robot, attach, world),
                 Msg::Down(Down::Stop) | Msg::WorldGone => return Ok(false),
                 Msg::Bad(m) => return Err(HostsError::Other(m)),
                 Msg::Down(_) => {}

@@ -1,98 +1,133 @@
-//! A host proxy's agents: started as the orchestrator starts them (`agent --robot I --prefix
-//! P --run-id ID --scenario FILE`), reaped, restarted under the run's fault policy
-//! (`faults.on_fault`, `faults.max_restarts`, `processes::START_FAILURES` for agents that exit
-//! before attaching), SIGKILLed on the world's kill orders. Every attach and every death is
+//! A host proxy's agents: started as the orchestrator starts them ([`Launcher`]: the built-in
+//! agent or the robot's `[[agents]]` program, the barrier's descriptors inherited, output
+//! appended to the robot's log in the proxy's run folder), reaped, restarted under the run's
+//! fault policy (`faults.on_fault`, `faults.max_restarts`, `processes::START_FAILURES` for
+//! agents that exit before attaching; an `[[agents]]` program that does not attach within its
+//! attach timeout is killed), SIGKILLed on the world's kill orders. An agent has attached when
+//! its attach notice came through its robot's act service. Every attach and every death is
 //! told to the world's host (`Up::Attached`, `Up::Died`), which mirrors them into the world's
-//! barrier and control channel.
+//! barrier, act services and control channel.
 
+use super::proxy_io::LocalWorld;
 use super::wire::Up;
 use super::HostsError;
-use crate::processes::{self, bin, describe, exit_of, kill, reap};
+use crate::agent_spawn::Launcher;
+use crate::processes::{self, describe, exit_of, kill, reap};
 use std::collections::BTreeMap;
-use std::os::unix::process::CommandExt;
 use std::path::PathBuf;
-use std::process::{Command, Stdio};
-use swarm::barrier::TickBarrier;
+use std::time::{Duration, Instant};
 use swarm::scenario::{FaultPolicy, Scenario};
 
-/// One agent process: its robot and the robot's attach count when it was started.
+/// One agent process: its robot, the robot's attach count when it was started (its own
+/// attach number is the next), when it started and how long it may take to attach.
 struct Agent {
     robot: u32,
     base: u64,
+    started: Instant,
+    attach_timeout: Option<Duration>,
 }
 
 pub struct Agents {
+    sc: Scenario,
     prefix: String,
     run_id: String,
+    /// The run's scenario as the proxy wrote it (what every agent reads).
     scenario: PathBuf,
+    /// The proxy's run folder: the robots' logs are in its `logs/`.
+    run_dir: PathBuf,
     restart: bool,
     max_restarts: u32,
     agents: BTreeMap<u32, Agent>,
     restarts: Vec<u32>,
     start_failures: Vec<u32>,
+    /// Agents started per robot (the marks in its log count them; no agent can attach more
+    /// often than this).
+    starts: Vec<u32>,
     /// Each robot's local attaches already told to the world's host.
     told: Vec<u64>,
+    /// Agents killed for not attaching within their attach timeout.
+    timed_out: BTreeMap<u32, Duration>,
+    /// The last tick the world's host released (for the start marks in the logs).
+    pub tick: u64,
     /// Set once the run ends: deaths are no faults any more.
     pub ending: bool,
 }
 
 impl Agents {
-    pub fn new(sc: &Scenario, prefix: &str, run_id: &str, scenario: PathBuf) -> Agents {
+    pub fn new(
+        sc: &Scenario,
+        prefix: &str,
+        run_id: &str,
+        scenario: PathBuf,
+        run_dir: PathBuf,
+    ) -> Agents {
         let n = sc.run.robots as usize;
         Agents {
+            sc: sc.clone(),
             prefix: prefix.to_string(),
             run_id: run_id.to_string(),
             scenario,
+            run_dir,
             restart: sc.faults.on_fault == FaultPolicy::Restart,
             max_restarts: sc.faults.max_restarts,
             agents: BTreeMap::new(),
             restarts: vec![0; n],
             start_failures: vec![0; n],
+            starts: vec![0; n],
             told: vec![0; n],
+            timed_out: BTreeMap::new(),
+            tick: 0,
             ending: false,
         }
     }
 
-    fn command(&self, robot: u32) -> Command {
-        let mut c = Command::new(bin("agent"));
-        c.args(["--robot", &robot.to_string(), "--prefix", &self.prefix])
-            .args(["--run-id", &self.run_id, "--scenario"])
-            .arg(&self.scenario);
-        c
+    fn launcher<'a>(&'a self, world: &'a LocalWorld) -> Launcher<'a> {
+        Launcher {
+            sc: &self.sc,
+            prefix: &self.prefix,
+            run_id: &self.run_id,
+            scenario_path: &self.scenario,
+            run_dir: &self.run_dir,
+            barrier_fds: &world.barrier_fds,
+        }
     }
 
     /// Starts an agent of `robot`.
-    pub fn spawn(&mut self, robot: u32, barrier: &TickBarrier) -> Result<(), HostsError> {
-        let child = self
-            .command(robot)
-            .stdin(Stdio::null())
-            .stdout(Stdio::null())
-            .process_group(0)
-            .spawn()
-            .map_err(|e| {
-                HostsError::Other(format!("cannot start {}: {e}", bin("agent").display()))
-            })?;
-        let base = barrier.attach_count(robot);
-        self.agents.insert(child.id(), Agent { robot, base });
+    pub fn spawn(&mut self, robot: u32, world: &LocalWorld) -> Result<(), HostsError> {
+        let r = robot as usize;
+        self.starts[r] += 1;
+        let launcher = self.launcher(world);
+        let (pid, _) = launcher
+            .spawn(robot, self.starts[r], self.tick)
+            .map_err(HostsError::Other)?;
+        let agent = Agent {
+            robot,
+            base: world.barrier.attach_count(robot),
+            started: Instant::now(),
+            attach_timeout: launcher.attach_timeout(robot),
+        };
+        self.agents.insert(pid, agent);
         Ok(())
     }
 
-    /// Tells new attaches, reaps dead agents (told as deaths, restarted under the policy).
-    /// Returns the robots whose agent died; `tell` sends to the world's host.
+    /// Tells new attaches, kills agents that did not attach in time, reaps dead agents (told
+    /// as deaths, restarted under the policy). Returns the robots whose agent died; `tell`
+    /// sends to the world's host.
     pub fn supervise(
         &mut self,
-        barrier: &TickBarrier,
-        node: &iceoryx2::node::Node<iceoryx2::prelude::ipc::Service>,
+        world: &mut LocalWorld,
         tell: &mut dyn FnMut(Up) -> Result<(), HostsError>,
     ) -> Result<Vec<u32>, HostsError> {
-        self.tell_attaches(barrier, tell)?;
+        self.tell_attaches(world, tell)?;
+        self.kill_unattached(world);
         let mut dead = Vec::new();
         while let Some((pid, st)) = reap() {
-            let Some(Agent { robot, base }) = self.agents.remove(&pid) else {
+            let Some(Agent { robot, base, .. }) = self.agents.remove(&pid) else {
                 continue;
             };
-            let attached = barrier.attach_count(robot) > base;
-            if self.ending || barrier.is_shutdown() || (attached && exit_of(st) == Ok(0)) {
+            let timeout = self.timed_out.remove(&pid);
+            let attached = world.attached(robot) > base;
+            if self.ending || world.barrier.is_shutdown() || (attached && exit_of(st) == Ok(0)) {
                 continue;
             }
             let r = robot as usize;
@@ -107,35 +142,53 @@ impl Agents {
                     1
                 };
                 if self.start_failures[r] >= limit {
+                    let how = match timeout {
+                        Some(t) => format!(
+                            "did not attach within its attach timeout of {} s and was killed",
+                            t.as_secs_f64()
+                        ),
+                        None => format!("exited before attaching ({})", describe(st)),
+                    };
+                    let launcher = self.launcher(world);
                     tell(Up::Failed(format!(
-                        "robot {robot} failed: its agent exited before attaching to the run {} \
-                         time(s) in a row (last: {})",
+                        "robot {robot} failed: its agent {how}, {} time(s) in a row; command: \
+                         {}; its log on the host: {}, ending:\n{}",
                         self.start_failures[r],
-                        describe(st)
+                        launcher.describe(robot),
+                        crate::agent_spawn::log_path(&self.run_dir, robot).display(),
+                        launcher.log_tail(robot)
                     )))?;
                     continue;
                 }
             }
-            tell(Up::Died { robot, attached })?;
+            tell(Up::Died {
+                robot,
+                attached,
+                status: st,
+            })?;
             let budget = !attached || self.restarts[r] < self.max_restarts;
             if self.restart && budget {
-                self.spawn(robot, barrier)?;
+                self.spawn(robot, world)?;
                 if attached {
                     self.restarts[r] += 1;
                 }
-                processes::cleanup_dead_agents(node, &self.prefix);
+                processes::cleanup_dead_agents(&world.node, &self.prefix);
             }
         }
         Ok(dead)
     }
 
+    /// Tells each robot's attaches up to the newest attach notice on its act service (an
+    /// agent that died between its attach and its notice is told with the next one, so the
+    /// world's host counts attaches as this host's barrier does), never more than the
+    /// agents started for it.
     fn tell_attaches(
         &mut self,
-        barrier: &TickBarrier,
+        world: &mut LocalWorld,
         tell: &mut dyn FnMut(Up) -> Result<(), HostsError>,
     ) -> Result<(), HostsError> {
         for r in 0..self.told.len() {
-            let c = barrier.attach_count(r as u32);
+            let c = world.attached(r as u32).min(self.starts[r] as u64);
             while self.told[r] < c {
                 self.told[r] += 1;
                 tell(Up::Attached { robot: r as u32 })?;
@@ -144,11 +197,26 @@ impl Agents {
         Ok(())
     }
 
+    /// SIGKILLs each agent with an attach timeout (an `[[agents]]` program) that has not
+    /// attached within it (reaped as a start failure).
+    fn kill_unattached(&mut self, world: &mut LocalWorld) {
+        for (&pid, a) in &self.agents {
+            let Some(t) = a.attach_timeout else { continue };
+            if self.timed_out.contains_key(&pid) || a.started.elapsed() < t {
+                continue;
+            }
+            if world.attached(a.robot) <= a.base {
+                kill(pid);
+                self.timed_out.insert(pid, t);
+            }
+        }
+    }
+
     /// The world ordered robot `robot`'s agent with attach number `attach` killed: SIGKILL
     /// that incarnation if it still runs (never a replacement that has not taken over).
-    pub fn kill(&self, robot: u32, attach: u64, barrier: &TickBarrier) {
+    pub fn kill(&self, robot: u32, attach: u64, world: &mut LocalWorld) {
         for (&pid, a) in &self.agents {
-            if a.robot == robot && barrier.attach_count(robot) > a.base && a.base + 1 == attach {
+            if a.robot == robot && world.attached(robot) > a.base && a.base + 1 == attach {
                 kill(pid);
             }
         }
@@ -160,15 +228,15 @@ impl Agents {
         for &pid in self.agents.keys() {
             kill(pid);
         }
-        let t = std::time::Instant::now();
+        let t = Instant::now();
         while !self.agents.is_empty() && t.elapsed() < AGENTS_GONE_WAIT {
             while let Some((pid, _)) = reap() {
                 self.agents.remove(&pid);
             }
-            std::thread::sleep(std::time::Duration::from_millis(2));
+            std::thread::sleep(Duration::from_millis(2));
         }
     }
 }
 
 /// How long the proxy's end waits for its SIGKILLed agents before it removes their files.
-const AGENTS_GONE_WAIT: std::time::Duration = std::time::Duration::from_secs(5);
+const AGENTS_GONE_WAIT: Duration = Duration::from_secs(5);

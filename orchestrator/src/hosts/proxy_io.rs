@@ -1,14 +1,19 @@
 //! A host proxy's local world: the services its agents open (`world/sense`, `radio/air`, its
 //! robots' `robot/<i>/act`) and the tick barrier, made with the run's scenario as the world
 //! makes them, under the proxy's own iceoryx2 prefix. The Sense and air bytes are published
-//! as they came over the link; the act samples are read back raw.
+//! as they came over the link; the act samples are read back raw, attach notices apart.
+//!
+//! The barrier is the run's as the orchestrator makes it (two sealed memfds,
+//! docs/protocol.md section 4): the proxy is world and orchestrator in one process, so it
+//! seals the world's segment as soon as it made it, before any agent starts, and keeps the
+//! descriptors for every agent it starts.
 
 use super::wire::Act;
 use super::HostsError;
 use iceoryx2::port::publisher::Publisher;
 use iceoryx2::port::subscriber::Subscriber;
 use iceoryx2::prelude::*;
-use swarm::barrier::TickBarrier;
+use swarm::barrier::{BarrierFds, TickBarrier};
 use swarm::frames::{Action, AirHeader, SenseHeader};
 use swarm::scenario::Scenario;
 use swarm::transport::{self, ActService, SensesService};
@@ -18,11 +23,15 @@ type ActSample = iceoryx2::sample::Sample<ipc::Service, [u8], Action>;
 pub struct LocalWorld {
     pub node: Node<ipc::Service>,
     pub barrier: TickBarrier,
+    /// The barrier's memfds, inherited by every agent the proxy starts.
+    pub barrier_fds: BarrierFds,
     senses: Publisher<ipc::Service, [u8], SenseHeader>,
     air: transport::AirSink,
     /// Per robot of the run: its act subscriber if it runs here, and its newest sample.
     acts: Vec<Option<Subscriber<ipc::Service, [u8], Action>>>,
     held: Vec<Option<ActSample>>,
+    /// Per robot: the highest attach number an attach notice on its act service carried.
+    attached: Vec<u64>,
     _services: (SensesService, Vec<ActService>),
 }
 
@@ -42,10 +51,15 @@ impl LocalWorld {
             acts[r as usize] = Some(transport::act_subscriber(&svc)?);
             services.push(svc);
         }
-        let barrier = TickBarrier::create(prefix, sc.run.robots)?;
+        let (barrier, barrier_fds) = TickBarrier::create(prefix, sc.run.robots)?;
+        // Mapped writable once, here (world and orchestrator are this process): sealed
+        // before any agent exists.
+        barrier_fds.seal_worlds_segment()?;
         Ok(LocalWorld {
             node,
             barrier,
+            barrier_fds,
+            attached: vec![0; n],
             senses,
             air,
             acts,
@@ -84,17 +98,33 @@ impl LocalWorld {
         Ok(())
     }
 
-    /// Whether robot `r`'s act service holds its action of tick `k`.
-    pub fn arrived(&mut self, r: u32, k: u64) -> bool {
+    /// Receives what robot `r`'s act service holds: attach notices are noted, the newest
+    /// action is held.
+    fn receive(&mut self, r: u32) {
         let Some(Some(sub)) = self.acts.get(r as usize) else {
-            return false;
+            return;
         };
         while let Ok(Some(s)) = sub.receive() {
-            self.held[r as usize] = Some(s);
+            match transport::attach_of(s.user_header()) {
+                Some(n) => self.attached[r as usize] = self.attached[r as usize].max(n),
+                None => self.held[r as usize] = Some(s),
+            }
         }
-        self.held[r as usize]
-            .as_ref()
-            .is_some_and(|s| s.user_header().tick == k)
+    }
+
+    /// The highest attach number an attach notice of robot `r`'s act service carried (0:
+    /// none yet). An agent's notice is the first sample it sends, before any action.
+    pub fn attached(&mut self, r: u32) -> u64 {
+        self.receive(r);
+        self.attached.get(r as usize).copied().unwrap_or(0)
+    }
+
+    /// Whether robot `r`'s act service holds its action of tick `k`.
+    pub fn arrived(&mut self, r: u32, k: u64) -> bool {
+        self.receive(r);
+        self.held
+            .get(r as usize)
+            .is_some_and(|h| h.as_ref().is_some_and(|s| s.user_header().tick == k))
     }
 
     /// Robot `r`'s action of tick `k` with its used message area, if it arrived.

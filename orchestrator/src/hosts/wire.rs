@@ -80,8 +80,13 @@ pub enum Up {
     Ready,
     /// One more agent of robot `robot` attached on the host.
     Attached { robot: u32 },
-    /// Robot `robot`'s agent died (reaped on the host); `attached`: it had attached.
-    Died { robot: u32, attached: bool },
+    /// Robot `robot`'s agent died (reaped on the host); `attached`: it had attached;
+    /// `status`: its wait status (waitpid), for the fault's cause.
+    Died {
+        robot: u32,
+        attached: bool,
+        status: i32,
+    },
     /// The host's robots' actions of tick `tick` (a robot missing gives no action).
     Batch { tick: u64, acts: Vec<Act> },
     /// The host cannot run its part (its message); the world's host stops the run.
@@ -245,10 +250,15 @@ impl Up {
                 out.push(ATTACHED);
                 out.extend_from_slice(&robot.to_le_bytes());
             }
-            Up::Died { robot, attached } => {
+            Up::Died {
+                robot,
+                attached,
+                status,
+            } => {
                 out.push(DIED);
                 out.extend_from_slice(&robot.to_le_bytes());
                 out.push(*attached as u8);
+                out.extend_from_slice(&status.to_le_bytes());
             }
             Up::Batch { tick, acts } => {
                 out.push(BATCH);
@@ -277,6 +287,7 @@ impl Up {
             DIED => Up::Died {
                 robot: r.u32()?,
                 attached: r.take(1)?[0] != 0,
+                status: r.u32()? as i32,
             },
             BATCH => {
                 let tick = r.u64()?;
@@ -355,6 +366,7 @@ mod tests {
             Up::Died {
                 robot: 4,
                 attached: true,
+                status: 9,
             },
             Up::Batch {
                 tick: 9,

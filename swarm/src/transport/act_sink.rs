@@ -52,7 +52,7 @@ type ActSample = iceoryx2::sample::Sample<ipc::Service, [u8], Action>;
 pub const ATTACH_NOTICE: u64 = 1 << 63;
 
 /// The attach number of an attach notice, None for an action.
-fn attach_of(a: &Action) -> Option<u64> {
+pub fn attach_of(a: &Action) -> Option<u64> {
     (a.tick & ATTACH_NOTICE != 0).then_some(a.tick & !ATTACH_NOTICE)
 }
 
