@@ -18,9 +18,7 @@ use std::sync::mpsc::{Receiver, RecvTimeoutError};
 use std::sync::Arc;
 use std::time::Duration;
 use swarm::barrier::{TickBarrier, Wake};
-use swarm::frames::{
-    Action, AirHeader, Control, Sense, SenseHeader, CONTROL_ROBOT_DIED, CONTROL_STOP,
-};
+use swarm::frames::{AirHeader, Control, Sense, SenseHeader, CONTROL_ROBOT_DIED, CONTROL_STOP};
 use swarm::scenario::Scenario;
 use swarm::sense_pack::{unpack_into, SensePacker};
 use swarm::transport::{self, ActSink};
@@ -331,13 +329,12 @@ impl Gateway {
             if transport::attach_of(&a.action).is_some() {
                 continue;
             }
+            let (bytes, mut action) = (&a.area, a.action);
             sink.send(|area| {
-                let used = a.area.len().min(area.len());
-                area[..used].copy_from_slice(&a.area[..used]);
-                Action {
-                    radio_bytes: a.action.radio_bytes.min(used as u32),
-                    ..a.action
-                }
+                let used = bytes.len().min(area.len());
+                area[..used].copy_from_slice(&bytes[..used]);
+                action.radio_bytes = action.radio_bytes.min(used as u32);
+                action
             })?;
             self.barrier.ack(a.robot, k);
         }
