@@ -296,6 +296,97 @@ fn remote_agents_killed_under_restart_come_back() {
     assert_nothing_left(&id, &["h1"]);
 }
 
+/// An `[[agents]]` entry placed on robot `robot`: `script` run by /bin/sh with the agent's
+/// arguments (`$1 $2` = `--robot <i>`, ...).
+fn shell_agent(robot: u32, script: &str, extra: &str) -> String {
+    format!(
+        "[[agents]]\nrobots = [{robot}]\ncommand = [\"/bin/sh\", \"-c\", {script:?}, \"sh\"]\n{extra}\n"
+    )
+}
+
+/// `sc` with `more` (TOML) appended.
+fn with(sc: &Path, more: &str) -> PathBuf {
+    let text = std::fs::read_to_string(sc).unwrap() + more;
+    let p = sc.with_extension("agents.toml");
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+/// A robot's log in a proxy's run folder (`orchestrator host`'s default --out).
+fn remote_log(run_id: &str, host: &str, robot: u32) -> PathBuf {
+    std::env::temp_dir()
+        .join(format!("swarm-host-{host}-{run_id}"))
+        .join(format!("logs/robot-{robot}.log"))
+}
+
+/// `[[agents]]` programs on a remote host run as on the world's host: the proxy starts them
+/// with the sealed barrier's descriptors (without them an agent cannot attach), their output
+/// goes to the robot's log in the proxy's run folder, and the run records what the same
+/// scenario on one host records. One that never attaches is killed after its attach timeout
+/// and fails the run fast, naming the robot, its command and its output.
+#[test]
+fn agents_programs_on_a_remote_host_run_log_and_time_out_there() {
+    let _g = serial();
+    if !can_run() {
+        return;
+    }
+    let net = Net::new(1);
+    let agent = bin_dir().join("agent");
+    let wrapper = shell_agent(
+        5,
+        &format!(
+            "echo hello from robot $2 on its host; exec {} \"$@\"",
+            agent.display()
+        ),
+        "",
+    );
+    let across = with(&scenario("agents", "roam", 8, "", &["4..8"]), &wrapper);
+    let one = with(&scenario("agents1", "roam", 8, "", &[]), &wrapper);
+    let (a, b) = (tmp_dir("hosts-agents"), tmp_dir("hosts-agents1"));
+    let id = own_run_id("agents");
+    let proxy = net.proxy(1);
+    let o = wait_out(net.up(&across, &a, &id, &[]), Duration::from_secs(120));
+    assert!(ended_by_itself(&o), "across hosts: {}", stderr(&o));
+    assert!(wait_out(proxy, Duration::from_secs(20)).status.success());
+    let s = summary(&a);
+    assert_eq!(s["alive_at_end"], 8, "{s}");
+    let log = std::fs::read_to_string(remote_log(&id, "h1", 5)).unwrap();
+    assert!(log.contains("--- swarm: agent start 1 of robot 5"), "{log}");
+    assert!(log.contains("hello from robot 5 on its host"), "{log}");
+    let o = up(&["--scenario", one.to_str().unwrap()], &b);
+    assert!(ended_by_itself(&o), "one host: {}", stderr(&o));
+    assert!(
+        same_recording(&a, &b),
+        "the run across hosts records other bytes"
+    );
+    assert_nothing_left(&id, &["h1"]);
+    assert_left_nothing(&b);
+
+    let hangs = shell_agent(
+        6,
+        "echo waiting for a licence server; exec sleep 600.321",
+        "attach_timeout_s = 1",
+    );
+    let sc = with(&scenario("hangs", "roam", 8, "", &["4..8"]), &hangs);
+    let out = tmp_dir("hosts-hangs");
+    let id2 = own_run_id("hangs");
+    let proxy = net.proxy(1);
+    let t = Instant::now();
+    let o = wait_out(net.up(&sc, &out, &id2, &[]), Duration::from_secs(120));
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(exit::FAILED), "{err}");
+    assert!(err.contains("robot 6 failed"), "{err}");
+    assert!(err.contains("did not attach within its attach timeout"), "{err}");
+    assert!(err.contains("waiting for a licence server"), "{err}");
+    assert!(t.elapsed() < Duration::from_secs(30), "took {:?}", t.elapsed());
+    let _ = wait_out(proxy, Duration::from_secs(20));
+    assert!(processes_mentioning("600.321").is_empty(), "the program lives on");
+    assert_nothing_left(&id2, &["h1"]);
+    for i in [&id, &id2] {
+        let _ = std::fs::remove_dir_all(std::env::temp_dir().join(format!("swarm-host-h1-{i}")));
+    }
+}
+
 #[test]
 fn a_killed_proxy_makes_its_robots_faults_and_the_run_goes_on() {
     let _g = serial();
