@@ -177,7 +177,8 @@ fn wait_out(c: Child, within: Duration) -> Output {
     c.wait_with_output().unwrap()
 }
 
-/// Nothing of the run is left: no process and no file of its world or of its proxies.
+/// Nothing of the run is left: no process and no file of its world or of its proxies. Then
+/// removes the proxies' run folders (kept after a run for its robots' logs).
 fn assert_nothing_left(run_id: &str, hosts: &[&str]) {
     let t = Instant::now();
     let prefixes: Vec<String> = std::iter::once(swarm::transport::prefix_for(run_id))
@@ -193,6 +194,10 @@ fn assert_nothing_left(run_id: &str, hosts: &[&str]) {
             .flat_map(|p| processes_mentioning(p))
             .collect();
         if files.is_empty() && procs.is_empty() {
+            for h in hosts {
+                let dir = std::env::temp_dir().join(format!("swarm-host-{h}-{run_id}"));
+                let _ = std::fs::remove_dir_all(dir);
+            }
             return;
         }
         assert!(
@@ -304,10 +309,12 @@ fn shell_agent(robot: u32, script: &str, extra: &str) -> String {
     )
 }
 
-/// `sc` with `more` (TOML) appended.
-fn with(sc: &Path, more: &str) -> PathBuf {
+/// `sc` with `more` (TOML) appended, written to `name`.toml in the temporary folder (the
+/// recording holds an `[[agents]]` entry's source file: runs compared byte for byte read
+/// their scenario from the same path).
+fn with(sc: &Path, more: &str, name: &str) -> PathBuf {
     let text = std::fs::read_to_string(sc).unwrap() + more;
-    let p = sc.with_extension("agents.toml");
+    let p = std::env::temp_dir().join(format!("swarm-e2e-{}-{name}.toml", std::process::id()));
     std::fs::write(&p, text).unwrap();
     p
 }
@@ -340,8 +347,11 @@ fn agents_programs_on_a_remote_host_run_log_and_time_out_there() {
         ),
         "",
     );
-    let across = with(&scenario("agents", "roam", 8, "", &["4..8"]), &wrapper);
-    let one = with(&scenario("agents1", "roam", 8, "", &[]), &wrapper);
+    let across = with(
+        &scenario("agents", "roam", 8, "", &["4..8"]),
+        &wrapper,
+        "wrapped",
+    );
     let (a, b) = (tmp_dir("hosts-agents"), tmp_dir("hosts-agents1"));
     let id = own_run_id("agents");
     let proxy = net.proxy(1);
@@ -353,6 +363,11 @@ fn agents_programs_on_a_remote_host_run_log_and_time_out_there() {
     let log = std::fs::read_to_string(remote_log(&id, "h1", 5)).unwrap();
     assert!(log.contains("--- swarm: agent start 1 of robot 5"), "{log}");
     assert!(log.contains("hello from robot 5 on its host"), "{log}");
+    let one = with(
+        &scenario("agents1", "roam", 8, "", &[]),
+        &wrapper,
+        "wrapped",
+    );
     let o = up(&["--scenario", one.to_str().unwrap()], &b);
     assert!(ended_by_itself(&o), "one host: {}", stderr(&o));
     assert!(
@@ -367,7 +382,11 @@ fn agents_programs_on_a_remote_host_run_log_and_time_out_there() {
         "echo waiting for a licence server; exec sleep 600.321",
         "attach_timeout_s = 1",
     );
-    let sc = with(&scenario("hangs", "roam", 8, "", &["4..8"]), &hangs);
+    let sc = with(
+        &scenario("hangs", "roam", 8, "", &["4..8"]),
+        &hangs,
+        "hangs",
+    );
     let out = tmp_dir("hosts-hangs");
     let id2 = own_run_id("hangs");
     let proxy = net.proxy(1);
@@ -376,15 +395,22 @@ fn agents_programs_on_a_remote_host_run_log_and_time_out_there() {
     let err = stderr(&o);
     assert_eq!(o.status.code(), Some(exit::FAILED), "{err}");
     assert!(err.contains("robot 6 failed"), "{err}");
-    assert!(err.contains("did not attach within its attach timeout"), "{err}");
+    assert!(
+        err.contains("did not attach within its attach timeout"),
+        "{err}"
+    );
     assert!(err.contains("waiting for a licence server"), "{err}");
-    assert!(t.elapsed() < Duration::from_secs(30), "took {:?}", t.elapsed());
+    assert!(
+        t.elapsed() < Duration::from_secs(30),
+        "took {:?}",
+        t.elapsed()
+    );
     let _ = wait_out(proxy, Duration::from_secs(20));
-    assert!(processes_mentioning("600.321").is_empty(), "the program lives on");
+    assert!(
+        processes_mentioning("600.321").is_empty(),
+        "the program lives on"
+    );
     assert_nothing_left(&id2, &["h1"]);
-    for i in [&id, &id2] {
-        let _ = std::fs::remove_dir_all(std::env::temp_dir().join(format!("swarm-host-h1-{i}")));
-    }
 }
 
 #[test]
