@@ -130,3 +130,46 @@ pub fn kill_remote(prefix: &str, run_id: &str, robot: u32) -> String {
         Err(e) => format!("robot {robot}: {e}"),
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A kill request reaches the gateway's server through real iceoryx2 services, from
+    /// another thread of the same process as the viewer's button sends it (and from another
+    /// process as `orchestrator kill` does, the same calls), and its answer comes back; no
+    /// server: a clear error, no hang.
+    #[test]
+    fn a_kill_request_is_answered_by_the_runs_server() {
+        let prefix = transport::prefix_for(&format!("unit-kill-{}", std::process::id()));
+        let config = transport::run_config(&prefix).unwrap();
+        let node = transport::node(&config, "gateway").unwrap();
+        let no_server = kill_remote(&prefix, "r1", 3);
+        assert!(no_server.contains("hosts/kill"), "{no_server}");
+        let server = KillServer::create(&node).unwrap();
+        let p = prefix.clone();
+        let asks = std::thread::spawn(move || (kill_remote(&p, "r1", 3), kill_remote(&p, "r1", 4)));
+        let mut seen = Vec::new();
+        while !asks.is_finished() {
+            server
+                .serve(|robot| {
+                    seen.push(robot);
+                    if robot == 3 {
+                        7
+                    } else {
+                        NO_LIVE_AGENT
+                    }
+                })
+                .unwrap();
+            std::thread::sleep(Duration::from_millis(1));
+        }
+        let (killed, dead) = asks.join().unwrap();
+        assert_eq!(seen, vec![3, 4]);
+        assert!(killed.starts_with("killed robot 3 of run r1"), "{killed}");
+        assert!(killed.contains("attach 7"), "{killed}");
+        assert!(dead.contains("no live agent"), "{dead}");
+        drop(server);
+        drop(node);
+        swarm::cleanup::remove_run(&prefix);
+    }
+}
