@@ -205,7 +205,7 @@ fn serve_run(
                 let acts = live.iter().filter_map(|&r| world.take(r, tick)).collect();
                 tell(Up::Batch { tick, acts })?;
             }
-            Msg::Down(Down::Kill { robot, attach }) => agents.kill(robot, attach, world),
+            Msg::Down(Down::Kill { robot, attach }) => agents.kill(robot, attach),
             Msg::Down(Down::Stop) | Msg::WorldGone => break,
             Msg::Down(Down::Start { .. }) => {}
             Msg::Bad(m) => return Err(HostsError::Other(m)),
@@ -246,7 +246,7 @@ fn wait_tick(
         wait.retain(|r| !dead.contains(r));
         while let Ok(m) = rx.try_recv() {
             match m {
-                Msg::Down(Down::Kill { robot, attach }) => agents.kill(robot, attach, world),
+                Msg::Down(Down::Kill { robot, attach }) => agents.kill(robot, attach),
                 Msg::Down(Down::Stop) | Msg::WorldGone => return Ok(false),
                 Msg::Bad(m) => return Err(HostsError::Other(m)),
                 Msg::Down(_) => {}

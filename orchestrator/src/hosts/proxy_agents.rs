@@ -4,9 +4,12 @@
 //! fault policy (`faults.on_fault`, `faults.max_restarts`, `processes::START_FAILURES` for
 //! agents that exit before attaching; an `[[agents]]` program that does not attach within its
 //! attach timeout is killed), SIGKILLed on the world's kill orders. An agent has attached when
-//! its attach notice came through its robot's act service. Every attach and every death is
-//! told to the world's host (`Up::Attached`, `Up::Died`), which mirrors them into the world's
-//! barrier, act services and control channel.
+//! a new attach notice came through its robot's act service (one agent of a robot lives at a
+//! time, and only it can publish there). Every attach and every death is told to the world's
+//! host (`Up::Attached`, `Up::Died`), which mirrors them into the world's barrier, act services
+//! and control channel: the k-th attach told of a robot is its attach number k on the world's
+//! side, which the world's kill orders name. The proxy keeps that number per agent, never
+//! reading it back from the barrier's attach words, which every agent can write.
 
 use super::proxy_io::LocalWorld;
 use super::wire::Up;
@@ -18,11 +21,11 @@ use std::path::PathBuf;
 use std::time::{Duration, Instant};
 use swarm::scenario::{FaultPolicy, Scenario};
 
-/// One agent process: its robot, the robot's attach count when it was started (its own
-/// attach number is the next), when it started and how long it may take to attach.
+/// One agent process: its robot, its attach number on the world's side once it attached,
+/// when it started and how long it may take to attach.
 struct Agent {
     robot: u32,
-    base: u64,
+    attach: Option<u64>,
     started: Instant,
     attach_timeout: Option<Duration>,
 }
@@ -40,11 +43,12 @@ pub struct Agents {
     agents: BTreeMap<u32, Agent>,
     restarts: Vec<u32>,
     start_failures: Vec<u32>,
-    /// Agents started per robot (the marks in its log count them; no agent can attach more
-    /// often than this).
+    /// Agents started per robot (the marks in its log count them).
     starts: Vec<u32>,
-    /// Each robot's local attaches already told to the world's host.
+    /// Each robot's attaches told to the world's host (its last attach number there).
     told: Vec<u64>,
+    /// Each robot's highest attach notice already taken as an agent's attach.
+    noticed: Vec<u64>,
     /// Agents killed for not attaching within their attach timeout.
     timed_out: BTreeMap<u32, Duration>,
     /// The last tick the world's host released (for the start marks in the logs).
@@ -75,6 +79,7 @@ impl Agents {
             start_failures: vec![0; n],
             starts: vec![0; n],
             told: vec![0; n],
+            noticed: vec![0; n],
             timed_out: BTreeMap::new(),
             tick: 0,
             ending: false,
@@ -102,7 +107,7 @@ impl Agents {
             .map_err(HostsError::Other)?;
         let agent = Agent {
             robot,
-            base: world.barrier.attach_count(robot),
+            attach: None,
             started: Instant::now(),
             attach_timeout: launcher.attach_timeout(robot),
         };
@@ -119,14 +124,16 @@ impl Agents {
         tell: &mut dyn FnMut(Up) -> Result<(), HostsError>,
     ) -> Result<Vec<u32>, HostsError> {
         self.tell_attaches(world, tell)?;
-        self.kill_unattached(world);
+        self.kill_unattached();
         let mut dead = Vec::new();
         while let Some((pid, st)) = reap() {
-            let Some(Agent { robot, base, .. }) = self.agents.remove(&pid) else {
+            let Some(mut agent) = self.agents.remove(&pid) else {
                 continue;
             };
+            // Its notice may have come after the last look.
+            self.note_attach(&mut agent, world, tell)?;
+            let (robot, attached) = (agent.robot, agent.attach.is_some());
             let timeout = self.timed_out.remove(&pid);
-            let attached = world.attached(robot) > base;
             if self.ending || world.barrier.is_shutdown() || (attached && exit_of(st) == Ok(0)) {
                 continue;
             }
@@ -178,34 +185,52 @@ impl Agents {
         Ok(dead)
     }
 
-    /// Tells each robot's attaches up to the newest attach notice on its act service (an
-    /// agent that died between its attach and its notice is told with the next one, so the
-    /// world's host counts attaches as this host's barrier does), never more than the
-    /// agents started for it.
+    /// Tells the attach of every agent whose notice came.
     fn tell_attaches(
         &mut self,
         world: &mut LocalWorld,
         tell: &mut dyn FnMut(Up) -> Result<(), HostsError>,
     ) -> Result<(), HostsError> {
-        for r in 0..self.told.len() {
-            let c = world.attached(r as u32).min(self.starts[r] as u64);
-            while self.told[r] < c {
-                self.told[r] += 1;
-                tell(Up::Attached { robot: r as u32 })?;
-            }
+        let mut agents = std::mem::take(&mut self.agents);
+        let result = agents
+            .values_mut()
+            .try_for_each(|a| self.note_attach(a, world, tell));
+        self.agents = agents;
+        result
+    }
+
+    /// If `a` has not attached yet and its robot's act service brought a new attach notice,
+    /// `a` attached (it is its robot's only agent): it gets the robot's next attach number
+    /// on the world's side, told to the world's host.
+    fn note_attach(
+        &mut self,
+        a: &mut Agent,
+        world: &mut LocalWorld,
+        tell: &mut dyn FnMut(Up) -> Result<(), HostsError>,
+    ) -> Result<(), HostsError> {
+        let r = a.robot as usize;
+        if a.attach.is_some() {
+            return Ok(());
         }
-        Ok(())
+        let notice = world.attached(a.robot);
+        if notice <= self.noticed[r] {
+            return Ok(());
+        }
+        self.noticed[r] = notice;
+        self.told[r] += 1;
+        a.attach = Some(self.told[r]);
+        tell(Up::Attached { robot: a.robot })
     }
 
     /// SIGKILLs each agent with an attach timeout (an `[[agents]]` program) that has not
     /// attached within it (reaped as a start failure).
-    fn kill_unattached(&mut self, world: &mut LocalWorld) {
+    fn kill_unattached(&mut self) {
         for (&pid, a) in &self.agents {
             let Some(t) = a.attach_timeout else { continue };
             if self.timed_out.contains_key(&pid) || a.started.elapsed() < t {
                 continue;
             }
-            if world.attached(a.robot) <= a.base {
+            if a.attach.is_none() {
                 kill(pid);
                 self.timed_out.insert(pid, t);
             }
@@ -214,9 +239,9 @@ impl Agents {
 
     /// The world ordered robot `robot`'s agent with attach number `attach` killed: SIGKILL
     /// that incarnation if it still runs (never a replacement that has not taken over).
-    pub fn kill(&self, robot: u32, attach: u64, world: &mut LocalWorld) {
+    pub fn kill(&self, robot: u32, attach: u64) {
         for (&pid, a) in &self.agents {
-            if a.robot == robot && world.attached(robot) > a.base && a.base + 1 == attach {
+            if a.robot == robot && a.attach == Some(attach) {
                 kill(pid);
             }
         }
