@@ -298,9 +298,13 @@ impl RunEntry {
         Ok(())
     }
 
-    /// Whether the run's orchestrator is still running.
+    /// Whether the run's orchestrator is still running: the recorded process (pid and start
+    /// time) runs a binary named `orchestrator`, this build's or another's (a second checkout,
+    /// an installed copy). A live run of another build is live: `clean` (which every `up`
+    /// runs) once took it for dead and SIGKILLed its agents mid-run. Another program at that
+    /// pid is not an orchestrator.
     pub fn orchestrator_is_live(&self) -> bool {
-        is_ours(self.orchestrator_pid, self.orchestrator_start, ORCHESTRATOR)
+        runs_binary_named(self.orchestrator_pid, self.orchestrator_start, ORCHESTRATOR)
     }
 
     /// The run's world and agent processes still running (pid, binary), verified.
@@ -353,6 +357,20 @@ pub fn start_time(pid: u32) -> Option<u64> {
 pub fn binary(name: &str) -> PathBuf {
     let exe = std::env::current_exe().expect("current exe");
     exe.parent().expect("exe dir").join(name)
+}
+
+/// Whether process `pid` started at `start` and runs a binary whose file name is `name`, of
+/// whichever build.
+pub fn runs_binary_named(pid: u32, start: u64, name: &str) -> bool {
+    if pid == 0 || start == 0 || start_time(pid) != Some(start) {
+        return false;
+    }
+    let Ok(exe) = std::fs::read_link(format!("/proc/{pid}/exe")) else {
+        return false;
+    };
+    let exe = exe.to_string_lossy();
+    let exe = exe.strip_suffix(" (deleted)").unwrap_or(&exe);
+    Path::new(exe).file_name().is_some_and(|f| f == name)
 }
 
 /// Whether `pid` is a process of this project's: it started at `start` and runs this build's

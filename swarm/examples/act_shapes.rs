@@ -2,11 +2,13 @@
 //! one act sample a round, the world receives and releases all N. `per-robot` = one service
 //! a robot (1 publisher, 1 subscriber: today's `robot/<i>/act`); `one-service` = one service
 //! with N publishers and the world's one subscriber (its `receive()` scans every connection).
+//! `blackboard` = one blackboard service a robot (world creates and reads, the robot writes).
 //! Prints the mean time a round of the world's side (receive + release of N samples) and of
 //! the robots' side (N loans + sends). Run it under `valgrind --tool=callgrind` for
 //! instruction counts, which a loaded machine does not move.
 //!
-//! `cargo run --release -p swarm --example act_shapes -- N ROUNDS`
+//! `cargo run --release -p swarm --example act_shapes -- N ROUNDS` (SHAPE=per-robot, one-service
+//! or blackboard for one of them).
 
 use iceoryx2::prelude::*;
 use std::time::{Duration, Instant};
@@ -66,6 +68,69 @@ fn rounds(pubs: &[Pub], rounds: u64, mut take: impl FnMut() -> usize) -> (Durati
     (send / rounds as u32, recv / rounds as u32)
 }
 
+/// The act as a blackboard value: the round in its first 8 bytes, then the payload.
+#[derive(Clone, Copy, Debug, ZeroCopySend)]
+#[repr(C)]
+struct BoardAct {
+    round: u64,
+    bytes: [u8; SLICE],
+}
+
+/// `blackboard` = one blackboard service a robot (the world creates it and reads key 0, the
+/// robot's writer updates it: iceoryx2's triple-buffered `UnrestrictedAtomic`, no loan, no
+/// return queue).
+fn blackboard(node: &Node<ipc::Service>, n: u64, r: u64) {
+    let t = Instant::now();
+    let init = BoardAct {
+        round: u64::MAX,
+        bytes: [0; SLICE],
+    };
+    let svcs: Vec<_> = (0..n)
+        .map(|i| {
+            node.service_builder(&ServiceName::new(&format!("robot/{i}/board")).unwrap())
+                .blackboard_creator::<u8>()
+                .max_readers(1)
+                .max_nodes(2)
+                .add::<BoardAct>(0, init)
+                .create()
+                .unwrap()
+        })
+        .collect();
+    let readers: Vec<_> = svcs
+        .iter()
+        .map(|s| s.reader_builder().create().unwrap())
+        .collect();
+    let rents: Vec<_> = readers
+        .iter()
+        .map(|rd| rd.entry::<BoardAct>(&0).unwrap())
+        .collect();
+    let writers: Vec<_> = svcs
+        .iter()
+        .map(|s| s.writer_builder().create().unwrap())
+        .collect();
+    let wents: Vec<_> = writers
+        .iter()
+        .map(|w| w.entry::<BoardAct>(&0).unwrap())
+        .collect();
+    let setup = t.elapsed();
+    let (mut send, mut recv) = (Duration::ZERO, Duration::ZERO);
+    let mut v = init;
+    for round in 0..r {
+        let t = Instant::now();
+        for w in &wents {
+            v.round = round;
+            w.update_with_copy(v);
+        }
+        let t2 = Instant::now();
+        let got = rents.iter().filter(|e| e.get().round == round).count();
+        assert_eq!(got, n as usize, "round {round}");
+        send += t2 - t;
+        recv += t2.elapsed();
+    }
+    let (s, t) = (send / r as u32, recv / r as u32);
+    println!("blackboard  N={n}: set-up {setup:?}, robots' sends {s:?} a round, world's receives {t:?} a round ({:?} a sample)", t / n as u32);
+}
+
 fn main() {
     let args: Vec<u64> = std::env::args()
         .skip(1)
@@ -117,6 +182,9 @@ fn main() {
             got
         });
         println!("one-service N={n}: set-up {setup:?}, robots' sends {s:?} a round, world's receives {t:?} a round ({:?} a sample)", t / n as u32);
+    }
+    if which.is_empty() || which == "blackboard" {
+        blackboard(&node, n, r);
     }
     drop(node);
     // Everything of this program in /dev/shm starts with `swactshape`: leave none of it.

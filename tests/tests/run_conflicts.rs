@@ -1,6 +1,7 @@
 //! Runs that collide (issue 37 item 13): two runs on one `--out`, one `SWARM_RUN_ID` twice,
-//! one robot named thrice in a kill order. The second run is refused (exit 2) before it
-//! writes anything, and the first goes on unharmed. Real processes.
+//! one robot named thrice in a kill order, a live run of another build of the project. The
+//! second run is refused (exit 2) before it writes anything, and the first goes on unharmed.
+//! Real processes.
 
 use e2e::*;
 use std::path::Path;
@@ -177,4 +178,45 @@ fn a_robot_named_thrice_is_killed_once() {
     assert_eq!(faults.len(), 1, "{faults:?}");
     assert_eq!(faults[0]["robot"], 3);
     assert_left_nothing(&out);
+}
+
+/// Two builds of the project on one machine (a second checkout, an installed copy) share the
+/// run registry: `clean` (and so every `up`) of one must leave the other's live runs alone.
+/// Before, a run was live only if its orchestrator ran *this* build's binary: another build's
+/// run counted as dead, and `clean` SIGKILLed its agents (their command lines hold the run's
+/// prefix) mid-run, once in CI while a second checkout ran its tests.
+#[test]
+fn a_live_run_of_another_build_is_left_alone_by_clean() {
+    let _g = serial();
+    let other = tmp_dir("other-build");
+    std::fs::create_dir_all(&other).unwrap();
+    for b in ["orchestrator", "world", "agent"] {
+        std::fs::copy(bin_dir().join(b), other.join(b)).unwrap();
+    }
+    let out = tmp_dir("other-build-run");
+    let mut cmd = Command::new(other.join("orchestrator"));
+    cmd.args(["up", "--quiet", "--out"])
+        .arg(&out)
+        .args(["--scenario", roam(), "--robots", "4", "--max-ticks", "600"])
+        .args(["--tick-hz", "200", "--seed", "5"])
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped());
+    let child = cmd.spawn().unwrap();
+    let entry = registry_entry(&out, 4);
+    goes_on(&out, registry_tick(&out));
+    // This build's clean, while the other build's run ticks.
+    let o = Command::new(orchestrator()).arg("clean").output().unwrap();
+    assert!(o.status.success(), "{}", stderr(&o));
+    for pid in entry["agent_pids"].as_array().unwrap() {
+        let pid = pid.as_u64().unwrap() as i32;
+        assert!(pid_alive(pid), "clean killed agent {pid} of a live run");
+    }
+    let o = wait_with_timeout(child, Duration::from_secs(60));
+    assert!(ended_by_itself(&o), "{}", stderr(&o));
+    let s = summary(&out);
+    assert_eq!(s["ticks"], 600, "{s}");
+    assert_eq!(s["faults"].as_array().unwrap().len(), 0, "{s}");
+    assert_left_nothing(&out);
+    let _ = std::fs::remove_dir_all(&other);
+    let _ = std::fs::remove_dir_all(&out);
 }

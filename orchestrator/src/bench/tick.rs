@@ -51,6 +51,8 @@ pub(super) struct Stats {
     pub per_s: f64,
     pub p50_us: f64,
     pub p99_us: f64,
+    /// Spawn to every agent attached (a run's summary.json; 0 where not measured).
+    pub startup_s: f64,
 }
 
 fn stats(mut ns: Vec<u64>) -> Stats {
@@ -60,6 +62,7 @@ fn stats(mut ns: Vec<u64>) -> Stats {
         per_s: ns.len() as f64 / (total as f64 / 1e9),
         p50_us: percentile(&ns, 0.5) / 1e3,
         p99_us: percentile(&ns, 0.99) / 1e3,
+        startup_s: 0.0,
     }
 }
 
@@ -192,6 +195,7 @@ pub(super) fn run_stats(sc: &Scenario) -> BenchResult<(u64, Stats)> {
             per_s: s["steady_ticks_per_second"].as_f64().unwrap_or(0.0),
             p50_us: s["tick_time"]["p50_us"].as_f64().unwrap_or(0.0),
             p99_us: s["tick_time"]["p99_us"].as_f64().unwrap_or(0.0),
+            startup_s: s["startup_seconds"].as_f64().unwrap_or(0.0),
         },
     ))
 }
