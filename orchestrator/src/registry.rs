@@ -359,34 +359,34 @@ pub fn binary(name: &str) -> PathBuf {
     exe.parent().expect("exe dir").join(name)
 }
 
+/// The binary process `pid` runs, if it is the process that started at `start` (a reused
+/// pid, another start time, is not). A binary rebuilt while its process runs reads as
+/// "PATH (deleted)": the path is given without that suffix.
+fn exe_of(pid: u32, start: u64) -> Option<PathBuf> {
+    if pid == 0 || start == 0 || start_time(pid) != Some(start) {
+        return None;
+    }
+    let exe = std::fs::read_link(format!("/proc/{pid}/exe")).ok()?;
+    let exe = exe.to_string_lossy();
+    Some(PathBuf::from(
+        exe.strip_suffix(" (deleted)").unwrap_or(&exe),
+    ))
+}
+
 /// Whether process `pid` started at `start` and runs a binary whose file name is `name`, of
 /// whichever build.
 pub fn runs_binary_named(pid: u32, start: u64, name: &str) -> bool {
-    if pid == 0 || start == 0 || start_time(pid) != Some(start) {
-        return false;
-    }
-    let Ok(exe) = std::fs::read_link(format!("/proc/{pid}/exe")) else {
-        return false;
-    };
-    let exe = exe.to_string_lossy();
-    let exe = exe.strip_suffix(" (deleted)").unwrap_or(&exe);
-    Path::new(exe).file_name().is_some_and(|f| f == name)
+    exe_of(pid, start).is_some_and(|exe| exe.file_name().is_some_and(|f| f == name))
 }
 
 /// Whether `pid` is a process of this project's: it started at `start` and runs this build's
 /// binary `name`. A reused pid (another start time) or another program is not.
 pub fn is_ours(pid: u32, start: u64, name: &str) -> bool {
-    if pid == 0 || start == 0 || start_time(pid) != Some(start) {
-        return false;
-    }
-    let Ok(exe) = std::fs::read_link(format!("/proc/{pid}/exe")) else {
+    let Some(exe) = exe_of(pid, start) else {
         return false;
     };
-    // A binary rebuilt while its process runs reads as "PATH (deleted)".
-    let exe = exe.to_string_lossy();
-    let exe = exe.strip_suffix(" (deleted)").unwrap_or(&exe);
     let want = binary(name);
-    Path::new(exe) == want || std::fs::canonicalize(&want).is_ok_and(|w| Path::new(exe) == w)
+    exe == want || std::fs::canonicalize(&want).is_ok_and(|w| exe == w)
 }
 
 pub fn pid_alive(pid: u32) -> bool {
