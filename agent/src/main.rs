@@ -20,14 +20,7 @@ impl BehaviourVisitor for Run {
 }
 
 fn main() {
-    let agent = match Agent::from_args(std::env::args().skip(1)) {
-        Ok(a) => a,
-        Err(AgentError::Args(e)) => e.exit(),
-        Err(e) => {
-            eprintln!("agent: {e}");
-            std::process::exit(e.exit_code());
-        }
-    };
+    let agent = swarm::agent::from_env_or_exit();
     let robot = agent.robot();
     // The registry's dispatch reads the scenario while the visitor owns the agent.
     let sc = agent.scenario().clone();

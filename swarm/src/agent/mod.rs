@@ -197,19 +197,24 @@ impl Agent {
     }
 }
 
-/// The whole `main` of an agent program: parses `std::env::args`, builds the behaviour with
-/// `make` (an error there is printed with the robot id and exits [`EXIT_BAD_INPUT`]), runs
-/// it, and exits with the agent exit codes.
-pub fn main<B: Behaviour, E: std::fmt::Display>(make: impl FnOnce(&Agent) -> Result<B, E>) -> ! {
-    let agent = match Agent::from_args(std::env::args().skip(1)) {
+/// The Agent of `std::env::args`, or the process exits: --help, --version and argument errors
+/// as clap prints them, anything else printed with the agent exit code it maps to.
+pub fn from_env_or_exit() -> Agent {
+    match Agent::from_args(std::env::args().skip(1)) {
         Ok(a) => a,
-        // --help, --version and argument errors as clap prints them.
         Err(AgentError::Args(e)) => e.exit(),
         Err(e) => {
             eprintln!("agent: {e}");
             std::process::exit(e.exit_code());
         }
-    };
+    }
+}
+
+/// The whole `main` of an agent program: parses `std::env::args`, builds the behaviour with
+/// `make` (an error there is printed with the robot id and exits [`EXIT_BAD_INPUT`]), runs
+/// it, and exits with the agent exit codes.
+pub fn main<B: Behaviour, E: std::fmt::Display>(make: impl FnOnce(&Agent) -> Result<B, E>) -> ! {
+    let agent = from_env_or_exit();
     let robot = agent.robot();
     let behaviour = match make(&agent) {
         Ok(b) => b,
