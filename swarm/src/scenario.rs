@@ -282,10 +282,35 @@ pub enum BarrierKind {
     Iox2Event,
 }
 
+/// How the actions travel from each agent to the world (`runtime.acts`, docs/protocol.md
+/// section 5): both are iceoryx2, world-created, one service per robot.
+#[derive(Serialize, Deserialize, Clone, Copy, Debug, PartialEq, Eq, Default)]
+#[serde(rename_all = "kebab-case")]
+pub enum ActsKind {
+    /// Publish-subscribe `robot/<i>/act`: a loaned sample a tick, the Action as its user
+    /// header, the messages as its payload.
+    #[default]
+    PubSub,
+    /// Blackboard `robot/<i>/board`: the agent's writer updates the act value (two tick
+    /// slots, an attach key), the world's reader copies it: no loan, no queue (BENCHMARKS
+    /// 22b: a quarter of pub-sub's instructions). Lock-step and real-time, one host.
+    Blackboard,
+}
+
+impl ActsKind {
+    fn is_default(&self) -> bool {
+        *self == ActsKind::default()
+    }
+}
+
 #[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct RuntimeParams {
     pub barrier: BarrierKind,
+    /// The act transport (`ActsKind`); left out of a resolved scenario when it is the
+    /// default, so recordings of runs that do not set it are unchanged.
+    #[serde(default, skip_serializing_if = "ActsKind::is_default")]
+    pub acts: ActsKind,
     pub ack_deadline_ms: u64,
     pub poll_ms: u64,
     pub startup_timeout_s: u64,

@@ -16,12 +16,18 @@ use std::path::PathBuf;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Arc;
 
+mod act_board;
 mod act_sink;
+mod acts;
 mod air_source;
 mod error;
 mod sense_source;
 mod service;
-pub use act_sink::{attach_of, ActSink, ActSource, ATTACH_NOTICE};
+pub use act_board::{
+    chunks as act_board_chunks, ActChunk, ActHead, BoardSink, BoardSource, CHUNK_AREA, HEAD_AREA,
+};
+pub use act_sink::{attach_of, PubSubSink, PubSubSource, ATTACH_NOTICE};
+pub use acts::{ActSink, ActSource};
 pub use air_source::{AirGot, AirSink, AirSource};
 pub use error::{Port, TransportError, TransportResult};
 pub use sense_source::{SenseSink, SenseSource};

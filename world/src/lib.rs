@@ -13,6 +13,7 @@ pub mod mission;
 pub mod output;
 pub mod placement;
 pub mod process;
+pub mod read_watchdog;
 pub mod sensing;
 pub mod shrink_guard;
 pub mod svg;

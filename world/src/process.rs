@@ -284,7 +284,7 @@ pub fn run(args: &WorldArgs) -> Result<i32> {
     let node = transport::node(&config, "world")?;
     // Sense frames: every robot's record packed into one `world/sense` sample a tick.
     let mut senses = transport::SenseSink::create(&node, sc)?;
-    // Actions: one `robot/<i>/act` service a robot.
+    // Actions: one `robot/<i>/act` service (or `robot/<i>/board`, `runtime.acts`) a robot.
     // Every read of robot r's act service is guarded: a segment that shrinks under it makes r
     // a fault, not a SIGBUS of the world (shrink_guard).
     crate::shrink_guard::install()?;
@@ -301,7 +301,10 @@ pub fn run(args: &WorldArgs) -> Result<i32> {
         .create()
         .map_err(|e| format!("control subscriber: {e:?}"))?;
     // The barrier's segments, inherited from the orchestrator (docs/protocol.md section 4).
-    let barrier = TickBarrier::open_world()?;
+    let barrier = std::sync::Arc::new(TickBarrier::open_world()?);
+    // A read of a robot's act service that does not end (a writer that keeps moving a
+    // blackboard entry's counter) is bounded by a watchdog (read_watchdog).
+    crate::read_watchdog::spawn(barrier.clone())?;
     if barrier.robots() != n {
         return Err(format!(
             "the tick barrier has {} robot slots, the scenario {n} robots",
@@ -335,7 +338,7 @@ pub fn run(args: &WorldArgs) -> Result<i32> {
     let startup_deadline = Instant::now() + Duration::from_secs(sc.runtime.startup_timeout_s);
     let mut unattached: Vec<u32> = (0..n).collect();
     loop {
-        unattached.retain(|&i| world.alive[i as usize] && acts.attached(i) == 0);
+        unattached.retain(|&i| world.alive[i as usize] && acts.attached(&node, i) == 0);
         if unattached.is_empty() {
             break;
         }
@@ -359,7 +362,7 @@ pub fn run(args: &WorldArgs) -> Result<i32> {
         // A robot whose first agent died during start-up is driven by no one yet: any later
         // attach beyond the dead ones takes it over.
         drivers.attached[i as usize] = if world.alive[i as usize] {
-            acts.attached(i)
+            acts.attached(&node, i)
         } else {
             barrier.dead_upto(i)
         };
@@ -374,6 +377,10 @@ pub fn run(args: &WorldArgs) -> Result<i32> {
     // Who is alive as this tick's frames are written (a copy: sensing needs the world).
     let mut alive_now: Vec<bool> = Vec::with_capacity(n as usize);
     let deadline = Duration::from_millis(sc.runtime.ack_deadline_ms);
+    // Who was alive at the last tick's start: a robot found dead since has its act service
+    // retired once (`ActSource::retire`: a blackboard is made anew for a replacement). Every
+    // robot counts as alive before tick 0, so one that died during start-up is retired too.
+    let mut was_alive: Vec<bool> = vec![true; n as usize];
     // Stopped during start-up (Ctrl-C before every agent attached): no tick runs, so no
     // robot that was still starting is declared dead at tick 0 (issue 14 item 8).
     let mut end = if ctl.stop { "interrupted" } else { "completed" }.to_string();
@@ -389,6 +396,12 @@ pub fn run(args: &WorldArgs) -> Result<i32> {
         let t_tick = Instant::now();
         world.begin_tick();
         drivers.order_kills(&world, &barrier);
+        for (i, was) in was_alive.iter_mut().enumerate() {
+            if *was && !world.alive[i] {
+                acts.retire(i as u32);
+            }
+            *was = world.alive[i];
+        }
         if restart {
             // A new agent process attached for a dead robot (its attach notice came through
             // the robot's act service): it drives the robot from now on, unless it is already
@@ -399,7 +412,7 @@ pub fn run(args: &WorldArgs) -> Result<i32> {
                 if world.alive[i as usize] {
                     continue;
                 }
-                let c = acts.attached(i);
+                let c = acts.attached(&node, i);
                 if c > drivers.attached[i as usize] && c > barrier.dead_upto(i) && world.revive(i) {
                     drivers.attached[i as usize] = c;
                     clock.start(i as usize, k);

@@ -21,7 +21,7 @@
 //!
 //! The handler is async-signal-safe: atomics, `syscall(SYS_gettid)`, `mmap` and `sigaction`.
 
-use std::sync::atomic::{compiler_fence, AtomicU32, AtomicUsize, Ordering};
+use std::sync::atomic::{compiler_fence, AtomicU32, AtomicU64, AtomicUsize, Ordering};
 use swarm::frames::Action;
 use swarm::mailbox::Air;
 use swarm::transport::ActSource;
@@ -43,6 +43,9 @@ static READING: AtomicU32 = AtomicU32::new(NOBODY);
 static READER: AtomicU32 = AtomicU32::new(0);
 /// The robot whose read faulted (and was given zeros), or [`NOBODY`].
 static SHRANK: AtomicU32 = AtomicU32::new(NOBODY);
+/// How many guarded reads began: the read watchdog (`read_watchdog`) tells one long read
+/// from many short ones by it.
+static READS: AtomicU64 = AtomicU64::new(0);
 /// The page size, read once by [`install`] (sysconf is not async-signal-safe).
 static PAGE: AtomicUsize = AtomicUsize::new(0);
 
@@ -139,6 +142,7 @@ pub fn reading<T>(robot: u32, f: impl FnOnce() -> T) -> Option<T> {
         static TID: u32 = tid();
     }
     READER.store(TID.with(|t| *t), Ordering::Release);
+    READS.store(READS.load(Ordering::Relaxed) + 1, Ordering::Relaxed);
     READING.store(robot, Ordering::Release);
     // The handler runs on this thread: the marker is set before any of f's reads and cleared
     // after them, as the compiler emits them.
@@ -152,6 +156,15 @@ pub fn reading<T>(robot: u32, f: impl FnOnce() -> T) -> Option<T> {
         Err(panic) if !shrank => std::panic::resume_unwind(panic),
         _ => None,
     }
+}
+
+/// The read in progress: the robot whose act service is being read (None: no robot's) and
+/// the number of the read (`READS`), for the read watchdog.
+pub fn read_in_progress() -> (Option<u32>, u64) {
+    let robot = READING.load(Ordering::Acquire);
+    let n = READS.load(Ordering::Relaxed);
+    let robot = (robot < RUN_SEGMENTS).then_some(robot);
+    (robot, n)
 }
 
 /// Whether `run/control` shrank under this process ([`control_lost`]): it is not touched again.
@@ -250,8 +263,17 @@ impl GuardedActs {
     }
 
     /// [`ActSource::attached`]; 0 (not attached) when the robot's segment shrank.
-    pub fn attached(&mut self, robot: u32) -> u64 {
-        self.guard(robot, |a| a.attached(robot)).unwrap_or(0)
+    pub fn attached(
+        &mut self,
+        node: &iceoryx2::node::Node<iceoryx2::prelude::ipc::Service>,
+        robot: u32,
+    ) -> u64 {
+        self.guard(robot, |a| a.attached(node, robot)).unwrap_or(0)
+    }
+
+    /// [`ActSource::retire`] (dropping a blackboard writes to its segments).
+    pub fn retire(&mut self, robot: u32) {
+        self.guard(robot, |a| a.retire(robot));
     }
 
     /// [`ActSource::poll_realtime`]; no progress when the robot's segment shrank.

@@ -18,7 +18,7 @@ use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 use swarm::barrier::{BarrierFds, TickBarrier, Wake};
 use swarm::cleanup;
-use swarm::scenario::{BarrierKind, Scenario};
+use swarm::scenario::{ActsKind, BarrierKind, Scenario};
 use swarm::transport::{self, EventCapacity, Reach, ServiceId, TransportError};
 use world::output::percentile;
 
@@ -33,6 +33,10 @@ pub struct Row {
     /// The runtime with `runtime.barrier = "iox2-event"`.
     pub runtime_ev_ticks_per_s: f64,
     pub runtime_ev_p50_us: f64,
+    /// The runtime with `runtime.acts = "blackboard"` (the same run but the act path: one
+    /// iceoryx2 blackboard a robot instead of one publish-subscribe service).
+    pub runtime_bb_ticks_per_s: f64,
+    pub runtime_bb_p50_us: f64,
     /// The runtime on the embedded default scenario (search, mode BT) run until every target
     /// is found (or `ticks`): how many ticks that took, ticks per second, p50. None above
     /// SEARCH_MAX_ROBOTS.
@@ -73,7 +77,7 @@ fn opt(v: Option<f64>) -> String {
 pub fn print_table(rows: &[Row]) {
     println!("lock-step tick (roam scenario, configs/roam.toml, for the runtime; no work for the others)");
     println!(
-        "{:>6} {:>6} | {:>10} {:>8} {:>8} | {:>10} {:>8} | {:>6} {:>9} {:>8} | {:>10} {:>8} {:>8} | {:>10} {:>8} {:>8} | {:>9} {:>9}",
+        "{:>6} {:>6} | {:>10} {:>8} {:>8} | {:>10} {:>8} | {:>10} {:>8} {:>7} | {:>6} {:>9} {:>8} | {:>10} {:>8} {:>8} | {:>10} {:>8} {:>8} | {:>9} {:>9}",
         "robots",
         "ticks",
         "runtime/s",
@@ -81,6 +85,9 @@ pub fn print_table(rows: &[Row]) {
         "p99 us",
         "rt-ev/s",
         "p50 us",
+        "rt-bb/s",
+        "p50 us",
+        "bb/rt",
         "ticks",
         "search/s",
         "p50 us",
@@ -95,7 +102,7 @@ pub fn print_table(rows: &[Row]) {
     );
     for r in rows {
         println!(
-            "{:>6} {:>6} | {:>10.0} {:>8.0} {:>8.0} | {:>10.0} {:>8.0} | {:>6} {:>9} {:>8} | {:>10.0} {:>8.0} {:>8.0} | {:>10.0} {:>8.0} {:>8.0} | {:>8.2}x {:>8.2}x",
+            "{:>6} {:>6} | {:>10.0} {:>8.0} {:>8.0} | {:>10.0} {:>8.0} | {:>10.0} {:>8.0} {:>6.2}x | {:>6} {:>9} {:>8} | {:>10.0} {:>8.0} {:>8.0} | {:>10.0} {:>8.0} {:>8.0} | {:>8.2}x {:>8.2}x",
             r.robots,
             r.ticks,
             r.runtime_ticks_per_s,
@@ -103,6 +110,9 @@ pub fn print_table(rows: &[Row]) {
             r.runtime_p99_us,
             r.runtime_ev_ticks_per_s,
             r.runtime_ev_p50_us,
+            r.runtime_bb_ticks_per_s,
+            r.runtime_bb_p50_us,
+            r.runtime_bb_ticks_per_s / r.runtime_ticks_per_s,
             opt(r.search_ticks.map(|t| t as f64)),
             opt(r.search_ticks_per_s),
             opt(r.search_p50_us),
@@ -116,7 +126,7 @@ pub fn print_table(rows: &[Row]) {
             r.futex_rounds_per_s / r.runtime_ticks_per_s,
         );
     }
-    println!("runtime = the runtime with its default futex barrier, the Sense frames, the air and the actions through their iceoryx2 services (world/sense, radio/air, robot/<i>/act); rt-ev = with runtime.barrier = \"iox2-event\".");
+    println!("runtime = the runtime with its default futex barrier, the Sense frames, the air and the actions through their iceoryx2 services (world/sense, radio/air, robot/<i>/act); rt-ev = with runtime.barrier = \"iox2-event\"; rt-bb = with runtime.acts = \"blackboard\" (robot/<i>/board), bb/rt its ticks/s over runtime's.");
     println!("search = the runtime on the default scenario (search BT, futex barrier) until every target is found: ticks run, ticks/s, p50.");
     println!("rt/iox2 = runtime tick time / raw iceoryx2 round time (mean); below 1 means faster than the raw round.");
 }
@@ -136,8 +146,9 @@ pub fn bench_tick(sizes: &[u32], ticks: u64) -> BenchResult<Vec<Row>> {
     let mut rows = Vec::new();
     for &n in sizes {
         let ticks = ticks_for(n, ticks);
-        let rt = runtime(n, ticks, BarrierKind::Futex)?;
-        let rt_ev = runtime(n, ticks, BarrierKind::Iox2Event)?;
+        let rt = runtime(n, ticks, BarrierKind::Futex, ActsKind::PubSub)?;
+        let rt_ev = runtime(n, ticks, BarrierKind::Iox2Event, ActsKind::PubSub)?;
+        let rt_bb = runtime(n, ticks, BarrierKind::Futex, ActsKind::Blackboard)?;
         let search = if n <= SEARCH_MAX_ROBOTS {
             let mut sc = Scenario::default();
             sc.run.robots = n;
@@ -157,6 +168,8 @@ pub fn bench_tick(sizes: &[u32], ticks: u64) -> BenchResult<Vec<Row>> {
             runtime_p99_us: rt.p99_us,
             runtime_ev_ticks_per_s: rt_ev.per_s,
             runtime_ev_p50_us: rt_ev.p50_us,
+            runtime_bb_ticks_per_s: rt_bb.per_s,
+            runtime_bb_p50_us: rt_bb.p50_us,
             search_ticks: search.as_ref().map(|s| s.0),
             search_ticks_per_s: search.as_ref().map(|s| s.1.per_s),
             search_p50_us: search.as_ref().map(|s| s.1.p50_us),
@@ -176,10 +189,11 @@ pub fn bench_tick(sizes: &[u32], ticks: u64) -> BenchResult<Vec<Row>> {
 const SEARCH_MAX_ROBOTS: u32 = 200;
 
 /// The runtime itself: the roam scenario with N robots for `ticks` ticks (+ warm-up).
-fn runtime(n: u32, ticks: u64, barrier: BarrierKind) -> BenchResult<Stats> {
+fn runtime(n: u32, ticks: u64, barrier: BarrierKind, acts: ActsKind) -> BenchResult<Stats> {
     let mut sc = Scenario::roam();
     sc.run.robots = n;
     sc.runtime.barrier = barrier;
+    sc.runtime.acts = acts;
     let warmup = (ticks / 20).max(10);
     sc.run.max_ticks = ticks + warmup;
     run_stats(&sc).map(|(_, s)| s)

@@ -19,7 +19,7 @@ use iceoryx2::prelude::*;
 /// sender is never what its header claims (a robot cannot speak, or be silenced, as another).
 /// An area that does not parse hands none (the world then refuses the action's radio report,
 /// counting its messages malformed).
-fn transmit_area(robot: u32, area: &[u8], into: &mut Air) {
+pub(super) fn transmit_area(robot: u32, area: &[u8], into: &mut Air) {
     crate::air::for_each_act_message(area, |h, p| {
         let stamped = RadioHeader {
             sender: robot,
@@ -67,14 +67,14 @@ pub struct ActPort {
 /// mode), and the newest attach notice each service delivered. Everything the world decides
 /// about a robot (done with a tick, silent, attached) comes from here, never from the
 /// barrier's ack and attach words, which every agent can write (issue 37 item 5).
-pub struct ActSource {
+pub struct PubSubSource {
     ports: Vec<ActPort>,
     held: Vec<Option<ActSample>>,
     late: Vec<Option<ActSample>>,
     attached: Vec<u64>,
 }
 
-impl ActSource {
+impl PubSubSource {
     /// Makes the run's act services for `sc.run.robots` robots.
     pub fn create(node: &Node<ipc::Service>, sc: &Scenario) -> TransportResult<Self> {
         let ports = (0..sc.run.robots)
@@ -87,7 +87,7 @@ impl ActSource {
             })
             .collect::<TransportResult<Vec<_>>>()?;
         let none = |_| None;
-        Ok(ActSource {
+        Ok(PubSubSource {
             held: (0..ports.len()).map(none).collect(),
             late: (0..ports.len()).map(none).collect(),
             attached: vec![0; ports.len()],
@@ -118,7 +118,7 @@ impl ActSource {
     }
 
     /// Lock-step: whether robot `robot`'s action of tick `k` has arrived (received and held
-    /// until [`ActSource::take`]). A robot counts as done with tick k when its own act
+    /// until [`PubSubSource::take`]). A robot counts as done with tick k when its own act
     /// service delivered a sample of tick k: the barrier's ack words only say when to look.
     /// One receive a robot a tick in the common case.
     pub fn arrived(&mut self, robot: u32, k: u64) -> bool {
@@ -218,18 +218,18 @@ impl ActSource {
 }
 
 /// An agent's side of its Action frames: its robot's act service.
-pub struct ActSink {
+pub struct PubSubSink {
     publisher: Publisher<ipc::Service, [u8], Action>,
     robot: u32,
     area: usize,
     _service: ActService,
 }
 
-impl ActSink {
+impl PubSubSink {
     /// Opens robot `robot`'s act service for its agent.
     pub fn open(node: &Node<ipc::Service>, sc: &Scenario, robot: u32) -> TransportResult<Self> {
         let service = act_service(node, robot, false)?;
-        Ok(ActSink {
+        Ok(PubSubSink {
             publisher: act_publisher(&service, sc)?,
             robot,
             area: super::act_slice_len(sc),

@@ -11,9 +11,12 @@ use iceoryx2::node::NodeCreationFailure;
 use iceoryx2::port::listener::{ListenerCreateError, ListenerWaitError};
 use iceoryx2::port::notifier::{NotifierCreateError, NotifierNotifyError};
 use iceoryx2::port::publisher::PublisherCreateError;
+use iceoryx2::port::reader::{EntryHandleError, ReaderCreateError};
 use iceoryx2::port::subscriber::SubscriberCreateError;
+use iceoryx2::port::writer::{EntryHandleMutError, WriterCreateError};
 use iceoryx2::port::{LoanError, ReceiveError, SendError};
 use iceoryx2::prelude::SemanticStringError;
+use iceoryx2::service::builder::blackboard::{BlackboardCreateError, BlackboardOpenError};
 use iceoryx2::service::builder::event::{EventCreateError, EventOpenError};
 use iceoryx2::service::builder::publish_subscribe::{
     PublishSubscribeCreateError, PublishSubscribeOpenError,
@@ -82,6 +85,38 @@ pub enum TransportError {
     Open {
         service: ServiceId,
         source: PublishSubscribeOpenError,
+    },
+    /// The world could not create a robot's act blackboard.
+    #[error("create blackboard {service}: {source}")]
+    CreateBoard {
+        service: ServiceId,
+        source: BlackboardCreateError,
+    },
+    /// An agent could not open its robot's act blackboard.
+    #[error("open blackboard {service}: {source}")]
+    OpenBoard {
+        service: ServiceId,
+        source: BlackboardOpenError,
+    },
+    #[error("{service} reader: {source}")]
+    Reader {
+        service: ServiceId,
+        source: ReaderCreateError,
+    },
+    #[error("{service} writer: {source}")]
+    Writer {
+        service: ServiceId,
+        source: WriterCreateError,
+    },
+    #[error("{service} reader's entry: {source}")]
+    Entry {
+        service: ServiceId,
+        source: EntryHandleError,
+    },
+    #[error("{service} writer's entry: {source}")]
+    EntryMut {
+        service: ServiceId,
+        source: EntryHandleMutError,
     },
     #[error("create event service {service}: {source}")]
     CreateEvent {
@@ -153,6 +188,12 @@ impl TransportError {
             ServiceName { service, .. }
             | Create { service, .. }
             | Open { service, .. }
+            | CreateBoard { service, .. }
+            | OpenBoard { service, .. }
+            | Reader { service, .. }
+            | Writer { service, .. }
+            | Entry { service, .. }
+            | EntryMut { service, .. }
             | CreateEvent { service, .. }
             | OpenEvent { service, .. }
             | Publisher { service, .. }

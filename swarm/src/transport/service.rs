@@ -27,8 +27,10 @@ pub enum ServiceId {
     Senses,
     /// `robot/<i>/sense`: one robot's Sense frame (the latency benchmark's one hop).
     Sense(u32),
-    /// `robot/<i>/act`: robot i's Action frames.
+    /// `robot/<i>/act`: robot i's Action frames (pub-sub).
     Act(u32),
+    /// `robot/<i>/board`: robot i's Action frames (blackboard, `runtime.acts`).
+    Board(u32),
     /// `radio/air`: the world's one publication a tick of the messages due.
     Air,
     /// `world/state`: the world's status for the orchestrator.
@@ -45,6 +47,7 @@ impl ServiceId {
         match self {
             ServiceId::Sense(r) => format!("robot/{r}/sense"),
             ServiceId::Act(r) => format!("robot/{r}/act"),
+            ServiceId::Board(r) => format!("robot/{r}/board"),
             ServiceId::Air => AIR_NAME.to_string(),
             ServiceId::Senses => SENSES_NAME.to_string(),
             ServiceId::Status => STATUS_NAME.to_string(),
@@ -56,7 +59,7 @@ impl ServiceId {
     /// The robot the service belongs to, if it is one robot's.
     pub fn robot(&self) -> Option<u32> {
         match self {
-            ServiceId::Sense(r) | ServiceId::Act(r) => Some(*r),
+            ServiceId::Sense(r) | ServiceId::Act(r) | ServiceId::Board(r) => Some(*r),
             _ => None,
         }
     }
@@ -87,6 +90,8 @@ impl From<&str> for ServiceId {
             ServiceId::Sense(r)
         } else if let Some(r) = robots("act") {
             ServiceId::Act(r)
+        } else if let Some(r) = robots("board") {
+            ServiceId::Board(r)
         } else if name == AIR_NAME {
             ServiceId::Air
         } else if name == SENSES_NAME {
