@@ -181,6 +181,50 @@ fn the_iox2_event_barrier_gives_the_same_run_as_the_futex_one() {
     assert_eq!(a["faults"].as_array().unwrap().len(), 1);
 }
 
+/// The actions over one blackboard a robot (`runtime.acts = "blackboard"`): a search run
+/// with loss and a kill gives the in-process executor's recording byte for byte, and the same
+/// tick records as the pub-sub services (the recordings' headers differ by the resolved
+/// scenario's `acts` line).
+#[test]
+fn acts_over_blackboards_give_the_same_run_in_both_executors_and_as_pub_sub() {
+    let _g = serial();
+    let dir = tmp_dir("boards");
+    std::fs::create_dir_all(&dir).unwrap();
+    let sc = dir.join("board.toml");
+    std::fs::write(&sc, "[runtime]\nacts = \"blackboard\"\n").unwrap();
+    let args = [
+        "--robots",
+        "12",
+        "--max-ticks",
+        "200",
+        "--seed",
+        "5",
+        "--loss",
+        "0.2",
+        "--chaos-at",
+        "60:4",
+    ];
+    let board = same_run_in_both_executors(
+        "boards-bb",
+        &[&args[..], &["--scenario", sc.to_str().unwrap()]].concat(),
+    );
+    assert_left_nothing(&board);
+    let pubsub = tmp_dir("boards-ps");
+    let o = up(&args, &pubsub);
+    assert!(ended_by_itself(&o), "{}", stderr(&o));
+    let (a, b) = (summary(&board), summary(&pubsub));
+    assert_eq!(a["ticks"], b["ticks"]);
+    assert_eq!(a["messages"], b["messages"]);
+    assert_eq!(a["faults"].as_array().unwrap().len(), 1);
+    // The tick records: the recordings' tails after the longer header.
+    let (ra, rb) = (recording(&board), recording(&pubsub));
+    let n = ra.len().min(rb.len()) - 4096;
+    assert!(
+        ra[ra.len() - n..] == rb[rb.len() - n..],
+        "the tick records differ"
+    );
+}
+
 #[test]
 fn a_paced_run_ticks_no_faster_than_asked_and_records_the_same_ticks() {
     let _g = serial();

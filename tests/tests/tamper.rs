@@ -8,6 +8,8 @@
 //! - Robot r's act publisher data segment (or its connection to the world) truncated under
 //!   the world: robot r becomes a fault, every other robot completes, `up` exits normally and
 //!   /dev/shm is left as found.
+//! - The same with the actions over blackboards (`runtime.acts = "blackboard"`): robot r's
+//!   board truncated, or a program that never lets the world's read of its board end.
 //! - The orchestrator's own `run/control` segment truncated: the run goes on.
 //! - The limit (docs/protocol.md section 4): the world's own Sense segment truncated kills the
 //!   world by SIGBUS; the run fails, named so, and still leaves nothing behind.
@@ -37,12 +39,31 @@ const STALL: Duration = Duration::from_millis(300);
 
 /// Starts a paced roam run of [`ROBOTS`] robots; returns it and the agent pids by robot.
 fn start(tag: &str) -> (Child, std::path::PathBuf, String, Vec<i32>) {
+    start_with(tag, roam())
+}
+
+/// configs/roam.toml with the actions over blackboards (`runtime.acts = "blackboard"`) and
+/// `more` TOML after it, written into `dir`; returns its path.
+fn board_scenario(dir: &Path, more: &str) -> String {
+    std::fs::create_dir_all(dir).unwrap();
+    let text = std::fs::read_to_string(roam()).unwrap();
+    let path = dir.join("board.toml");
+    std::fs::write(
+        &path,
+        format!("{text}\n[runtime]\nacts = \"blackboard\"\n{more}"),
+    )
+    .unwrap();
+    path.display().to_string()
+}
+
+/// [`start`] with the scenario file `scenario`.
+fn start_with(tag: &str, scenario: &str) -> (Child, std::path::PathBuf, String, Vec<i32>) {
     let out = tmp_dir(tag);
     let id = own_run_id(tag);
     let up = spawn_up_as(
         &[
             "--scenario",
-            roam(),
+            scenario,
             "--robots",
             &ROBOTS.to_string(),
             "--max-ticks",
@@ -149,10 +170,15 @@ fn maps_writable(f: &std::fs::File) -> bool {
 /// Robot `pid`'s own act publisher data segment: the one iceoryx2 `.data` file it maps
 /// read-write.
 fn own_data_segment(pid: i32) -> String {
+    own_segment(pid, ".data")
+}
+
+/// The one iceoryx2 file ending in `suffix` that `pid` maps read-write.
+fn own_segment(pid: i32, suffix: &str) -> String {
     let maps = std::fs::read_to_string(format!("/proc/{pid}/maps")).unwrap();
     let own: Vec<&str> = maps
         .lines()
-        .filter(|l| l.split_whitespace().nth(1) == Some("rw-s") && l.ends_with(".data"))
+        .filter(|l| l.split_whitespace().nth(1) == Some("rw-s") && l.ends_with(suffix))
         .filter_map(|l| l.split_whitespace().nth(5))
         .collect();
     assert_eq!(own.len(), 1, "{maps}");
@@ -296,6 +322,47 @@ fn a_truncated_act_connection_hurts_only_its_robot() {
     }
     let f = assert_only_the_victim_hurt(up, &out, &id);
     assert_eq!(f.len(), 1, "{f:?}");
+}
+
+/// The same over blackboards: robot r's board data (the world made it; r's agent maps it to
+/// write its actions) truncated under the world: r is a fault, the run goes on.
+#[test]
+fn a_truncated_board_makes_only_its_robot_a_fault() {
+    let _g = serial();
+    let dir = tmp_dir("board-data-sc");
+    let (up, out, id, pids) = start_with("board-data", &board_scenario(&dir, ""));
+    signal(pids[STALLED], libc::SIGSTOP);
+    std::thread::sleep(STALL);
+    truncate(&own_segment(pids[VICTIM], ".blackboard_data"));
+    signal(pids[STALLED], libc::SIGCONT);
+    let f = assert_only_the_victim_hurt(up, &out, &id);
+    assert_eq!(f.len(), 1, "{f:?}");
+    assert!(
+        f[0].1
+            .contains(&format!("robot {VICTIM}'s act segment shrank")),
+        "{f:?}"
+    );
+    let _ = std::fs::remove_dir_all(dir);
+}
+
+/// A robot's program that moves its board's write counters without end, writing nothing
+/// (each read of such an entry by the world retries for as long as the counter moves during
+/// its copy: iceoryx2's read has no bound). Only that robot is hurt: the world's reads get
+/// through (on 2 cores the writer is off-CPU often enough), the robot gives no action of its
+/// own and is declared dead; where a read does not get through, the read watchdog orders the
+/// writer killed after 2 s (world/src/read_watchdog.rs, its unit test).
+#[test]
+fn a_board_writer_that_moves_its_counters_without_end_hurts_only_its_robot() {
+    let _g = serial();
+    let dir = tmp_dir("board-hostile-sc");
+    let agents = format!(
+        "\n[[agents]]\nrobots = [{VICTIM}]\ncommand = [{:?}]\n",
+        env!("CARGO_BIN_EXE_hostile_board")
+    );
+    let (up, out, id, _pids) = start_with("board-hostile", &board_scenario(&dir, &agents));
+    let f = assert_only_the_victim_hurt(up, &out, &id);
+    assert_eq!(f.len(), 1, "{f:?}");
+    let _ = std::fs::remove_dir_all(dir);
 }
 
 /// The orchestrator's own `run/control` publisher segment truncated, then an agent dies: the
