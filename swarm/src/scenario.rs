@@ -287,14 +287,16 @@ pub enum BarrierKind {
 #[derive(Serialize, Deserialize, Clone, Copy, Debug, PartialEq, Eq, Default)]
 #[serde(rename_all = "kebab-case")]
 pub enum ActsKind {
-    /// Publish-subscribe `robot/<i>/act`: a loaned sample a tick, the Action as its user
-    /// header, the messages as its payload.
+    /// Blackboard `robot/<i>/board` (the default): the agent's writer updates the act value
+    /// (two tick slots, an attach key), the world's reader copies it: no loan, no queue
+    /// (BENCHMARKS 22b: a quarter of pub-sub's instructions; 25: 1.13-1.29x pub-sub's
+    /// ticks/s on `bench tick` roam).
     #[default]
-    PubSub,
-    /// Blackboard `robot/<i>/board`: the agent's writer updates the act value (two tick
-    /// slots, an attach key), the world's reader copies it: no loan, no queue (BENCHMARKS
-    /// 22b: a quarter of pub-sub's instructions). Lock-step and real-time, one host.
     Blackboard,
+    /// Publish-subscribe `robot/<i>/act`: a loaned sample a tick, the Action as its user
+    /// header, the messages as its payload. Kept as the measured alternative (`bench tick`'s
+    /// rt-ps column).
+    PubSub,
 }
 
 impl ActsKind {

@@ -74,7 +74,7 @@ fn a_board_carries_attach_actions_and_messages() {
     let mut src = ActSource::create(&world, &sc).unwrap();
     assert!(matches!(src, ActSource::Board(_)));
     assert_eq!(src.attached(&world, 1), 0);
-    let mut sink = ActSink::open(&agent, &sc, 1).unwrap();
+    let mut sink = ActSink::open(&agent, &sc, 1, &|| true).unwrap();
     sink.attach(7).unwrap();
     assert_eq!(src.attached(&world, 1), 7);
 
@@ -132,7 +132,7 @@ fn a_dead_agents_board_is_made_anew_for_its_replacement() {
     let mut src = ActSource::create(&world, &sc).unwrap();
     {
         let first = transport::node(&config, "agent-1").unwrap();
-        let mut sink = ActSink::open(&first, &sc, 1).unwrap();
+        let mut sink = ActSink::open(&first, &sc, 1, &|| true).unwrap();
         sink.attach(1).unwrap();
         assert_eq!(src.attached(&world, 1), 1);
         send(&mut sink, 0, 1, 8);
@@ -144,7 +144,7 @@ fn a_dead_agents_board_is_made_anew_for_its_replacement() {
     // Made anew at the next look; the attach number seen so far stays.
     assert_eq!(src.attached(&world, 1), 1);
     let second = transport::node(&config, "agent-1").unwrap();
-    let mut sink = ActSink::open(&second, &sc, 1).unwrap();
+    let mut sink = ActSink::open(&second, &sc, 1, &|| true).unwrap();
     sink.attach(2).unwrap();
     assert_eq!(src.attached(&world, 1), 2);
     send(&mut sink, 5, 1, 8);

@@ -42,18 +42,23 @@ fn start(tag: &str) -> (Child, std::path::PathBuf, String, Vec<i32>) {
     start_with(tag, roam())
 }
 
-/// configs/roam.toml with the actions over blackboards (`runtime.acts = "blackboard"`) and
-/// `more` TOML after it, written into `dir`; returns its path.
-fn board_scenario(dir: &Path, more: &str) -> String {
+/// configs/roam.toml with the actions over `acts` (`runtime.acts`) and `more` TOML after
+/// it, written into `dir`; returns its path.
+fn acts_scenario(dir: &Path, acts: &str, more: &str) -> String {
     std::fs::create_dir_all(dir).unwrap();
     let text = std::fs::read_to_string(roam()).unwrap();
-    let path = dir.join("board.toml");
+    let path = dir.join("acts.toml");
     std::fs::write(
         &path,
-        format!("{text}\n[runtime]\nacts = \"blackboard\"\n{more}"),
+        format!("{text}\n[runtime]\nacts = \"{acts}\"\n{more}"),
     )
     .unwrap();
     path.display().to_string()
+}
+
+/// configs/roam.toml with `more` after it (the default acts: blackboards).
+fn board_scenario(dir: &Path, more: &str) -> String {
+    acts_scenario(dir, "blackboard", more)
 }
 
 /// [`start`] with the scenario file `scenario`.
@@ -284,7 +289,8 @@ fn the_barrier_is_out_of_an_agents_reach() {
 #[test]
 fn a_truncated_act_segment_makes_only_its_robot_a_fault() {
     let _g = serial();
-    let (up, out, id, pids) = start("act-data");
+    let dir = tmp_dir("act-data-sc");
+    let (up, out, id, pids) = start_with("act-data", &acts_scenario(&dir, "pub-sub", ""));
     signal(pids[STALLED], libc::SIGSTOP);
     std::thread::sleep(STALL);
     truncate(&own_data_segment(pids[VICTIM]));
@@ -301,7 +307,8 @@ fn a_truncated_act_segment_makes_only_its_robot_a_fault() {
 #[test]
 fn a_truncated_act_connection_hurts_only_its_robot() {
     let _g = serial();
-    let (up, out, id, pids) = start("act-conn");
+    let dir = tmp_dir("act-conn-sc");
+    let (up, out, id, pids) = start_with("act-conn", &acts_scenario(&dir, "pub-sub", ""));
     // The connection files of the victim's publisher (`<service>_<publisher>_<subscriber>`).
     let data = own_data_segment(pids[VICTIM]);
     let publisher = data

@@ -416,6 +416,9 @@ pub fn run(args: &WorldArgs) -> Result<i32> {
                 if c > drivers.attached[i as usize] && c > barrier.dead_upto(i) && world.revive(i) {
                     drivers.attached[i as usize] = c;
                     clock.start(i as usize, k);
+                    // Alive again: its next death retires the new board (a kill scheduled
+                    // at the very next tick included).
+                    was_alive[i as usize] = true;
                 }
             }
         }

@@ -33,10 +33,10 @@ pub struct Row {
     /// The runtime with `runtime.barrier = "iox2-event"`.
     pub runtime_ev_ticks_per_s: f64,
     pub runtime_ev_p50_us: f64,
-    /// The runtime with `runtime.acts = "blackboard"` (the same run but the act path: one
-    /// iceoryx2 blackboard a robot instead of one publish-subscribe service).
-    pub runtime_bb_ticks_per_s: f64,
-    pub runtime_bb_p50_us: f64,
+    /// The runtime with `runtime.acts = "pub-sub"` (the same run but the act path: one
+    /// iceoryx2 publish-subscribe service a robot instead of the default blackboard).
+    pub runtime_ps_ticks_per_s: f64,
+    pub runtime_ps_p50_us: f64,
     /// The runtime on the embedded default scenario (search, mode BT) run until every target
     /// is found (or `ticks`): how many ticks that took, ticks per second, p50. None above
     /// SEARCH_MAX_ROBOTS.
@@ -85,9 +85,9 @@ pub fn print_table(rows: &[Row]) {
         "p99 us",
         "rt-ev/s",
         "p50 us",
-        "rt-bb/s",
+        "rt-ps/s",
         "p50 us",
-        "bb/rt",
+        "rt/ps",
         "ticks",
         "search/s",
         "p50 us",
@@ -110,9 +110,9 @@ pub fn print_table(rows: &[Row]) {
             r.runtime_p99_us,
             r.runtime_ev_ticks_per_s,
             r.runtime_ev_p50_us,
-            r.runtime_bb_ticks_per_s,
-            r.runtime_bb_p50_us,
-            r.runtime_bb_ticks_per_s / r.runtime_ticks_per_s,
+            r.runtime_ps_ticks_per_s,
+            r.runtime_ps_p50_us,
+            r.runtime_ticks_per_s / r.runtime_ps_ticks_per_s,
             opt(r.search_ticks.map(|t| t as f64)),
             opt(r.search_ticks_per_s),
             opt(r.search_p50_us),
@@ -126,7 +126,7 @@ pub fn print_table(rows: &[Row]) {
             r.futex_rounds_per_s / r.runtime_ticks_per_s,
         );
     }
-    println!("runtime = the runtime with its default futex barrier, the Sense frames, the air and the actions through their iceoryx2 services (world/sense, radio/air, robot/<i>/act); rt-ev = with runtime.barrier = \"iox2-event\"; rt-bb = with runtime.acts = \"blackboard\" (robot/<i>/board), bb/rt its ticks/s over runtime's.");
+    println!("runtime = the runtime with its default futex barrier, the Sense frames, the air and the actions through their iceoryx2 services (world/sense, radio/air, the blackboards robot/<i>/board); rt-ev = with runtime.barrier = \"iox2-event\"; rt-ps = with runtime.acts = \"pub-sub\" (robot/<i>/act services), rt/ps = runtime's ticks/s over rt-ps's.");
     println!("search = the runtime on the default scenario (search BT, futex barrier) until every target is found: ticks run, ticks/s, p50.");
     println!("rt/iox2 = runtime tick time / raw iceoryx2 round time (mean); below 1 means faster than the raw round.");
 }
@@ -146,9 +146,9 @@ pub fn bench_tick(sizes: &[u32], ticks: u64) -> BenchResult<Vec<Row>> {
     let mut rows = Vec::new();
     for &n in sizes {
         let ticks = ticks_for(n, ticks);
-        let rt = runtime(n, ticks, BarrierKind::Futex, ActsKind::PubSub)?;
-        let rt_ev = runtime(n, ticks, BarrierKind::Iox2Event, ActsKind::PubSub)?;
-        let rt_bb = runtime(n, ticks, BarrierKind::Futex, ActsKind::Blackboard)?;
+        let rt = runtime(n, ticks, BarrierKind::Futex, ActsKind::Blackboard)?;
+        let rt_ev = runtime(n, ticks, BarrierKind::Iox2Event, ActsKind::Blackboard)?;
+        let rt_ps = runtime(n, ticks, BarrierKind::Futex, ActsKind::PubSub)?;
         let search = if n <= SEARCH_MAX_ROBOTS {
             let mut sc = Scenario::default();
             sc.run.robots = n;
@@ -168,8 +168,8 @@ pub fn bench_tick(sizes: &[u32], ticks: u64) -> BenchResult<Vec<Row>> {
             runtime_p99_us: rt.p99_us,
             runtime_ev_ticks_per_s: rt_ev.per_s,
             runtime_ev_p50_us: rt_ev.p50_us,
-            runtime_bb_ticks_per_s: rt_bb.per_s,
-            runtime_bb_p50_us: rt_bb.p50_us,
+            runtime_ps_ticks_per_s: rt_ps.per_s,
+            runtime_ps_p50_us: rt_ps.p50_us,
             search_ticks: search.as_ref().map(|s| s.0),
             search_ticks_per_s: search.as_ref().map(|s| s.1.per_s),
             search_p50_us: search.as_ref().map(|s| s.1.p50_us),

@@ -53,7 +53,12 @@ struct Host {
 }
 
 pub struct Gateway {
-    _node: Node<ipc::Service>,
+    node: Node<ipc::Service>,
+    /// The run's scenario (a remote robot's act service is opened anew for a replacement).
+    sc: Box<Scenario>,
+    /// Per robot: the attach number of a remote agent that attached, while its act service
+    /// cannot be opened yet (a blackboard the world is making anew after a death).
+    pending: Vec<Option<u64>>,
     hosts: Vec<Host>,
     /// Which host runs each robot (None: the world's host).
     at: Vec<Option<usize>>,
@@ -109,7 +114,7 @@ impl Gateway {
         for (h, r) in remotes.iter().enumerate() {
             for &i in &r.robots {
                 at[i as usize] = Some(h);
-                acts[i as usize] = Some(ActSink::open(&node, sc, i)?);
+                acts[i as usize] = Some(ActSink::open(&node, sc, i, &|| true)?);
             }
         }
         services.push(Box::new(senses_svc));
@@ -126,7 +131,9 @@ impl Gateway {
             .collect();
         Ok(Gateway {
             kills: KillServer::create(&node)?,
-            _node: node,
+            node,
+            sc: Box::new(sc.clone()),
+            pending: vec![None; n as usize],
             hosts,
             at,
             barrier,
@@ -160,6 +167,7 @@ impl Gateway {
             while let Ok(ev) = events.try_recv() {
                 self.handle(ev, None)?;
             }
+            self.attach_pending()?;
             self.forward_kills()?;
             let k = match self.barrier.wait_release(done, IDLE_POLL) {
                 Wake::Shutdown => return Ok(()),
@@ -284,9 +292,8 @@ impl Gateway {
                     Up::Attached { robot } if self.at.get(robot as usize) == Some(&Some(h)) => {
                         // The world believes only the notice on the robot's act service.
                         let attach = self.barrier.mark_ready(robot);
-                        if let Some(sink) = self.acts[robot as usize].as_mut() {
-                            sink.attach(attach)?;
-                        }
+                        self.pending[robot as usize] = Some(attach);
+                        self.attach_pending()?;
                     }
                     Up::Died { robot, status, .. }
                         if self.at.get(robot as usize) == Some(&Some(h)) =>
@@ -348,8 +355,31 @@ impl Gateway {
         if self.barrier.is_shutdown() {
             return;
         }
+        // Let go of the robot's act service: a blackboard is made anew by the world for the
+        // replacement (its old writer's entries stay taken), opened again at its attach.
+        if let Some(a) = self.acts.get_mut(r as usize) {
+            *a = None;
+        }
         self.barrier.set_dead_upto(r, self.barrier.attach_count(r));
         self.send_control(CONTROL_ROBOT_DIED, r, status);
+    }
+
+    /// Gives the attach notice of every remote agent that attached, once its robot's act
+    /// service can be opened (one try each call: the gateway never waits here).
+    fn attach_pending(&mut self) -> Result<(), HostsError> {
+        for r in 0..self.pending.len() {
+            let Some(attach) = self.pending[r] else {
+                continue;
+            };
+            if self.acts[r].is_none() {
+                self.acts[r] = ActSink::try_open(&self.node, &self.sc, r as u32).ok();
+            }
+            if let Some(sink) = self.acts[r].as_mut() {
+                sink.attach(attach)?;
+                self.pending[r] = None;
+            }
+        }
+        Ok(())
     }
 
     fn send_control(&self, kind: u32, robot: u32, status: i32) {

@@ -173,6 +173,9 @@ impl Agents {
                 attached,
                 status: st,
             })?;
+            // A blackboard is made anew for the replacement (its dead writer's entries stay
+            // taken): the proxy lets go of it now and makes it once the cleanup removed it.
+            world.retire(robot);
             let budget = !attached || self.restarts[r] < self.max_restarts;
             if self.restart && budget {
                 self.spawn(robot, world)?;

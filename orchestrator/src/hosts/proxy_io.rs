@@ -1,7 +1,8 @@
 //! A host proxy's local world: the services its agents open (`world/sense`, `radio/air`, its
-//! robots' `robot/<i>/act`) and the tick barrier, made with the run's scenario as the world
-//! makes them, under the proxy's own iceoryx2 prefix. The Sense and air bytes are published
-//! as they came over the link; the act samples are read back raw, attach notices apart.
+//! robots' act services, `robot/<i>/act` or `robot/<i>/board`) and the tick barrier, made with
+//! the run's scenario as the world makes them, under the proxy's own iceoryx2 prefix. The
+//! Sense and air bytes are published as they came over the link; the actions are read back
+//! with their message areas as written (`ActSource::take_area`).
 //!
 //! The barrier is the run's as the orchestrator makes it (two sealed memfds,
 //! docs/protocol.md section 4): the proxy is world and orchestrator in one process, so it
@@ -11,14 +12,11 @@
 use super::wire::Act;
 use super::HostsError;
 use iceoryx2::port::publisher::Publisher;
-use iceoryx2::port::subscriber::Subscriber;
 use iceoryx2::prelude::*;
 use swarm::barrier::{BarrierFds, TickBarrier};
-use swarm::frames::{Action, AirHeader, SenseHeader};
+use swarm::frames::{AirHeader, SenseHeader};
 use swarm::scenario::Scenario;
-use swarm::transport::{self, ActService, SensesService};
-
-type ActSample = iceoryx2::sample::Sample<ipc::Service, [u8], Action>;
+use swarm::transport::{self, SensesService};
 
 pub struct LocalWorld {
     pub node: Node<ipc::Service>,
@@ -27,12 +25,10 @@ pub struct LocalWorld {
     pub barrier_fds: BarrierFds,
     senses: Publisher<ipc::Service, [u8], SenseHeader>,
     air: transport::AirSink,
-    /// Per robot of the run: its act subscriber if it runs here, and its newest sample.
-    acts: Vec<Option<Subscriber<ipc::Service, [u8], Action>>>,
-    held: Vec<Option<ActSample>>,
-    /// Per robot: the highest attach number an attach notice on its act service carried.
-    attached: Vec<u64>,
-    _services: (SensesService, Vec<ActService>),
+    /// Its robots' act services (`runtime.acts`: pub-sub or blackboards), read as the world
+    /// reads them; the actions are relayed with their message areas as written.
+    acts: transport::ActSource,
+    _services: SensesService,
 }
 
 impl LocalWorld {
@@ -43,14 +39,7 @@ impl LocalWorld {
         let senses_svc = transport::senses_service(&node, sc, true)?;
         let senses = transport::senses_publisher(&senses_svc, sc)?;
         let air = transport::AirSink::create(&node, sc)?;
-        let n = sc.run.robots as usize;
-        let mut acts: Vec<Option<_>> = (0..n).map(|_| None).collect();
-        let mut services = Vec::new();
-        for &r in robots {
-            let svc = transport::act_service(&node, r, true)?;
-            acts[r as usize] = Some(transport::act_subscriber(&svc)?);
-            services.push(svc);
-        }
+        let acts = transport::ActSource::create_for(&node, sc, robots)?;
         let (barrier, barrier_fds) = TickBarrier::create(prefix, sc.run.robots)?;
         // Mapped writable once, here (world and orchestrator are this process): sealed
         // before any agent exists.
@@ -59,12 +48,10 @@ impl LocalWorld {
             node,
             barrier,
             barrier_fds,
-            attached: vec![0; n],
             senses,
             air,
             acts,
-            held: (0..n).map(|_| None).collect(),
-            _services: (senses_svc, services),
+            _services: senses_svc,
         })
     }
 
@@ -98,47 +85,30 @@ impl LocalWorld {
         Ok(())
     }
 
-    /// Receives what robot `r`'s act service holds: attach notices are noted, the newest
-    /// action is held.
-    fn receive(&mut self, r: u32) {
-        let Some(Some(sub)) = self.acts.get(r as usize) else {
-            return;
-        };
-        while let Ok(Some(s)) = sub.receive() {
-            match transport::attach_of(s.user_header()) {
-                Some(n) => self.attached[r as usize] = self.attached[r as usize].max(n),
-                None => self.held[r as usize] = Some(s),
-            }
-        }
-    }
-
-    /// The highest attach number an attach notice of robot `r`'s act service carried (0:
-    /// none yet). An agent's notice is the first sample it sends, before any action.
+    /// The highest attach number robot `r`'s act service showed (0: none yet).
     pub fn attached(&mut self, r: u32) -> u64 {
-        self.receive(r);
-        self.attached.get(r as usize).copied().unwrap_or(0)
+        self.acts.attached(&self.node, r)
     }
 
     /// Whether robot `r`'s act service holds its action of tick `k`.
     pub fn arrived(&mut self, r: u32, k: u64) -> bool {
-        self.receive(r);
-        self.held
-            .get(r as usize)
-            .is_some_and(|h| h.as_ref().is_some_and(|s| s.user_header().tick == k))
+        self.acts.arrived(r, k)
     }
 
     /// Robot `r`'s action of tick `k` with its used message area, if it arrived.
     pub fn take(&mut self, r: u32, k: u64) -> Option<Act> {
-        if !self.arrived(r, k) {
-            return None;
-        }
-        let s = self.held[r as usize].take()?;
-        let used = (s.user_header().radio_bytes as usize).min(s.payload().len());
+        let (action, area) = self.acts.take_area(r, k)?;
         Some(Act {
             robot: r,
-            action: *s.user_header(),
-            area: s.payload()[..used].to_vec(),
+            action,
+            area,
         })
+    }
+
+    /// Robot `r`'s agent died: its act service is let go of if it must be made anew for a
+    /// replacement (a blackboard, `ActSource::retire`).
+    pub fn retire(&mut self, r: u32) {
+        self.acts.retire(r)
     }
 }
 

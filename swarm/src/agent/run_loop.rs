@@ -29,13 +29,16 @@ pub(super) fn run_loop<B: Behaviour>(
     // `frame`.
     let mut sense_in = transport::SenseSource::open(&node, robot)?;
     let mut frame = crate::frames::Sense::zeroed();
-    // Actions: this robot's own `robot/<i>/act` service.
-    let mut act_out = transport::ActSink::open(&node, sc, robot)?;
+    let barrier = TickBarrier::open_agent(prefix)?;
+    let world_pid = barrier.world_pid();
+    // Actions: this robot's own board `robot/<i>/board` (or `robot/<i>/act`,
+    // `runtime.acts`). A replacement waits for the world to make its board anew, as long as
+    // the world is there and running.
+    let world_running = || world_alive(world_pid) && !barrier.is_shutdown();
+    let mut act_out = transport::ActSink::open(&node, sc, robot, &world_running)?;
     // The air: the `radio/air` service (a sample held while a read or a zero-copy view
     // lasts).
     let mut air_in = transport::AirSource::open(&node, sc)?;
-    let barrier = TickBarrier::open_agent(prefix)?;
-    let world_pid = barrier.world_pid();
     let bell = match sc.runtime.barrier {
         crate::scenario::BarrierKind::Futex => None,
         crate::scenario::BarrierKind::Iox2Event => {

@@ -176,7 +176,10 @@ impl BoardReader {
 /// mode), and the newest attach number each board showed. The same calls as the pub-sub
 /// source (`super::ActSource` dispatches to either).
 pub struct BoardSource {
+    /// Per robot of the run: its board (None while retired, or not this source's robot).
     boards: Vec<Option<BoardReader>>,
+    /// Per robot: whether this source reads its board (a host proxy reads its own robots').
+    mine: Vec<bool>,
     held: Vec<Option<Box<ActHead>>>,
     late: Vec<Option<Box<ActHead>>>,
     /// Per robot: the newest tick whose action was taken (never taken again as late).
@@ -189,15 +192,25 @@ pub struct BoardSource {
 }
 
 impl BoardSource {
-    /// Makes the run's boards for `sc.run.robots` robots.
-    pub fn create(node: &Node<ipc::Service>, sc: &Scenario) -> TransportResult<Self> {
+    /// Makes the boards of `robots` of the run (`sc.run.robots` in all).
+    pub fn create(
+        node: &Node<ipc::Service>,
+        sc: &Scenario,
+        robots: &[u32],
+    ) -> TransportResult<Self> {
         let n = sc.run.robots as usize;
-        let boards = (0..sc.run.robots)
-            .map(|i| BoardReader::create(node, sc, i).map(Some))
-            .collect::<TransportResult<Vec<_>>>()?;
+        let mut boards: Vec<Option<BoardReader>> = (0..n).map(|_| None).collect();
+        let mut mine = vec![false; n];
+        for &i in robots {
+            if let Some(b) = boards.get_mut(i as usize) {
+                *b = Some(BoardReader::create(node, sc, i)?);
+                mine[i as usize] = true;
+            }
+        }
         let none = |_| None;
         Ok(BoardSource {
             boards,
+            mine,
             held: (0..n).map(none).collect(),
             late: (0..n).map(none).collect(),
             taken: vec![None; n],
@@ -218,7 +231,7 @@ impl BoardSource {
     /// iceoryx2 removed the old one.
     pub fn attached(&mut self, node: &Node<ipc::Service>, robot: u32) -> u64 {
         let r = robot as usize;
-        if r >= self.boards.len() {
+        if !self.mine.get(r).copied().unwrap_or(false) {
             return 0;
         }
         if self.boards[r].is_none() {
@@ -311,6 +324,19 @@ impl BoardSource {
         Some(self.deliver(robot, &h, sent))
     }
 
+    /// Lock-step, for a host proxy: robot `robot`'s action of tick `k` if it arrived, with
+    /// its used message area (head part and chunks joined, cut at a torn chunk).
+    pub fn take_area(&mut self, robot: u32, k: u64) -> Option<(Action, Vec<u8>)> {
+        if !self.arrived(robot, k) {
+            return None;
+        }
+        let r = robot as usize;
+        let h = self.held.get_mut(r)?.take()?;
+        self.join_area(r, &h);
+        self.taken[r] = self.taken[r].max(Some(k));
+        Some((Action { robot, ..h.action }, self.area.clone()))
+    }
+
     /// Real-time mode: reads robot `robot`'s two heads, keeping its action of tick `k` and
     /// its newest late one (of a tick from `since` to k - 1, not taken before). True if an
     /// action not seen before was kept: the robot made progress.
@@ -390,7 +416,7 @@ pub struct BoardSink {
 
 impl BoardSink {
     /// One try at robot `robot`'s board: open it, make its writer, take every entry.
-    fn try_open(node: &Node<ipc::Service>, sc: &Scenario, robot: u32) -> TransportResult<Self> {
+    pub fn try_open(node: &Node<ipc::Service>, sc: &Scenario, robot: u32) -> TransportResult<Self> {
         let id = || ServiceId::Board(robot);
         let name = super::service_name(&id())?;
         let board = node
@@ -435,13 +461,19 @@ impl BoardSink {
 
     /// Opens robot `robot`'s board for its agent. A replacement may find its dead
     /// predecessor's board, which it cannot write, until the world has made it anew: it tries
-    /// again for up to [`OPEN_PATIENCE`].
-    pub fn open(node: &Node<ipc::Service>, sc: &Scenario, robot: u32) -> TransportResult<Self> {
+    /// again while `keep_trying()` says so (the world is alive and running), for up to
+    /// [`OPEN_PATIENCE`].
+    pub fn open(
+        node: &Node<ipc::Service>,
+        sc: &Scenario,
+        robot: u32,
+        keep_trying: &dyn Fn() -> bool,
+    ) -> TransportResult<Self> {
         let t = Instant::now();
         loop {
             match Self::try_open(node, sc, robot) {
                 Ok(s) => return Ok(s),
-                Err(e) if t.elapsed() > OPEN_PATIENCE => return Err(e),
+                Err(e) if t.elapsed() > OPEN_PATIENCE || !keep_trying() => return Err(e),
                 Err(_) => std::thread::sleep(OPEN_RETRY),
             }
         }
@@ -503,8 +535,8 @@ mod tests {
         {
             let world = super::super::node(&config, "world").unwrap();
             let agent = super::super::node(&config, "agent-0").unwrap();
-            let mut src = BoardSource::create(&world, &sc).unwrap();
-            let mut sink = BoardSink::open(&agent, &sc, 0).unwrap();
+            let mut src = BoardSource::create(&world, &sc, &[0]).unwrap();
+            let mut sink = BoardSink::open(&agent, &sc, 0, &|| true).unwrap();
             let step = |tick| {
                 move |area: &mut [u8]| {
                     let mut tx = ActTx::new(area);

@@ -68,24 +68,31 @@ pub struct ActPort {
 /// about a robot (done with a tick, silent, attached) comes from here, never from the
 /// barrier's ack and attach words, which every agent can write (issue 37 item 5).
 pub struct PubSubSource {
-    ports: Vec<ActPort>,
+    /// Per robot of the run: its act service, if this source reads it (a host proxy reads
+    /// its own robots' only).
+    ports: Vec<Option<ActPort>>,
     held: Vec<Option<ActSample>>,
     late: Vec<Option<ActSample>>,
     attached: Vec<u64>,
 }
 
 impl PubSubSource {
-    /// Makes the run's act services for `sc.run.robots` robots.
-    pub fn create(node: &Node<ipc::Service>, sc: &Scenario) -> TransportResult<Self> {
-        let ports = (0..sc.run.robots)
-            .map(|i| {
-                let service = act_service(node, i, true)?;
-                Ok(ActPort {
+    /// Makes the act services of `robots` of the run (`sc.run.robots` in all).
+    pub fn create(
+        node: &Node<ipc::Service>,
+        sc: &Scenario,
+        robots: &[u32],
+    ) -> TransportResult<Self> {
+        let mut ports: Vec<Option<ActPort>> = (0..sc.run.robots).map(|_| None).collect();
+        for &i in robots {
+            let service = act_service(node, i, true)?;
+            if let Some(p) = ports.get_mut(i as usize) {
+                *p = Some(ActPort {
                     subscriber: super::act_subscriber(&service)?,
                     _service: service,
-                })
-            })
-            .collect::<TransportResult<Vec<_>>>()?;
+                });
+            }
+        }
         let none = |_| None;
         Ok(PubSubSource {
             held: (0..ports.len()).map(none).collect(),
@@ -98,7 +105,7 @@ impl PubSubSource {
     /// The next sample of robot `robot`'s service that is an action; attach notices met on
     /// the way are noted.
     fn next_action(&mut self, robot: usize) -> Option<ActSample> {
-        let port = self.ports.get(robot)?;
+        let port = self.ports.get(robot)?.as_ref()?;
         while let Ok(Some(s)) = port.subscriber.receive() {
             match attach_of(s.user_header()) {
                 Some(n) => self.attached[robot] = self.attached[robot].max(n),
@@ -147,6 +154,16 @@ impl PubSubSource {
         let s = self.held.get_mut(robot as usize)?.take()?;
         transmit_area(robot, area_of(&s), sent);
         Some(action_of(robot, &s))
+    }
+
+    /// Lock-step, for a host proxy: robot `robot`'s action of tick `k` if it arrived, with
+    /// its used message area as written (relayed to the world's host as it came).
+    pub fn take_area(&mut self, robot: u32, k: u64) -> Option<(Action, Vec<u8>)> {
+        if !self.arrived(robot, k) {
+            return None;
+        }
+        let s = self.held.get_mut(robot as usize)?.take()?;
+        Some((action_of(robot, &s), area_of(&s).to_vec()))
     }
 
     /// Real-time mode: receives robot `robot`'s pending samples, keeping its action of tick

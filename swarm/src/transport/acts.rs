@@ -32,9 +32,21 @@ macro_rules! either {
 impl ActSource {
     /// Makes the run's act services (`sc.runtime.acts`) for `sc.run.robots` robots.
     pub fn create(node: &Node<ipc::Service>, sc: &Scenario) -> TransportResult<Self> {
+        let all: Vec<u32> = (0..sc.run.robots).collect();
+        Self::create_for(node, sc, &all)
+    }
+
+    /// Makes the act services of `robots` only (a host proxy's own robots).
+    pub fn create_for(
+        node: &Node<ipc::Service>,
+        sc: &Scenario,
+        robots: &[u32],
+    ) -> TransportResult<Self> {
         Ok(match sc.runtime.acts {
-            ActsKind::PubSub => ActSource::PubSub(PubSubSource::create(node, sc)?),
-            ActsKind::Blackboard => ActSource::Board(Box::new(BoardSource::create(node, sc)?)),
+            ActsKind::PubSub => ActSource::PubSub(PubSubSource::create(node, sc, robots)?),
+            ActsKind::Blackboard => {
+                ActSource::Board(Box::new(BoardSource::create(node, sc, robots)?))
+            }
         })
     }
 
@@ -63,6 +75,12 @@ impl ActSource {
 
     pub fn take(&mut self, robot: u32, k: u64, sent: &mut Air) -> Option<Action> {
         either!(self, s => s.take(robot, k, sent))
+    }
+
+    /// Lock-step, for a host proxy: robot `robot`'s action of tick `k`, if it arrived, with
+    /// its used message area as the agent wrote it (relayed, not parsed here).
+    pub fn take_area(&mut self, robot: u32, k: u64) -> Option<(Action, Vec<u8>)> {
+        either!(self, s => s.take_area(robot, k))
     }
 
     pub fn poll_realtime(&mut self, robot: u32, k: u64, since: u64) -> bool {
@@ -95,11 +113,29 @@ pub enum ActSink {
 }
 
 impl ActSink {
-    /// Opens robot `robot`'s act service for its agent.
-    pub fn open(node: &Node<ipc::Service>, sc: &Scenario, robot: u32) -> TransportResult<Self> {
+    /// Opens robot `robot`'s act service for its agent. A blackboard that is not there yet
+    /// or still held by a dead predecessor (being made anew by the world) is tried again
+    /// while `keep_trying()` says so.
+    pub fn open(
+        node: &Node<ipc::Service>,
+        sc: &Scenario,
+        robot: u32,
+        keep_trying: &dyn Fn() -> bool,
+    ) -> TransportResult<Self> {
         Ok(match sc.runtime.acts {
             ActsKind::PubSub => ActSink::PubSub(PubSubSink::open(node, sc, robot)?),
-            ActsKind::Blackboard => ActSink::Board(Box::new(BoardSink::open(node, sc, robot)?)),
+            ActsKind::Blackboard => {
+                ActSink::Board(Box::new(BoardSink::open(node, sc, robot, keep_trying)?))
+            }
+        })
+    }
+
+    /// One try at opening robot `robot`'s act service (a caller that must not wait: the hosts
+    /// gateway tries again at its next turn).
+    pub fn try_open(node: &Node<ipc::Service>, sc: &Scenario, robot: u32) -> TransportResult<Self> {
+        Ok(match sc.runtime.acts {
+            ActsKind::PubSub => ActSink::PubSub(PubSubSink::open(node, sc, robot)?),
+            ActsKind::Blackboard => ActSink::Board(Box::new(BoardSink::try_open(node, sc, robot)?)),
         })
     }
 
