@@ -75,4 +75,3 @@ fn watch(barrier: &TickBarrier) {
         }
     }
 }
-
