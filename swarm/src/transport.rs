@@ -24,8 +24,7 @@ mod error;
 mod sense_source;
 mod service;
 pub use act_board::{
-    chunks as act_board_chunks, slots as act_board_slots, ActChunk, ActHead, BoardSink,
-    BoardSource, CHUNK_AREA, HEAD_AREA,
+    chunks as act_board_chunks, ActChunk, ActHead, BoardSink, BoardSource, CHUNK_AREA, HEAD_AREA,
 };
 pub use act_sink::{attach_of, PubSubSink, PubSubSource, ATTACH_NOTICE};
 pub use acts::{ActSink, ActSource};

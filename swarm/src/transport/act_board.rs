@@ -63,22 +63,6 @@ pub fn chunk_key(p: usize, c: usize) -> u32 {
     3 + 2 * c as u32 + p as u32
 }
 
-/// Tick slots a board of this scenario has: two in real-time mode (a late action of tick
-/// k - 1 is still readable while tick k's is written), one in lock-step (the world has taken
-/// tick k's action before it releases tick k + 1, so the agent never overwrites one it needs).
-pub fn slots(sc: &Scenario) -> usize {
-    if sc.runtime.is_realtime() {
-        2
-    } else {
-        1
-    }
-}
-
-/// The slot of tick `t` on a board of `slots` slots.
-fn slot(t: u64, slots: usize) -> usize {
-    (t % slots as u64) as usize
-}
-
 /// The chunks a board of this scenario has per tick slot.
 pub fn chunks(sc: &Scenario) -> usize {
     act_slice_len(sc)
@@ -129,12 +113,11 @@ fn create_board(node: &Node<ipc::Service>, sc: &Scenario, robot: u32) -> Transpo
         .blackboard_creator::<u32>()
         .max_readers(1)
         .max_nodes(BOARD_NODES)
-        .add::<u64>(ATTACH_KEY, 0);
-    for p in 0..slots(sc) {
-        b = b.add::<ActHead>(head_key(p), head);
-    }
+        .add::<u64>(ATTACH_KEY, 0)
+        .add::<ActHead>(head_key(0), head)
+        .add::<ActHead>(head_key(1), head);
     for c in 0..chunks(sc) {
-        for p in 0..slots(sc) {
+        for p in 0..2 {
             b = b.add::<ActChunk>(chunk_key(p, c), chunk);
         }
     }
@@ -147,9 +130,8 @@ fn create_board(node: &Node<ipc::Service>, sc: &Scenario, robot: u32) -> Transpo
 /// The world's side of one robot's board.
 struct BoardReader {
     attach: EntryHandle<ipc::Service, u32, u64>,
-    /// Per tick slot ([`slots`]): its head, and its chunks.
-    heads: Vec<EntryHandle<ipc::Service, u32, ActHead>>,
-    chunks: Vec<Vec<EntryHandle<ipc::Service, u32, ActChunk>>>,
+    heads: [EntryHandle<ipc::Service, u32, ActHead>; 2],
+    chunks: [Vec<EntryHandle<ipc::Service, u32, ActChunk>>; 2],
     _reader: iceoryx2::port::reader::Reader<ipc::Service, u32>,
     _board: Board,
 }
@@ -181,10 +163,8 @@ impl BoardReader {
         };
         Ok(BoardReader {
             attach: reader.entry::<u64>(&ATTACH_KEY).map_err(entry_err)?,
-            heads: (0..slots(sc)).map(head).collect::<TransportResult<_>>()?,
-            chunks: (0..slots(sc))
-                .map(chunk_list)
-                .collect::<TransportResult<_>>()?,
+            heads: [head(0)?, head(1)?],
+            chunks: [chunk_list(0)?, chunk_list(1)?],
             _reader: reader,
             _board: board,
         })
@@ -240,10 +220,10 @@ impl BoardSource {
         })
     }
 
-    /// Reads the head of tick `t`'s slot of robot `r`'s board.
-    fn head(&self, r: usize, t: u64) -> Option<ActHead> {
+    /// Reads slot `p`'s head of robot `r`'s board.
+    fn head(&self, r: usize, p: usize) -> Option<ActHead> {
         let b = self.boards.get(r)?.as_ref()?;
-        Some(*b.heads[slot(t, b.heads.len())].get())
+        Some(*b.heads[p].get())
     }
 
     /// The highest attach number robot `robot`'s board showed (0: no agent attached through
@@ -285,7 +265,7 @@ impl BoardSource {
         if self.holds(robot, k) {
             return true;
         }
-        match self.head(r, k) {
+        match self.head(r, (k % 2) as usize) {
             // (An action once taken stays on the board: never taken twice.)
             Some(h) if h.action.tick == k && self.taken[r].is_none_or(|t| t < k) => {
                 self.held[r] = Some(Box::new(h));
@@ -311,7 +291,7 @@ impl BoardSource {
         let Some(b) = self.boards.get(r).and_then(Option::as_ref) else {
             return;
         };
-        let p = slot(h.action.tick, b.heads.len());
+        let p = (h.action.tick % 2) as usize;
         let mut left = used.saturating_sub(HEAD_AREA);
         for entry in &b.chunks[p] {
             if left == 0 {
@@ -363,9 +343,8 @@ impl BoardSource {
     pub fn poll_realtime(&mut self, robot: u32, k: u64, since: u64) -> bool {
         let r = robot as usize;
         let mut progress = false;
-        // Both slots (real-time mode has two): the ticks of k and of k - 1.
-        for t in [k, k.saturating_sub(1)] {
-            let Some(h) = self.head(r, t) else {
+        for p in 0..2 {
+            let Some(h) = self.head(r, p) else {
                 return false;
             };
             let t = h.action.tick;
@@ -427,9 +406,8 @@ impl BoardSource {
 /// head and chunks of the tick's slot).
 pub struct BoardSink {
     attach: EntryHandleMut<ipc::Service, u32, u64>,
-    /// Per tick slot ([`slots`]): its head, and its chunks.
-    heads: Vec<EntryHandleMut<ipc::Service, u32, ActHead>>,
-    chunks: Vec<Vec<EntryHandleMut<ipc::Service, u32, ActChunk>>>,
+    heads: [EntryHandleMut<ipc::Service, u32, ActHead>; 2],
+    chunks: [Vec<EntryHandleMut<ipc::Service, u32, ActChunk>>; 2],
     area: Vec<u8>,
     head: Box<ActHead>,
     _writer: iceoryx2::port::writer::Writer<ipc::Service, u32>,
@@ -472,10 +450,8 @@ impl BoardSink {
         };
         Ok(BoardSink {
             attach: writer.entry::<u64>(&ATTACH_KEY).map_err(entry_err)?,
-            heads: (0..slots(sc)).map(head).collect::<TransportResult<_>>()?,
-            chunks: (0..slots(sc))
-                .map(chunk_list)
-                .collect::<TransportResult<_>>()?,
+            heads: [head(0)?, head(1)?],
+            chunks: [chunk_list(0)?, chunk_list(1)?],
             area: vec![0; act_slice_len(sc)],
             head: Box::new(ActHead::empty()),
             _writer: writer,
@@ -515,7 +491,7 @@ impl BoardSink {
     pub fn send(&mut self, step: impl FnOnce(&mut [u8]) -> Action) {
         let action = step(&mut self.area);
         let used = (action.radio_bytes as usize).min(self.area.len());
-        let p = slot(action.tick, self.heads.len());
+        let p = (action.tick % 2) as usize;
         let mut rest = &self.area[used.min(HEAD_AREA)..used];
         for entry in &self.chunks[p] {
             if rest.is_empty() {
