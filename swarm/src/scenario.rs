@@ -287,16 +287,15 @@ pub enum BarrierKind {
 #[derive(Serialize, Deserialize, Clone, Copy, Debug, PartialEq, Eq, Default)]
 #[serde(rename_all = "kebab-case")]
 pub enum ActsKind {
-    /// Blackboard `robot/<i>/board` (the default): the agent's writer updates the act value
-    /// (two tick slots, an attach key), the world's reader copies it: no loan, no queue
-    /// (BENCHMARKS 22b: a quarter of pub-sub's instructions; 25: 1.13-1.29x pub-sub's
-    /// ticks/s on `bench tick` roam).
+    /// Publish-subscribe `robot/<i>/act` (the default): a loaned sample a tick, the Action as
+    /// its user header, the messages as its payload.
     #[default]
-    Blackboard,
-    /// Publish-subscribe `robot/<i>/act`: a loaned sample a tick, the Action as its user
-    /// header, the messages as its payload. Kept as the measured alternative (`bench tick`'s
-    /// rt-ps column).
     PubSub,
+    /// Blackboard `robot/<i>/board`: the agent's writer updates the act value (two tick
+    /// slots, an attach key), the world's reader copies it: no loan, no queue (BENCHMARKS
+    /// 22b: a quarter of pub-sub's instructions; 25: 1.13-1.29x pub-sub's ticks/s on roam).
+    /// One host only for now: a remote robot's restart over boards is racy (DESIGN-NOTES).
+    Blackboard,
 }
 
 impl ActsKind {

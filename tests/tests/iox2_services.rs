@@ -45,15 +45,14 @@ fn a_live_runs_sense_air_and_act_services_are_listed_by_iceoryx2() {
         &out,
         Some(&id),
     );
-    // Every agent attached (an agent opens the Sense service, its act board and then the
+    // Every agent attached (an agent opens the Sense service, its act service and then the
     // air, so wait for all of them): each shared service has the world and every agent as
-    // nodes, each act board (`robot/<i>/board`, the default `runtime.acts`) its agent and
-    // the world.
+    // nodes, each act service its agent and the world.
     let attached = |seen: &BTreeMap<String, usize>| {
         ["world/sense", "radio/air"]
             .iter()
             .all(|s| seen.get(*s).copied().unwrap_or(0) > ROBOTS)
-            && (0..ROBOTS).all(|i| seen.get(&format!("robot/{i}/board")).copied().unwrap_or(0) >= 2)
+            && (0..ROBOTS).all(|i| seen.get(&format!("robot/{i}/act")).copied().unwrap_or(0) >= 2)
     };
     let t = Instant::now();
     let mut seen = services_of(&id);
@@ -70,7 +69,7 @@ fn a_live_runs_sense_air_and_act_services_are_listed_by_iceoryx2() {
         "world/state".to_string(),
         "run/control".to_string(),
     ];
-    want.extend((0..ROBOTS).map(|i| format!("robot/{i}/board")));
+    want.extend((0..ROBOTS).map(|i| format!("robot/{i}/act")));
     for name in &want {
         assert!(seen.contains_key(name), "{name} not listed: {seen:?}");
     }
@@ -83,7 +82,7 @@ fn a_live_runs_sense_air_and_act_services_are_listed_by_iceoryx2() {
     }
     for i in 0..ROBOTS {
         assert_eq!(
-            seen[&format!("robot/{i}/board")],
+            seen[&format!("robot/{i}/act")],
             2,
             "its agent and the world"
         );

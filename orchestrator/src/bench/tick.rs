@@ -126,7 +126,7 @@ pub fn print_table(rows: &[Row]) {
             r.futex_rounds_per_s / r.runtime_ticks_per_s,
         );
     }
-    println!("runtime = the runtime with its default futex barrier, the Sense frames, the air and the actions through their iceoryx2 services (world/sense, radio/air, the blackboards robot/<i>/board); rt-ev = with runtime.barrier = \"iox2-event\"; rt-ps = with runtime.acts = \"pub-sub\" (robot/<i>/act services), rt/ps = runtime's ticks/s over rt-ps's.");
+    println!("runtime = the runtime with its default futex barrier, the Sense frames, the air and the actions through their iceoryx2 services (world/sense, radio/air, and runtime.acts = \"blackboard\": robot/<i>/board); rt-ev = the same with runtime.barrier = \"iox2-event\"; rt-ps = with runtime.acts = \"pub-sub\" (robot/<i>/act services, the default), rt/ps = runtime's ticks/s over rt-ps's.");
     println!("search = the runtime on the default scenario (search BT, futex barrier) until every target is found: ticks run, ticks/s, p50.");
     println!("rt/iox2 = runtime tick time / raw iceoryx2 round time (mean); below 1 means faster than the raw round.");
 }

@@ -57,7 +57,8 @@ pub struct Gateway {
     /// The run's scenario (a remote robot's act service is opened anew for a replacement).
     sc: Box<Scenario>,
     /// Per robot: the attach number of a remote agent that attached, while its act service
-    /// cannot be opened yet (a blackboard the world is making anew after a death).
+    /// is not open (the gateway keeps every remote robot's act service for the whole run, so
+    /// this only guards a sink that failed to open: the notice waits for it).
     pending: Vec<Option<u64>>,
     hosts: Vec<Host>,
     /// Which host runs each robot (None: the world's host).
@@ -354,11 +355,6 @@ impl Gateway {
     fn died(&mut self, r: u32, status: i32) {
         if self.barrier.is_shutdown() {
             return;
-        }
-        // Let go of the robot's act service: a blackboard is made anew by the world for the
-        // replacement (its old writer's entries stay taken), opened again at its attach.
-        if let Some(a) = self.acts.get_mut(r as usize) {
-            *a = None;
         }
         self.barrier.set_dead_upto(r, self.barrier.attach_count(r));
         self.send_control(CONTROL_ROBOT_DIED, r, status);

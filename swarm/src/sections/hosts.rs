@@ -93,6 +93,14 @@ pub fn validate(sc: &Scenario, c: &Check) -> Result<(), ConfigError> {
             "must be \"futex\" in a run across hosts ([[hosts]])".into(),
         ));
     }
+    if sc.runtime.acts != crate::scenario::ActsKind::PubSub {
+        return Err(c.err(
+            "runtime.acts",
+            "must be \"pub-sub\" in a run across hosts ([[hosts]]): a remote robot's restart \
+             over blackboards is not reliable yet"
+                .into(),
+        ));
+    }
     let mut owner: Vec<Option<usize>> = vec![None; sc.run.robots as usize];
     for (h, spec) in sc.hosts.iter().enumerate() {
         let key = format!("hosts[{h}].name");
