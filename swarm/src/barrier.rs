@@ -48,7 +48,10 @@ struct Header {
     released_tick: AtomicU64,
     /// How many acknowledgements wake the world.
     expected: AtomicU32,
-    _pad: u32,
+    /// The generation of the world's data services (`world/sense`, `radio/air`;
+    /// `swarm::transport::Generation`): the world raises it, before a release, when it made
+    /// them anew; an agent that finds it changed at a release opens them again.
+    data_generation: AtomicU32,
 }
 
 /// The head of the agents' segment (`<prefix>acks`).
@@ -356,6 +359,18 @@ impl TickBarrier {
         self.ack_word(robot, 0)
     }
 
+    /// The generation of the world's data services (`world/sense`, `radio/air`) as of the
+    /// last release.
+    pub fn data_generation(&self) -> u32 {
+        self.header().data_generation.load(Ordering::Acquire)
+    }
+
+    /// The world made its data services anew under generation `g` (before the release that
+    /// tells the agents).
+    pub fn set_data_generation(&self, g: u32) {
+        self.header().data_generation.store(g, Ordering::Release);
+    }
+
     pub fn robots(&self) -> u32 {
         self.robots
     }
@@ -655,8 +670,9 @@ mod tests {
                 offset_of!(Header, shutdown),
                 offset_of!(Header, released_tick),
                 offset_of!(Header, expected),
+                offset_of!(Header, data_generation),
             ],
-            [8, 12, 16, 20, 24, 32]
+            [8, 12, 16, 20, 24, 32, 36]
         );
         assert_eq!(size_of::<AckHeader>(), 8);
         assert_eq!(offset_of!(AckHeader, ready), 4);

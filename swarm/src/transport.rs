@@ -32,8 +32,8 @@ pub use air_source::{AirGot, AirSink, AirSource};
 pub use error::{Port, TransportError, TransportResult};
 pub use sense_source::{SenseSink, SenseSource};
 pub use service::{
-    event, pub_sub, service_name, EventCapacity, EventService, PubSubCapacity, PubSubService,
-    Reach, ServiceId, ShmPayload, AIR_NAME, CONTROL_NAME, SENSES_NAME, STATUS_NAME,
+    event, pub_sub, service_name, EventCapacity, EventService, Generation, PubSubCapacity,
+    PubSubService, Reach, ServiceId, ShmPayload, AIR_NAME, CONTROL_NAME, SENSES_NAME, STATUS_NAME,
 };
 
 /// A boxed error of any kind, and a result with it: what a process's run loop returns when
@@ -255,11 +255,12 @@ pub fn control_capacity() -> PubSubCapacity {
 pub fn senses_service(
     node: &Node<ipc::Service>,
     sc: &Scenario,
+    generation: Generation,
     create: bool,
 ) -> TransportResult<SensesService> {
     pub_sub(
         node,
-        ServiceId::Senses,
+        ServiceId::Senses { generation },
         Reach::create_if(create, || senses_capacity(sc)),
     )
 }
@@ -320,11 +321,12 @@ pub fn act_service(
 pub fn air_service(
     node: &Node<ipc::Service>,
     sc: &Scenario,
+    generation: Generation,
     create: bool,
 ) -> TransportResult<AirService> {
     pub_sub(
         node,
-        ServiceId::Air,
+        ServiceId::Air { generation },
         Reach::create_if(create, || air_capacity(sc)),
     )
 }
@@ -487,4 +489,27 @@ fn decode_list<M: DeserializeOwned>(
 /// Quiets iceoryx2's own logging (it warns about the missing global config file otherwise).
 pub fn quiet_logs() {
     set_log_level_from_env_or(LogLevel::Error);
+}
+
+/// How often an agent looks for the first sample of a service the world made anew.
+pub(crate) const REMADE_POLL: std::time::Duration = std::time::Duration::from_micros(100);
+
+/// Waits until `has` says a sample is there (true), or `keep_trying` says to stop (false):
+/// an agent's wait for the world's resend into a service it made anew.
+pub(crate) fn wait_for_sample(
+    mut has: impl FnMut() -> TransportResult<bool>,
+    keep_trying: &dyn Fn() -> bool,
+) -> TransportResult<bool> {
+    let mut looks = 0u32;
+    loop {
+        if has()? {
+            return Ok(true);
+        }
+        // keep_trying costs a syscall (the world's pid): every 100th look.
+        looks += 1;
+        if looks.is_multiple_of(100) && !keep_trying() {
+            return Ok(false);
+        }
+        std::thread::sleep(REMADE_POLL);
+    }
 }

@@ -37,11 +37,11 @@ fn services_have_their_capacities_and_errors_name_them() {
             e.to_string().starts_with("open service robot/2/act: "),
             "{e}"
         );
-        let e = transport::air_service(&agent, &sc, false).unwrap_err();
-        assert_eq!(e.service(), Some(&ServiceId::Air));
+        let e = transport::air_service(&agent, &sc, 0, false).unwrap_err();
+        assert_eq!(e.service(), Some(&ServiceId::Air { generation: 0 }));
         assert_eq!(e.robot(), None);
 
-        let air = transport::air_service(&world, &sc, true).unwrap();
+        let air = transport::air_service(&world, &sc, 0, true).unwrap();
         let c = air.static_config();
         // Every agent subscribes, plus two restarted agents' dead predecessors.
         assert_eq!(c.max_subscribers(), 7 + 2);
@@ -51,7 +51,7 @@ fn services_have_their_capacities_and_errors_name_them() {
         // The sample being read and the two zero-copy views may hold.
         assert_eq!(c.subscriber_max_borrowed_samples(), 3);
         assert_eq!(c.history_size(), 0);
-        let opened = transport::air_service(&agent, &sc, false).unwrap();
+        let opened = transport::air_service(&agent, &sc, 0, false).unwrap();
         assert_eq!(opened.static_config().max_subscribers(), 9);
         let act = transport::act_service(&world, 2, true).unwrap();
         assert_eq!(act.static_config().subscriber_max_buffer_size(), 2);

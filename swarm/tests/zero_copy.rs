@@ -99,7 +99,7 @@ fn blob_fields_are_views_into_the_received_sample() {
     {
         let config = transport::run_config(&prefix).unwrap();
         let node = transport::node(&config, "zc").unwrap();
-        let svc = transport::air_service(&node, &sc, true).unwrap();
+        let svc = transport::air_service(&node, &sc, 0, true).unwrap();
         let publisher = transport::air_publisher(&svc, &sc).unwrap();
         let sub = svc.subscriber_builder().buffer_size(1).create().unwrap();
         let frame = Rc::new(RefCell::new(None));

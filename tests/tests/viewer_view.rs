@@ -290,6 +290,21 @@ fn check_legend(st: &serde_json::Value, shot: &Shot) -> Vec<String> {
         .collect()
 }
 
+/// A live page's state and a screenshot of the same picture: frames keep arriving, and a
+/// legend row that appears between the two moves the rows below it, so the pair is taken
+/// again until the legend reads the same before and after the screenshot.
+fn steady_shot(b: &mut Browser, name: &str) -> (serde_json::Value, Shot) {
+    for _ in 0..50 {
+        let before = b.state();
+        let s = shot(b, name);
+        let after = b.state();
+        if before["legend"] == after["legend"] {
+            return (after, s);
+        }
+    }
+    panic!("the live page's legend never held still over a screenshot");
+}
+
 /// The display states' names the recording's robots were in.
 fn states_in(out: &Path, meta: &serde_json::Value) -> Vec<String> {
     let (_, ticks) =
@@ -426,8 +441,8 @@ fn legends_list_only_what_the_run_has_in_distinct_colours() {
         std::thread::sleep(Duration::from_millis(50));
     }
     let mut b = Browser::open(&url, W, H, "legend-live");
-    let running = b.state();
-    let live = check_legend(&running, &shot(&mut b, "legend-live-running"));
+    let (running, running_shot) = steady_shot(&mut b, "legend-live-running");
+    let live = check_legend(&running, &running_shot);
     assert!(live.iter().any(|l| l == "target not found yet"), "{live:?}");
     assert!(!live.iter().any(|l| l.contains("missed")), "{live:?}");
     b.wait_for("document.getElementById('status').textContent.startsWith('live run: ended')");

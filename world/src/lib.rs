@@ -4,6 +4,7 @@
 //! world process drives it over iceoryx2, the in-process executor drives it directly.
 
 pub mod body;
+pub mod data_plane;
 pub mod heard;
 pub mod kinematics;
 pub mod limits;
@@ -16,6 +17,7 @@ pub mod process;
 pub mod read_watchdog;
 pub mod sensing;
 pub mod shrink_guard;
+pub mod status_out;
 pub mod svg;
 pub mod world;
 

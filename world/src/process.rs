@@ -1,5 +1,6 @@
 //! The world process: drives `World` over iceoryx2 and the tick barrier.
 
+use crate::data_plane::{DataPlane, TooManyRemakes};
 use crate::output::{RunOutputs, Timing};
 use crate::shrink_guard::GuardedActs;
 use crate::world::World;
@@ -22,19 +23,6 @@ pub struct WorldArgs {
     /// Flush recording.bin after every tick: a live viewer reads it as it grows
     /// (`orchestrator up --view`). Off, the world does nothing for viewers.
     pub live: bool,
-}
-
-/// Publishes the messages due at tick `k` as one air (`swarm::air`) through the run's air
-/// service (`radio/air`), before the tick is
-/// released: every agent reads its list in it. The world lends its airs
-/// (`World::lend_air`): the payloads are copied from `sent`, the buffer of the last tick's
-/// messages, which is not touched between `World::apply` and this publish.
-fn publish_air(air: &mut transport::AirSink, world: &World, sent: &Air, k: u64) -> Result<()> {
-    let len = swarm::air::air_len(world.air(), world.n);
-    air.publish(len, |out| {
-        swarm::air::write_air_from(world.air(), sent.bytes(), world.n, k, out)
-    })?;
-    Ok(())
 }
 
 /// Real-time mode's clock and each robot's progress: when the world last received an action
@@ -282,19 +270,17 @@ pub fn run(args: &WorldArgs) -> Result<i32> {
     world.lend_air();
     let config = transport::run_config(&args.prefix)?;
     let node = transport::node(&config, "world")?;
-    // Sense frames: every robot's record packed into one `world/sense` sample a tick.
-    let mut senses = transport::SenseSink::create(&node, sc)?;
+    // Sense frames (every robot's record packed into one `world/sense` sample a tick) and the
+    // air (`radio/air`), written under the shrink guard and made anew when a segment of
+    // theirs shrinks under the world (data_plane).
+    crate::shrink_guard::install()?;
+    let mut data = DataPlane::create(&node, sc)?;
     // Actions: one `robot/<i>/act` service (or `robot/<i>/board`, `runtime.acts`) a robot.
     // Every read of robot r's act service is guarded: a segment that shrinks under it makes r
     // a fault, not a SIGBUS of the world (shrink_guard).
-    crate::shrink_guard::install()?;
     let mut acts = GuardedActs::new(transport::ActSource::create(&node, sc)?);
-    let mut air = transport::AirSink::create(&node, sc)?;
-    let status_svc = transport::status_service(&node, true)?;
-    let status_pub = status_svc
-        .publisher_builder()
-        .create()
-        .map_err(|e| format!("status publisher: {e:?}"))?;
+    // The world's status for the orchestrator (`world/state`), written under the guard.
+    let mut status = crate::status_out::StatusOut::create(&node)?;
     let control_svc = transport::control_service(&node, true)?;
     let control = control_svc
         .subscriber_builder()
@@ -384,6 +370,8 @@ pub fn run(args: &WorldArgs) -> Result<i32> {
     // Stopped during start-up (Ctrl-C before every agent attached): no tick runs, so no
     // robot that was still starting is declared dead at tick 0 (issue 14 item 8).
     let mut end = if ctl.stop { "interrupted" } else { "completed" }.to_string();
+    // The run ended on an error after which its outputs are still written (the world exits 1).
+    let mut failed = false;
     'ticks: while world.tick < sc.run.max_ticks && !ctl.stop {
         let k = world.tick;
         if !pace(&sc.runtime, t_loop, k, poll, || {
@@ -431,9 +419,23 @@ pub fn run(args: &WorldArgs) -> Result<i32> {
         // iceoryx2 reclaims them when the dead node is cleaned (`orchestrator::processes`).
         alive_now.clear();
         alive_now.extend_from_slice(&world.alive);
-        senses.publish(k, &alive_now, |i, s| world.sense(i as usize, s))?;
-        publish_air(&mut air, &world, &sent, k)?;
-        barrier.release_with(k, world.alive_count(), bell);
+        let published = data
+            .publish((&node, sc), &barrier, &mut world, &alive_now, &sent, k)
+            .and_then(|()| {
+                barrier.release_with(k, world.alive_count(), bell);
+                let agents = world.alive_count() as usize;
+                data.after_release((&node, sc), &barrier, (&world, &sent), k, agents)
+            });
+        if let Err(e) = published {
+            // Remade too often: the run ends here, failed, with its outputs.
+            if e.downcast_ref::<TooManyRemakes>().is_none() {
+                return Err(e);
+            }
+            eprintln!("world: {e}");
+            end = "failed: the world's data services were truncated again and again".to_string();
+            failed = true;
+            break;
+        }
         if realtime {
             if !wait_realtime(
                 (&mut clock, &mut acts),
@@ -463,9 +465,7 @@ pub fn run(args: &WorldArgs) -> Result<i32> {
             let rec = world.apply_with_late(&actions, &late, &sent);
             outputs.push(&rec, &world)?;
             tick_ns.push(t_tick.elapsed().as_nanos() as u64);
-            if let Ok(s) = status_pub.loan_uninit() {
-                let _ = s.write_payload(world.status(false)).send();
-            }
+            status.publish(world.status(false));
             drain_control(&control, &mut world, &mut ctl, &barrier, &drivers);
             if ctl.stop {
                 end = "interrupted".to_string();
@@ -550,9 +550,7 @@ pub fn run(args: &WorldArgs) -> Result<i32> {
         let rec = world.apply(&actions, &sent);
         outputs.push(&rec, &world)?;
         tick_ns.push(t_tick.elapsed().as_nanos() as u64);
-        if let Ok(s) = status_pub.loan_uninit() {
-            let _ = s.write_payload(world.status(false)).send();
-        }
+        status.publish(world.status(false));
         drain_control(&control, &mut world, &mut ctl, &barrier, &drivers);
         if ctl.stop {
             end = "interrupted".to_string();
@@ -574,8 +572,8 @@ pub fn run(args: &WorldArgs) -> Result<i32> {
         late_releases,
     };
     outputs.finish(&mut world, &timing, &args.run_id, "processes", &end)?;
-    if let Ok(s) = status_pub.loan_uninit() {
-        let _ = s.write_payload(world.status(true)).send();
-    }
-    Ok(0)
+    status.publish(world.status(true));
+    // Closing writes to the status segment too (guarded, as it may have shrunk).
+    crate::shrink_guard::give_up(status);
+    Ok(if failed { 1 } else { 0 })
 }

@@ -33,6 +33,11 @@ const NOBODY: u32 = u32::MAX;
 /// read sees zeros, which these services' readers ignore) and reported to the caller.
 pub const RUN_SEGMENTS: u32 = u32::MAX - 2;
 
+/// The marker of the world's writes of its own data services (`world/sense`, `radio/air`):
+/// a fault there is absorbed (the write goes to a private zero page) and reported to the
+/// caller, which makes the services anew (`crate::data_plane`).
+pub const WORLD_DATA: u32 = u32::MAX - 3;
+
 /// [`READING`]'s value while the world closes every act service, after its outputs are
 /// written: a segment that shrank is of no consequence any more.
 const CLOSING: u32 = u32::MAX - 1;
@@ -163,7 +168,7 @@ pub fn reading<T>(robot: u32, f: impl FnOnce() -> T) -> Option<T> {
 pub fn read_in_progress() -> (Option<u32>, u64) {
     let robot = READING.load(Ordering::Acquire);
     let n = READS.load(Ordering::Relaxed);
-    let robot = (robot < RUN_SEGMENTS).then_some(robot);
+    let robot = (robot < WORLD_DATA).then_some(robot);
     (robot, n)
 }
 
@@ -187,6 +192,13 @@ pub fn control_lost() {
              messages are lost from now on (docs/protocol.md section 4)"
         )
     });
+}
+
+/// Drops `t` (ports and services of the world's data plane it made anew) under the guard:
+/// closing writes to their segments, one of which shrank; a fault or a panic there is of no
+/// consequence.
+pub fn give_up<T>(t: T) {
+    let _ = reading(CLOSING, || drop(t));
 }
 
 /// The fault's cause in the summary and the recording.

@@ -249,7 +249,7 @@ fn measure(sc: &Scenario, prefix: &str, tick: u64) -> Result<Row, String> {
     // service; the link design had one per radio link).
     let config = transport::run_config(prefix).map_err(|e| e.to_string())?;
     let node = transport::node(&config, "bench-memory").map_err(|e| e.to_string())?;
-    let subs = transport::air_service(&node, sc, false)
+    let subs = transport::air_service(&node, sc, 0, false)
         .map(|svc| svc.dynamic_config().number_of_subscribers())
         .unwrap_or(0);
     drop(node);

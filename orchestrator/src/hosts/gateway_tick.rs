@@ -45,6 +45,46 @@ type Zpub = zenoh::pubsub::Publisher<'static>;
 /// agents; the gateway says on stderr which host left.
 const LINK_LOST_STATUS: i32 = libc::SIGKILL;
 
+/// How often the gateway looks for the first frames of data services the world made anew.
+const REMADE_POLL: Duration = Duration::from_micros(200);
+
+/// The world's `world/sense` and `radio/air` of one generation, as the gateway reads them.
+struct WorldData {
+    generation: transport::Generation,
+    senses: Subscriber<ipc::Service, [u8], SenseHeader>,
+    air: Subscriber<ipc::Service, [u8], AirHeader>,
+    _senses_svc: transport::SensesService,
+    _air_svc: transport::AirService,
+}
+
+impl WorldData {
+    fn open(
+        node: &Node<ipc::Service>,
+        sc: &Scenario,
+        generation: transport::Generation,
+    ) -> Result<WorldData, HostsError> {
+        let senses_svc = transport::senses_service(node, sc, generation, false)?;
+        let senses = senses_svc
+            .subscriber_builder()
+            .buffer_size(1)
+            .create()
+            .map_err(|e| HostsError::Other(format!("world/sense subscriber: {e:?}")))?;
+        let air_svc = transport::air_service(node, sc, generation, false)?;
+        let air = air_svc
+            .subscriber_builder()
+            .buffer_size(1)
+            .create()
+            .map_err(|e| HostsError::Other(format!("radio/air subscriber: {e:?}")))?;
+        Ok(WorldData {
+            generation,
+            senses,
+            air,
+            _senses_svc: senses_svc,
+            _air_svc: air_svc,
+        })
+    }
+}
+
 struct Host {
     remote: Remote,
     down: Zpub,
@@ -66,8 +106,8 @@ pub struct Gateway {
     /// The orchestrator's own mapping of the run's barrier (the world's segment is sealed
     /// against any other writable one).
     barrier: Arc<TickBarrier>,
-    senses: Subscriber<ipc::Service, [u8], SenseHeader>,
-    air: Subscriber<ipc::Service, [u8], AirHeader>,
+    /// The world's data services, of the generation the barrier names.
+    data: WorldData,
     /// Each remote robot's act service, written as its agent would.
     acts: Vec<Option<ActSink>>,
     control: Publisher<ipc::Service, Control, ()>,
@@ -93,18 +133,7 @@ impl Gateway {
         let config = transport::run_config(prefix)?;
         let node = transport::node(&config, "gateway")?;
         let mut services: Vec<Box<dyn std::any::Any>> = Vec::new();
-        let senses_svc = transport::senses_service(&node, sc, false)?;
-        let senses = senses_svc
-            .subscriber_builder()
-            .buffer_size(1)
-            .create()
-            .map_err(|e| HostsError::Other(format!("world/sense subscriber: {e:?}")))?;
-        let air_svc = transport::air_service(&node, sc, false)?;
-        let air = air_svc
-            .subscriber_builder()
-            .buffer_size(1)
-            .create()
-            .map_err(|e| HostsError::Other(format!("radio/air subscriber: {e:?}")))?;
+        let data = WorldData::open(&node, sc, barrier.data_generation())?;
         let control_svc = transport::control_service(&node, false)?;
         let control = control_svc
             .publisher_builder()
@@ -118,8 +147,6 @@ impl Gateway {
                 acts[i as usize] = Some(ActSink::open(&node, sc, i, &|| true)?);
             }
         }
-        services.push(Box::new(senses_svc));
-        services.push(Box::new(air_svc));
         services.push(Box::new(control_svc));
         let hosts = remotes
             .into_iter()
@@ -138,8 +165,7 @@ impl Gateway {
             hosts,
             at,
             barrier,
-            senses,
-            air,
+            data,
             acts,
             control,
             kill_done: vec![0; n as usize],
@@ -187,12 +213,26 @@ impl Gateway {
         events: &Receiver<Event>,
         stop: &AtomicBool,
     ) -> Result<(), HostsError> {
+        let g = self.barrier.data_generation();
+        if g != self.data.generation {
+            // The world made its data services anew (docs/protocol.md section 4): open them
+            // and wait for the tick's frames, which it sends again once they are opened.
+            self.data = WorldData::open(&self.node, &self.sc, g)?;
+            let barrier = &self.barrier;
+            let running = || !barrier.is_shutdown() && !stop.load(Ordering::Relaxed);
+            while running()
+                && !(self.data.senses.has_samples().unwrap_or(false)
+                    && self.data.air.has_samples().unwrap_or(false))
+            {
+                std::thread::sleep(REMADE_POLL);
+            }
+        }
         let mut sense = None;
-        while let Ok(Some(s)) = self.senses.receive() {
+        while let Ok(Some(s)) = self.data.senses.receive() {
             sense = Some(s);
         }
         let mut air = None;
-        while let Ok(Some(s)) = self.air.receive() {
+        while let Ok(Some(s)) = self.data.air.receive() {
             air = Some(s);
         }
         let Some(sense) = sense.filter(|s| s.user_header().tick == k) else {

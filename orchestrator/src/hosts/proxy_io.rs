@@ -36,7 +36,7 @@ impl LocalWorld {
     pub fn create(sc: &Scenario, prefix: &str, robots: &[u32]) -> Result<LocalWorld, HostsError> {
         let config = transport::run_config(prefix)?;
         let node = transport::node(&config, "world")?;
-        let senses_svc = transport::senses_service(&node, sc, true)?;
+        let senses_svc = transport::senses_service(&node, sc, 0, true)?;
         let senses = transport::senses_publisher(&senses_svc, sc)?;
         let air = transport::AirSink::create(&node, sc)?;
         let acts = transport::ActSource::create_for(&node, sc, robots)?;

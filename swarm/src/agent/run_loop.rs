@@ -25,12 +25,15 @@ pub(super) fn run_loop<B: Behaviour>(
 ) -> Result<i32, AgentError> {
     let config = transport::run_config(prefix)?;
     let node = transport::node(&config, &format!("agent-{robot}"))?;
-    // Sense frames: this robot's record in the world's `world/sense` sample, copied into
-    // `frame`.
-    let mut sense_in = transport::SenseSource::open(&node, robot)?;
-    let mut frame = crate::frames::Sense::zeroed();
     let barrier = TickBarrier::open_agent(prefix)?;
     let world_pid = barrier.world_pid();
+    // The generation of the world's data services: the world makes them anew when a segment
+    // of theirs shrinks under it (docs/protocol.md section 4), and says so in the barrier.
+    let mut generation = barrier.data_generation();
+    // Sense frames: this robot's record in the world's `world/sense` sample, copied into
+    // `frame`.
+    let mut sense_in = transport::SenseSource::open_generation(&node, robot, generation)?;
+    let mut frame = crate::frames::Sense::zeroed();
     // Actions: this robot's own board `robot/<i>/board` (or `robot/<i>/act`,
     // `runtime.acts`). A replacement waits for the world to make its board anew, as long as
     // the world is there and running.
@@ -38,7 +41,7 @@ pub(super) fn run_loop<B: Behaviour>(
     let mut act_out = transport::ActSink::open(&node, sc, robot, &world_running)?;
     // The air: the `radio/air` service (a sample held while a read or a zero-copy view
     // lasts).
-    let mut air_in = transport::AirSource::open(&node, sc)?;
+    let mut air_in = transport::AirSource::open_generation(&node, sc, generation)?;
     let bell = match sc.runtime.barrier {
         crate::scenario::BarrierKind::Futex => None,
         crate::scenario::BarrierKind::Iox2Event => {
@@ -78,6 +81,17 @@ pub(super) fn run_loop<B: Behaviour>(
             }
             Wake::Tick(k) => k,
         };
+        // The world made its data services anew: open them and wait for tick k's frames,
+        // which the world sends again once every agent opened them.
+        let remade = barrier.data_generation();
+        if remade != generation {
+            generation = remade;
+            sense_in = transport::SenseSource::open_generation(&node, robot, generation)?;
+            air_in = transport::AirSource::open_generation(&node, sc, generation)?;
+            if !sense_in.wait_for(&world_running)? || !air_in.wait_for(&world_running)? {
+                continue;
+            }
+        }
         // The world published Sense_k and the air of tick k before releasing tick k: read
         // them in place.
         // One receive: the subscriber's buffer holds 1 (the newest frame replaces an unread

@@ -3,7 +3,8 @@
 //! `AllocationStrategy::Static` slots of the scenario's largest air
 //! ([`super::air_max_len`]). The bytes are `swarm::air::write_air`'s layout.
 
-use super::{air_publisher, air_service, AirSample, ServiceId, TransportError, TransportResult};
+use super::{air_publisher, air_service, AirSample, Generation, ServiceId};
+use super::{TransportError, TransportResult};
 use crate::frames::AirHeader;
 use crate::scenario::Scenario;
 use crate::wire::Received;
@@ -19,18 +20,35 @@ pub struct AirSink {
     publisher: Publisher<ipc::Service, [u8], AirHeader>,
     /// The largest air a slot holds.
     max_len: usize,
+    generation: Generation,
     _service: super::AirService,
 }
 
 impl AirSink {
     /// Makes the run's air for `sc.run.robots` agents.
     pub fn create(node: &Node<ipc::Service>, sc: &Scenario) -> TransportResult<Self> {
-        let service = air_service(node, sc, true)?;
+        Self::create_generation(node, sc, 0)
+    }
+
+    /// Makes the run's air of generation `generation` (the world's remake of a service whose
+    /// segment shrank under it).
+    pub fn create_generation(
+        node: &Node<ipc::Service>,
+        sc: &Scenario,
+        generation: Generation,
+    ) -> TransportResult<Self> {
+        let service = air_service(node, sc, generation, true)?;
         Ok(AirSink {
             publisher: air_publisher(&service, sc)?,
             max_len: super::air_max_len(sc),
+            generation,
             _service: service,
         })
+    }
+
+    /// How many agents' subscribers are connected.
+    pub fn subscribers(&self) -> usize {
+        self._service.dynamic_config().number_of_subscribers()
     }
 
     /// Publishes an air of `len` bytes; `fill` writes all of them and returns the header
@@ -51,7 +69,9 @@ impl AirSink {
             self.publisher
                 .loan_slice_uninit(len)
                 .map_err(|source| TransportError::Loan {
-                    service: ServiceId::Air,
+                    service: ServiceId::Air {
+                        generation: self.generation,
+                    },
                     source,
                 })?;
         // SAFETY: the slot is shared memory of the publisher's data segment, mapped from
@@ -61,7 +81,9 @@ impl AirSink {
         let h = fill(sample.payload_mut());
         *sample.user_header_mut() = h;
         sample.send().map_err(|source| TransportError::Send {
-            service: ServiceId::Air,
+            service: ServiceId::Air {
+                generation: self.generation,
+            },
             source,
         })?;
         Ok(())
@@ -71,6 +93,7 @@ impl AirSink {
 /// An agent's side of the air.
 pub struct AirSource {
     subscriber: Subscriber<ipc::Service, [u8], AirHeader>,
+    generation: Generation,
     _service: super::AirService,
 }
 
@@ -80,19 +103,47 @@ pub struct AirGot(AirSample);
 impl AirSource {
     /// Opens the run's air for an agent.
     pub fn open(node: &Node<ipc::Service>, sc: &Scenario) -> TransportResult<Self> {
-        let service = air_service(node, sc, false)?;
+        Self::open_generation(node, sc, 0)
+    }
+
+    /// Opens the run's air of generation `generation` for an agent.
+    pub fn open_generation(
+        node: &Node<ipc::Service>,
+        sc: &Scenario,
+        generation: Generation,
+    ) -> TransportResult<Self> {
+        let service = air_service(node, sc, generation, false)?;
         let subscriber = service
             .subscriber_builder()
             .buffer_size(1)
             .create()
             .map_err(|source| TransportError::Subscriber {
-                service: ServiceId::Air,
+                service: ServiceId::Air { generation },
                 source,
             })?;
         Ok(AirSource {
             subscriber,
+            generation,
             _service: service,
         })
+    }
+
+    /// Waits until an air is there to receive (true), or `keep_trying` says to stop (false).
+    pub fn wait_for(&self, keep_trying: &dyn Fn() -> bool) -> TransportResult<bool> {
+        let service = ServiceId::Air {
+            generation: self.generation,
+        };
+        super::wait_for_sample(
+            || {
+                self.subscriber
+                    .has_samples()
+                    .map_err(|e| TransportError::Receive {
+                        service: service.clone(),
+                        source: e.into(),
+                    })
+            },
+            keep_trying,
+        )
     }
 
     /// The newest air not received yet (buffer 1: none if already taken).
@@ -101,7 +152,9 @@ impl AirSource {
             .subscriber
             .receive()
             .map_err(|source| TransportError::Receive {
-                service: ServiceId::Air,
+                service: ServiceId::Air {
+                    generation: self.generation,
+                },
                 source,
             })?
             .map(AirGot))

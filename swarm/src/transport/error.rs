@@ -206,7 +206,7 @@ impl TransportError {
             | Notify { service, .. }
             | Wait { service, .. } => Some(service),
             AirTooLong { .. } => {
-                static AIR: ServiceId = ServiceId::Air;
+                static AIR: ServiceId = ServiceId::Air { generation: 0 };
                 Some(&AIR)
             }
         }

@@ -5,7 +5,7 @@
 //! to their counts) and sends it; each agent receives the sample and copies its own record
 //! out. The layout is the contract of `docs/protocol.md`.
 
-use super::{senses_publisher, senses_service, SensesService, ServiceId};
+use super::{senses_publisher, senses_service, Generation, SensesService, ServiceId};
 use super::{TransportError, TransportResult};
 use crate::frames::{Sense, SenseHeader, SENSE_FIXED_BYTES};
 use crate::scenario::Scenario;
@@ -17,6 +17,7 @@ use iceoryx2::prelude::*;
 /// The world's side of the Sense frames.
 pub struct SenseSink {
     publisher: Publisher<ipc::Service, [u8], SenseHeader>,
+    generation: Generation,
     packer: SensePacker,
     /// The frame the world fills before it is packed.
     scratch: Box<Sense>,
@@ -26,13 +27,35 @@ pub struct SenseSink {
 impl SenseSink {
     /// Makes the run's Sense service for `sc.run.robots` robots.
     pub fn create(node: &Node<ipc::Service>, sc: &Scenario) -> TransportResult<Self> {
-        let service = senses_service(node, sc, true)?;
+        Self::create_generation(node, sc, 0)
+    }
+
+    /// Makes the run's Sense service of generation `generation` (the world's remake of a
+    /// service whose segment shrank under it).
+    pub fn create_generation(
+        node: &Node<ipc::Service>,
+        sc: &Scenario,
+        generation: Generation,
+    ) -> TransportResult<Self> {
+        let service = senses_service(node, sc, generation, true)?;
         Ok(SenseSink {
             publisher: senses_publisher(&service, sc)?,
+            generation,
             packer: SensePacker::default(),
             scratch: Sense::zeroed(),
             _service: service,
         })
+    }
+
+    /// Takes over `old`'s last packed frames (for [`SenseSink::republish`]): the world's remake
+    /// of the service sends the tick's frames again from the new one.
+    pub fn take_packed(&mut self, old: &mut SenseSink) {
+        std::mem::swap(&mut self.packer, &mut old.packer);
+    }
+
+    /// How many agents' subscribers are connected.
+    pub fn subscribers(&self) -> usize {
+        self._service.dynamic_config().number_of_subscribers()
     }
 
     /// Publishes tick `tick`'s frame of every robot `alive` says is live, each written by
@@ -50,24 +73,37 @@ impl SenseSink {
             sense(i as u32, &mut self.scratch);
             self.packer.push(i as u32, &self.scratch);
         }
+        self.send_packed(tick, alive.len() as u32)
+    }
+
+    /// Sends the frames the last [`SenseSink::publish`] packed, again, as tick `tick`'s of
+    /// `robots` robots: the world's second send of a tick into a service it made anew (the
+    /// frames are the same bytes; sensing is not run twice, its noise draws stay as they were).
+    pub fn republish(&mut self, tick: u64, robots: u32) -> TransportResult<()> {
+        self.send_packed(tick, robots)
+    }
+
+    fn send_packed(&mut self, tick: u64, robots: u32) -> TransportResult<()> {
         let bytes = self.packer.bytes();
+        let service = ServiceId::Senses {
+            generation: self.generation,
+        };
         let sample = self
             .publisher
             .loan_slice_uninit(bytes.len())
             .map_err(|source| TransportError::Loan {
-                service: ServiceId::Senses,
+                service: service.clone(),
                 source,
             })?;
         let mut sample = sample.write_from_slice(bytes);
         *sample.user_header_mut() = SenseHeader {
             tick,
-            robots: alive.len() as u32,
+            robots,
             bytes: bytes.len() as u32,
         };
-        sample.send().map_err(|source| TransportError::Send {
-            service: ServiceId::Senses,
-            source,
-        })?;
+        sample
+            .send()
+            .map_err(|source| TransportError::Send { service, source })?;
         Ok(())
     }
 }
@@ -82,26 +118,55 @@ fn zero_fixed(s: &mut Sense) {
 pub struct SenseSource {
     subscriber: Subscriber<ipc::Service, [u8], SenseHeader>,
     robot: u32,
+    generation: Generation,
     _service: SensesService,
 }
 
 impl SenseSource {
     /// Opens the run's Sense service for robot `robot`'s agent.
     pub fn open(node: &Node<ipc::Service>, robot: u32) -> TransportResult<Self> {
-        let service = senses_service_open(node)?;
+        Self::open_generation(node, robot, 0)
+    }
+
+    /// Opens the run's Sense service of generation `generation` for robot `robot`'s agent.
+    pub fn open_generation(
+        node: &Node<ipc::Service>,
+        robot: u32,
+        generation: Generation,
+    ) -> TransportResult<Self> {
+        let service = super::pub_sub(node, ServiceId::Senses { generation }, super::Reach::Open)?;
         let subscriber = service
             .subscriber_builder()
             .buffer_size(1)
             .create()
             .map_err(|source| TransportError::Subscriber {
-                service: ServiceId::Senses,
+                service: ServiceId::Senses { generation },
                 source,
             })?;
         Ok(SenseSource {
             subscriber,
             robot,
+            generation,
             _service: service,
         })
+    }
+
+    /// Waits until a frame is there to receive (true), or `keep_trying` says to stop (false).
+    pub fn wait_for(&self, keep_trying: &dyn Fn() -> bool) -> TransportResult<bool> {
+        let service = ServiceId::Senses {
+            generation: self.generation,
+        };
+        super::wait_for_sample(
+            || {
+                self.subscriber
+                    .has_samples()
+                    .map_err(|e| TransportError::Receive {
+                        service: service.clone(),
+                        source: e.into(),
+                    })
+            },
+            keep_trying,
+        )
     }
 
     /// The newest frame not handed out yet, copied into `into` (the fixed fields and the
@@ -113,7 +178,9 @@ impl SenseSource {
             .subscriber
             .receive()
             .map_err(|source| TransportError::Receive {
-                service: ServiceId::Senses,
+                service: ServiceId::Senses {
+                    generation: self.generation,
+                },
                 source,
             })?
         else {
@@ -125,8 +192,4 @@ impl SenseSource {
             _ => None,
         })
     }
-}
-
-fn senses_service_open(node: &Node<ipc::Service>) -> TransportResult<SensesService> {
-    super::pub_sub(node, ServiceId::Senses, super::Reach::Open)
 }

@@ -20,19 +20,49 @@ pub const CONTROL_NAME: &str = "run/control";
 pub const AIR_NAME: &str = "radio/air";
 pub const SENSES_NAME: &str = "world/sense";
 
+/// The generation of the world's data services (`world/sense`, `radio/air`): 0 at the start
+/// of a run; the world makes both anew under the next generation when one of their segments
+/// shrinks under it (a process of the user truncated it: docs/protocol.md section 4), and
+/// says so in the tick barrier ([`crate::barrier::TickBarrier::data_generation`]).
+pub type Generation = u32;
+
+/// The name of a world data service of generation `generation`: `base` for 0 (every run
+/// that nobody tampered with), `<base>/g<generation>` after.
+fn generation_name(base: &str, generation: Generation) -> String {
+    if generation == 0 {
+        base.to_string()
+    } else {
+        format!("{base}/g{generation}")
+    }
+}
+
+/// The generation a name of `base`'s services carries, if it is one of them.
+fn generation_of(name: &str, base: &str) -> Option<Generation> {
+    if name == base {
+        return Some(0);
+    }
+    name.strip_prefix(base)?
+        .strip_prefix("/g")?
+        .parse()
+        .ok()
+        .filter(|&g| g > 0)
+}
+
 /// One iceoryx2 service of a run.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub enum ServiceId {
-    /// `world/sense`: every robot's Sense record of a tick, in one sample.
-    Senses,
+    /// `world/sense` (`world/sense/g<generation>` after the world made it anew): every
+    /// robot's Sense record of a tick, in one sample.
+    Senses { generation: Generation },
     /// `robot/<i>/sense`: one robot's Sense frame (the latency benchmark's one hop).
     Sense(u32),
     /// `robot/<i>/act`: robot i's Action frames (pub-sub).
     Act(u32),
     /// `robot/<i>/board`: robot i's Action frames (blackboard, `runtime.acts`).
     Board(u32),
-    /// `radio/air`: the world's one publication a tick of the messages due.
-    Air,
+    /// `radio/air` (`radio/air/g<generation>`): the world's one publication a tick of the
+    /// messages due.
+    Air { generation: Generation },
     /// `world/state`: the world's status for the orchestrator.
     Status,
     /// `run/control`: the orchestrator's commands to the world.
@@ -48,8 +78,8 @@ impl ServiceId {
             ServiceId::Sense(r) => format!("robot/{r}/sense"),
             ServiceId::Act(r) => format!("robot/{r}/act"),
             ServiceId::Board(r) => format!("robot/{r}/board"),
-            ServiceId::Air => AIR_NAME.to_string(),
-            ServiceId::Senses => SENSES_NAME.to_string(),
+            ServiceId::Air { generation } => generation_name(AIR_NAME, *generation),
+            ServiceId::Senses { generation } => generation_name(SENSES_NAME, *generation),
             ServiceId::Status => STATUS_NAME.to_string(),
             ServiceId::Control => CONTROL_NAME.to_string(),
             ServiceId::Named(n) => n.clone(),
@@ -92,10 +122,10 @@ impl From<&str> for ServiceId {
             ServiceId::Act(r)
         } else if let Some(r) = robots("board") {
             ServiceId::Board(r)
-        } else if name == AIR_NAME {
-            ServiceId::Air
-        } else if name == SENSES_NAME {
-            ServiceId::Senses
+        } else if let Some(generation) = generation_of(name, AIR_NAME) {
+            ServiceId::Air { generation }
+        } else if let Some(generation) = generation_of(name, SENSES_NAME) {
+            ServiceId::Senses { generation }
         } else if name == STATUS_NAME {
             ServiceId::Status
         } else if name == CONTROL_NAME {
@@ -259,13 +289,21 @@ mod tests {
         assert_eq!(ServiceId::Act(0).name(), "robot/0/act");
         assert_eq!(ServiceId::Status.name(), "world/state");
         assert_eq!(ServiceId::Control.name(), "run/control");
+        assert_eq!(ServiceId::Senses { generation: 0 }.name(), "world/sense");
+        assert_eq!(ServiceId::Air { generation: 2 }.name(), "radio/air/g2");
+        assert_eq!(
+            ServiceId::from("radio/air/g0"),
+            ServiceId::Named("radio/air/g0".into())
+        );
         assert_eq!(ServiceId::from("tick/down").robot(), None);
         // A name read back from iceoryx2 is the service it names.
         for id in [
             ServiceId::Sense(3),
             ServiceId::Act(12),
-            ServiceId::Air,
-            ServiceId::Senses,
+            ServiceId::Air { generation: 0 },
+            ServiceId::Senses { generation: 0 },
+            ServiceId::Air { generation: 3 },
+            ServiceId::Senses { generation: 1 },
             ServiceId::Status,
             ServiceId::Control,
             ServiceId::from("lat/down"),
