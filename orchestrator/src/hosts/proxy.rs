@@ -229,6 +229,12 @@ fn wait_tick(
     deadline: Duration,
 ) -> Result<bool, HostsError> {
     let mut progress = Instant::now();
+    // Who drives each robot as the tick is released: a robot whose agent is reaped before it
+    // answered is not waited for (it may have died, and been reaped by an earlier look,
+    // before the world's host released the tick with its record: its death is told, and the
+    // world does not wait for it either); a replacement answers from the next tick.
+    let drivers = agents.drivers();
+    wait.retain(|r| drivers.get(r).is_some_and(|&pid| agents.runs(pid)));
     loop {
         let before = wait.len();
         wait.retain(|&r| !(world.barrier.acked(r, k) && world.arrived(r, k)));
@@ -243,7 +249,7 @@ fn wait_tick(
         }
         world.barrier.wait_acks(POLL);
         let dead = agents.supervise(world, tell)?;
-        wait.retain(|r| !dead.contains(r));
+        wait.retain(|r| !dead.contains(r) && drivers.get(r).is_some_and(|&pid| agents.runs(pid)));
         while let Ok(m) = rx.try_recv() {
             match m {
                 Msg::Down(Down::Kill { robot, attach }) => agents.kill(robot, attach),

@@ -98,6 +98,20 @@ impl Agents {
     }
 
     /// Starts an agent of `robot`.
+    /// The pid of each robot's attached agent process, now (a tick's drivers at its release).
+    pub fn drivers(&self) -> BTreeMap<u32, u32> {
+        self.agents
+            .iter()
+            .filter(|(_, a)| a.attach.is_some())
+            .map(|(&pid, a)| (a.robot, pid))
+            .collect()
+    }
+
+    /// Whether agent process `pid` has not been reaped.
+    pub fn runs(&self, pid: u32) -> bool {
+        self.agents.contains_key(&pid)
+    }
+
     pub fn spawn(&mut self, robot: u32, world: &LocalWorld) -> Result<(), HostsError> {
         let r = robot as usize;
         self.starts[r] += 1;
