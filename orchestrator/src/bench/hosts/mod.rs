@@ -138,7 +138,16 @@ pub fn run(sizes: &[u32], ticks: u64, p: &Params) -> BenchResult<Report> {
                 println!("{n:>6} {ns:>3}  skipped: fewer robots than namespaces");
                 continue;
             }
-            rows.extend(case(n, ns, ticks_for(n, ticks), p, &scratch.0)?);
+            // A Ctrl-C also reaches the `ip` or `tc` of the moment, whose failure is then
+            // the interruption's, not an error of its own.
+            let measured = case(n, ns, ticks_for(n, ticks), p, &scratch.0).map_err(|e| {
+                if crate::signals::interrupted() {
+                    BenchError::Interrupted
+                } else {
+                    e
+                }
+            })?;
+            rows.extend(measured);
         }
     }
     println!("ns = namespaces (the world's and ns-1 hosts'); netem = delay added on every link, each way; rtt = the slowest link's median TCP round trip (64 B); one host, across = median over runs of each run's tick p50; target = one host x {:.1} + rtt; recording = every run across hosts recorded the one-host run's bytes.", 1.0 + TARGET_OVERHEAD);
