@@ -2,14 +2,13 @@
 //! run on the same machine, with the ratios between its rows printed beside it.
 //!
 //! - `tick` (tick.rs): the runtime's lock-step tick next to a raw iceoryx2 round and the futex
-//!   floor;
+//!   floor; and (hosts/) the tick across hosts, the swarm split over network namespaces
+//!   (needs root; skipped with a line saying why otherwise);
 //! - `latency` (latency/, one file per path): one-hop p50 / p99 between two processes for the
 //!   runtime's own paths (a radio message, a Sense frame), raw iceoryx2 publish-subscribe and a
 //!   copying baseline (Unix domain socket + bincode), busy-poll and blocking-wake;
 //! - `throughput` (throughput.rs): radio messages and bytes delivered per second with N robots
 //!   all broadcasting every tick;
-//!   With `--hosts` (hosts/): the tick across hosts, the swarm split over network namespaces
-//!   (needs root; skipped with a line saying why otherwise);
 //! - `memory` (memory.rs): RSS and open files per agent and /dev/shm files per run, against N;
 //! - `search` (search.rs): robot-steps per second of the in-process executor on the search
 //!   scenario.
