@@ -104,6 +104,12 @@ pub enum BenchError {
     /// What a benchmark left in /dev/shm (it must leave nothing).
     #[error("left in /dev/shm: {files:?}")]
     Leftovers { files: Vec<String> },
+    /// The rows across hosts failed (hosts/error.rs).
+    #[error("tick across hosts: {0}")]
+    Hosts(#[from] super::hosts::HostsBenchError),
+    /// Ctrl-C (or SIGTERM) stopped the benchmark; what it had started was stopped and removed.
+    #[error("interrupted")]
+    Interrupted,
     /// `bench memory` failed (memory.rs's errors are text).
     #[error("{0}")]
     Memory(String),

@@ -2,7 +2,8 @@
 //! run on the same machine, with the ratios between its rows printed beside it.
 //!
 //! - `tick` (tick.rs): the runtime's lock-step tick next to a raw iceoryx2 round and the futex
-//!   floor;
+//!   floor; and (hosts/) the tick across hosts, the swarm split over network namespaces
+//!   (needs root; skipped with a line saying why otherwise);
 //! - `latency` (latency/, one file per path): one-hop p50 / p99 between two processes for the
 //!   runtime's own paths (a radio message, a Sense frame), raw iceoryx2 publish-subscribe and a
 //!   copying baseline (Unix domain socket + bincode), busy-poll and blocking-wake;
@@ -18,6 +19,7 @@
 //! each in its own iceoryx2 prefix that is removed afterwards.
 
 mod error;
+mod hosts;
 mod latency;
 mod memory;
 mod own;
@@ -73,6 +75,26 @@ enum BenchWhat {
         /// Only the lock-step table (no real-time column).
         #[arg(long)]
         no_realtime: bool,
+        /// Network namespace counts of the rows across hosts (the world's and NS-1 hosts'),
+        /// at the sizes of --robots up to 200. Needs root and `ip` (iproute2); skipped with a
+        /// line saying why otherwise.
+        #[arg(long, value_delimiter = ',', default_value = "2,4",
+              value_parser = clap::value_parser!(u32).range(2..=hosts::MAX_NAMESPACES as i64))]
+        hosts: Vec<u32>,
+        /// `tc netem` delays of the rows across hosts, ms each way on every link (0: none).
+        #[arg(long, value_delimiter = ',', default_value = "0,0.5,2",
+              value_parser = hosts::parse_delay)]
+        netem_ms: Vec<f64>,
+        /// Runs per figure of the rows across hosts (the median of their tick p50s; 1 with
+        /// --quick).
+        #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..))]
+        hosts_runs: u32,
+        /// Only the rows across hosts.
+        #[arg(long, conflicts_with_all = ["no_hosts", "realtime_only"])]
+        hosts_only: bool,
+        /// No rows across hosts.
+        #[arg(long)]
+        no_hosts: bool,
     },
     /// One-hop latency p50 / p99: runtime radio and Sense vs raw iceoryx2 vs UDS + bincode.
     Latency {
@@ -227,10 +249,15 @@ fn memory_run(sizes: &[u32], quick: bool) -> BenchResult<Vec<memory::Row>> {
     memory::run(sizes, quick).map_err(BenchError::Memory)
 }
 
-/// The binary's edge: the error as text, and the exit code.
+/// The binary's edge: the error as text, and the exit code (128 + the signal's number after
+/// a Ctrl-C or SIGTERM).
 fn finish(r: BenchResult<()>, what: &str) -> i32 {
     match r {
         Ok(()) => 0,
+        Err(BenchError::Interrupted) => {
+            eprintln!("bench {what}: interrupted");
+            crate::signals::exit_code()
+        }
         Err(e) => {
             eprintln!("error: bench {what}: {e}");
             1
@@ -254,6 +281,11 @@ pub fn bench(a: BenchArgs) -> i32 {
             realtime_seconds,
             realtime_only,
             no_realtime,
+            hosts,
+            netem_ms,
+            hosts_runs,
+            hosts_only,
+            no_hosts,
         } => {
             let (robots, ticks) = if quick {
                 (vec![10, 50], 300)
@@ -264,10 +296,19 @@ pub fn bench(a: BenchArgs) -> i32 {
                 rates: realtime_hz,
                 seconds: if quick { 2.0 } else { realtime_seconds },
             };
+            let across_params = hosts::Params {
+                namespaces: if no_hosts || realtime_only {
+                    Vec::new()
+                } else {
+                    hosts
+                },
+                netem_ms,
+                runs: if quick { 1 } else { hosts_runs },
+            };
             print_machine();
             finish(
                 (|| -> BenchResult<()> {
-                    let (rows, own_rows) = if realtime_only {
+                    let (rows, own_rows) = if realtime_only || hosts_only {
                         (Vec::new(), Vec::new())
                     } else {
                         let rows = tick::bench_tick(&robots, ticks)?;
@@ -277,7 +318,7 @@ pub fn bench(a: BenchArgs) -> i32 {
                         own::print(&own_rows);
                         (rows, own_rows)
                     };
-                    let cells = if no_realtime || rt.rates.is_empty() {
+                    let cells = if no_realtime || hosts_only || rt.rates.is_empty() {
                         Vec::new()
                     } else {
                         if !realtime_only {
@@ -287,14 +328,29 @@ pub fn bench(a: BenchArgs) -> i32 {
                         realtime::print(&cells, &rt);
                         cells
                     };
+                    // Last: from here on Ctrl-C is caught (to remove the namespaces).
+                    let (across, failed) = if across_params.namespaces.is_empty() {
+                        (None, None)
+                    } else {
+                        if !hosts_only {
+                            println!();
+                        }
+                        match hosts::run(&robots, ticks, &across_params) {
+                            Ok(r) => (Some(r), None),
+                            Err(e) => (None, Some(e)),
+                        }
+                    };
+                    // The other tables are written even when the rows across hosts failed.
                     write_json(
                         &json,
                         &serde_json::json!({
                             "lockstep": rows,
                             "own_programs": own_rows,
-                            "realtime": cells
+                            "realtime": cells,
+                            "hosts": across
                         }),
-                    )
+                    )?;
+                    failed.map_or(Ok(()), Err)
                 })(),
                 "tick",
             )
