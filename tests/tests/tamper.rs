@@ -394,16 +394,20 @@ fn a_truncated_control_segment_leaves_the_orchestrator_standing() {
     assert_eq!(f.len(), 1, "{f:?}");
 }
 
-/// The world's data segments of this run it maps read-write (`.data` files), largest first
-/// (the Sense one, every robot's record, is the largest here).
-fn worlds_data_segments(id: &str) -> Vec<String> {
-    let world_pid = processes_mentioning(&swarm::transport::prefix_for(id))
+/// The world process of run `id`.
+fn world_pid(id: &str) -> i32 {
+    processes_mentioning(&swarm::transport::prefix_for(id))
         .into_iter()
         .find(|p| {
             std::fs::read_link(format!("/proc/{p}/exe"))
                 .is_ok_and(|e| e.file_name().is_some_and(|n| n == "world"))
         })
-        .expect("world process");
+        .expect("world process") as i32
+}
+
+/// The data segments of the world `world_pid` maps read-write (`.data` files), largest first
+/// (the Sense one, every robot's record, is the largest here).
+fn worlds_data_segments(world_pid: i32) -> Vec<String> {
     let maps = std::fs::read_to_string(format!("/proc/{world_pid}/maps")).unwrap();
     let mut segments: Vec<String> = maps
         .lines()
@@ -414,6 +418,22 @@ fn worlds_data_segments(id: &str) -> Vec<String> {
     segments.sort_by_key(|p| std::cmp::Reverse(std::fs::metadata(p).map(|m| m.len()).unwrap_or(0)));
     segments.dedup();
     segments
+}
+
+/// How long the world is stopped before a truncation of its data segments: every agent reads
+/// its frames within it and then sleeps on the barrier (the world cannot release the next
+/// tick), so no agent is reading them when they shrink (an agent that is, dies of SIGBUS: the
+/// limit docs/protocol.md section 4 gives, not what these tests judge).
+const AGENTS_SETTLE: Duration = Duration::from_millis(300);
+
+/// Truncates `segments` while the world `world_pid` is stopped and its agents sleep.
+fn truncate_with_world_stopped(world_pid: i32, segments: &[String]) {
+    signal(world_pid, libc::SIGSTOP);
+    std::thread::sleep(AGENTS_SETTLE);
+    for s in segments {
+        truncate(s);
+    }
+    signal(world_pid, libc::SIGCONT);
 }
 
 /// The run ended by itself with every tick, no robot hurt, and left nothing behind; its
@@ -438,8 +458,9 @@ fn assert_nobody_hurt(up: Child, out: &Path, id: &str) -> String {
 fn a_truncated_sense_segment_is_made_anew_and_no_robot_is_hurt() {
     let _g = serial();
     let (up, out, id, _pids) = start("sense");
-    let sense = worlds_data_segments(&id)[0].clone();
-    truncate(&sense);
+    let world = world_pid(&id);
+    let sense = worlds_data_segments(world)[0].clone();
+    truncate_with_world_stopped(world, &[sense]);
     let err = assert_nobody_hurt(up, &out, &id);
     assert!(err.contains("made anew as generation 1"), "{err}");
 }
@@ -450,11 +471,10 @@ fn a_truncated_sense_segment_is_made_anew_and_no_robot_is_hurt() {
 fn every_worlds_data_segment_truncated_hurts_no_robot() {
     let _g = serial();
     let (up, out, id, _pids) = start("world-data");
-    let segments = worlds_data_segments(&id);
+    let world = world_pid(&id);
+    let segments = worlds_data_segments(world);
     assert!(segments.len() >= 3, "{segments:?}");
-    for s in &segments {
-        truncate(s);
-    }
+    truncate_with_world_stopped(world, &segments);
     let err = assert_nobody_hurt(up, &out, &id);
     assert!(err.contains("made anew as generation"), "{err}");
 }
