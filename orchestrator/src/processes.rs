@@ -322,6 +322,8 @@ fn supervise(
         .subscriber_builder()
         .create()
         .map_err(|e| format!("status subscriber: {e:?}"))?;
+    // Its segment shrank under a read (section 4 of docs/protocol.md).
+    let mut status_lost = false;
     // The world mapped the barrier (it does before READY): from now on nobody maps the
     // world's segment writable, before any agent exists.
     barrier_fds
@@ -539,17 +541,22 @@ fn supervise(
                 }
             }
         }
-        let newest = guarded(|| {
-            let mut newest = None;
-            while let Ok(Some(s)) = status.receive() {
-                newest = Some(*s);
+        // A status read from a shrunk `world/state` segment (zeros) is not believed, and the
+        // subscriber is not touched again (iceoryx2 panics on the zeros it would read next;
+        // docs/protocol.md section 4): the run goes on without status.
+        if !status_lost {
+            let newest = guarded(|| {
+                let mut newest = None;
+                while let Ok(Some(s)) = status.receive() {
+                    newest = Some(*s);
+                }
+                newest
+            });
+            match newest {
+                Some(Some(s)) => last = s,
+                Some(None) => {}
+                None => status_lost = true,
             }
-            newest
-        });
-        // A status read from a shrunk `world/state` segment (zeros) is not believed; the
-        // world, which writes that segment, dies of it (docs/protocol.md section 4).
-        if let Some(Some(s)) = newest {
-            last = s;
         }
         (p.on_status)(&last);
         if last_registry.elapsed() > REGISTRY_PERIOD {
@@ -610,9 +617,19 @@ fn supervise(
             return Err(e);
         }
     }
-    // Closing the ports touches their segments (one may have shrunk).
-    let _ = guarded(|| drop(status));
-    let _ = guarded(|| drop(control));
+    // Closing the ports touches their segments: one that shrank is let go without closing
+    // (its zeros make iceoryx2 panic, and a panic while unwinding aborts the orchestrator
+    // before it removed the run's files); the others under the guard.
+    if status_lost {
+        std::mem::forget((status, status_svc));
+    } else {
+        let _ = guarded(|| drop(status));
+    }
+    if world::shrink_guard::control_is_lost() {
+        std::mem::forget((control, control_svc));
+    } else {
+        let _ = guarded(|| drop(control));
+    }
     drop(barrier);
     drop(node);
     Ok(ProcessOutcome {

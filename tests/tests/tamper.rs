@@ -478,3 +478,35 @@ fn every_worlds_data_segment_truncated_hurts_no_robot() {
     let err = assert_nobody_hurt(up, &out, &id);
     assert!(err.contains("made anew as generation"), "{err}");
 }
+
+/// The iceoryx2 files ending in `suffix` that process `pid` maps read-write.
+fn mapped_rw(pid: i32, suffix: &str) -> std::collections::BTreeSet<String> {
+    let maps = std::fs::read_to_string(format!("/proc/{pid}/maps")).unwrap_or_default();
+    maps.lines()
+        .filter(|l| l.split_whitespace().nth(1) == Some("rw-s") && l.ends_with(suffix))
+        .filter_map(|l| l.split_whitespace().nth(5))
+        .map(str::to_string)
+        .collect()
+}
+
+/// The shared state (`.dynamic`: the ports, the nodes) of the world's data services: the
+/// files the world and every agent map (each agent maps only those two and its own act
+/// service's) truncated, as their data segments above: the services are made anew, no robot
+/// is hurt, nobody aborts on the zeros iceoryx2 would read when closing their ports, and the
+/// run's files go.
+#[test]
+fn the_shared_state_of_the_worlds_data_services_truncated_hurts_no_robot() {
+    let _g = serial();
+    let (up, out, id, pids) = start("world-dynamic");
+    let world = world_pid(&id);
+    let mut shared = mapped_rw(world, ".dynamic");
+    for &p in &pids {
+        let mine = mapped_rw(p, ".dynamic");
+        shared.retain(|f| mine.contains(f));
+    }
+    assert_eq!(shared.len(), 2, "world/sense's and radio/air's: {shared:?}");
+    let shared: Vec<String> = shared.into_iter().collect();
+    truncate_with_world_stopped(world, &shared);
+    let err = assert_nobody_hurt(up, &out, &id);
+    assert!(err.contains("made anew as generation 1"), "{err}");
+}

@@ -573,7 +573,10 @@ pub fn run(args: &WorldArgs) -> Result<i32> {
     };
     outputs.finish(&mut world, &timing, &args.run_id, "processes", &end)?;
     status.publish(world.status(true));
-    // Closing writes to the status segment too (guarded, as it may have shrunk).
-    crate::shrink_guard::give_up(status);
+    status.close();
+    // The control subscriber: let go unclosed when its segment shrank (give_up).
+    if crate::shrink_guard::control_is_lost() {
+        crate::shrink_guard::give_up((control, control_svc));
+    }
     Ok(if failed { 1 } else { 0 })
 }

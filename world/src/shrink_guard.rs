@@ -194,11 +194,12 @@ pub fn control_lost() {
     });
 }
 
-/// Drops `t` (ports and services of the world's data plane it made anew) under the guard:
-/// closing writes to their segments, one of which shrank; a fault or a panic there is of no
-/// consequence.
+/// Lets go of `t` (ports and services one of whose segments shrank) without closing them:
+/// closing reads their segments, and iceoryx2 panics on the zeros it finds there, which
+/// during an unwind aborts the process. Their files stay until the orchestrator removes the
+/// run's files at its end (as it does for any run).
 pub fn give_up<T>(t: T) {
-    let _ = reading(CLOSING, || drop(t));
+    std::mem::forget(t);
 }
 
 /// The fault's cause in the summary and the recording.
@@ -212,6 +213,8 @@ pub struct GuardedActs {
     /// Always Some but in Drop.
     acts: Option<ActSource>,
     shrunk: Vec<u32>,
+    /// A segment of some robot's act service shrank during the run.
+    tainted: bool,
 }
 
 impl Drop for GuardedActs {
@@ -219,7 +222,12 @@ impl Drop for GuardedActs {
     /// the world at its very end before this guard).
     fn drop(&mut self) {
         let acts = self.acts.take();
-        let _ = reading(CLOSING, || drop(acts));
+        if self.tainted {
+            // A segment shrank: closing would read its zeros (give_up).
+            give_up(acts);
+        } else {
+            let _ = reading(CLOSING, || drop(acts));
+        }
     }
 }
 
@@ -228,6 +236,7 @@ impl GuardedActs {
         GuardedActs {
             acts: Some(acts),
             shrunk: Vec::new(),
+            tainted: false,
         }
     }
 
@@ -239,6 +248,7 @@ impl GuardedActs {
         let out = reading(robot, || f(acts));
         if out.is_none() {
             self.shrunk.push(robot);
+            self.tainted = true;
         }
         out
     }

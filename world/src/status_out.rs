@@ -33,6 +33,16 @@ impl StatusOut {
         })
     }
 
+    /// Closes the publisher (under the guard), or lets it go unclosed when its segment
+    /// shrank ([`shrink_guard::give_up`]).
+    pub fn close(self) {
+        if self.lost {
+            shrink_guard::give_up(self);
+        } else {
+            let _ = shrink_guard::reading(RUN_SEGMENTS, || drop(self));
+        }
+    }
+
     /// Publishes `status` (a full buffer or a lost segment drops it: the status is advisory).
     pub fn publish(&mut self, status: WorldStatus) {
         if self.lost {

@@ -217,7 +217,11 @@ impl Gateway {
         if g != self.data.generation {
             // The world made its data services anew (docs/protocol.md section 4): open them
             // and wait for the tick's frames, which it sends again once they are opened.
-            self.data = WorldData::open(&self.node, &self.sc, g)?;
+            // The old ones are let go unclosed (their shrunk segments: see the agent loop).
+            std::mem::forget(std::mem::replace(
+                &mut self.data,
+                WorldData::open(&self.node, &self.sc, g)?,
+            ));
             let barrier = &self.barrier;
             let running = || !barrier.is_shutdown() && !stop.load(Ordering::Relaxed);
             while running()

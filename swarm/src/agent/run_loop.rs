@@ -86,8 +86,17 @@ pub(super) fn run_loop<B: Behaviour>(
         let remade = barrier.data_generation();
         if remade != generation {
             generation = remade;
-            sense_in = transport::SenseSource::open_generation(&node, robot, generation)?;
-            air_in = transport::AirSource::open_generation(&node, sc, generation)?;
+            // The old services are let go unclosed: a segment of theirs shrank, and closing
+            // a port reads its service's shared state (a SIGBUS, or zeros iceoryx2 panics
+            // on). The orchestrator removes their files with the run's.
+            std::mem::forget(std::mem::replace(
+                &mut sense_in,
+                transport::SenseSource::open_generation(&node, robot, generation)?,
+            ));
+            std::mem::forget(std::mem::replace(
+                &mut air_in,
+                transport::AirSource::open_generation(&node, sc, generation)?,
+            ));
             if !sense_in.wait_for(&world_running)? || !air_in.wait_for(&world_running)? {
                 continue;
             }
