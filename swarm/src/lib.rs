@@ -34,6 +34,7 @@ pub mod scenario_shape;
 pub mod sealed;
 pub mod sections;
 pub mod sense_pack;
+pub mod shrink_guard;
 pub mod streams;
 pub mod toml_u64;
 pub mod transport;

@@ -80,6 +80,9 @@ pub enum AgentError {
     /// The run's tick barrier segment could not be opened.
     #[error(transparent)]
     Barrier(#[from] BarrierError),
+    /// The SIGBUS guard could not be installed.
+    #[error(transparent)]
+    Guard(#[from] crate::shrink_guard::GuardError),
 }
 
 impl AgentError {
@@ -89,7 +92,7 @@ impl AgentError {
             AgentError::Args(_) | AgentError::Scenario(_) | AgentError::RobotOutOfRange { .. } => {
                 EXIT_BAD_INPUT
             }
-            AgentError::Transport(_) | AgentError::Barrier(_) => EXIT_SETUP,
+            AgentError::Transport(_) | AgentError::Barrier(_) | AgentError::Guard(_) => EXIT_SETUP,
         }
     }
 }

@@ -5,7 +5,9 @@
 use super::{AgentError, EXIT_OK, EXIT_WORLD_GONE};
 use crate::air::ActTx;
 use crate::barrier::{TickBarrier, Wake};
+use crate::frames::Action;
 use crate::scenario::Scenario;
+use crate::shrink_guard::{self, AGENT_FRAMES};
 use crate::transport;
 use crate::{AgentRuntime, Behaviour, Received};
 use std::sync::atomic::AtomicUsize;
@@ -23,6 +25,10 @@ pub(super) fn run_loop<B: Behaviour>(
     robot: u32,
     mut rt: AgentRuntime<B>,
 ) -> Result<i32, AgentError> {
+    // The world's data services are files any process of the user can truncate: this
+    // agent's reads of them are guarded (a SIGBUS there holds the robot still for the tick,
+    // instead of killing the agent; docs/protocol.md section 4).
+    shrink_guard::install()?;
     let config = transport::run_config(prefix)?;
     let node = transport::node(&config, &format!("agent-{robot}"))?;
     let barrier = TickBarrier::open_agent(prefix)?;
@@ -106,7 +112,13 @@ pub(super) fn run_loop<B: Behaviour>(
         // One receive: the subscriber's buffer holds 1 (the newest frame replaces an unread
         // one). Draining in a loop could hold two samples at once when the world publishes
         // the next tick's in between (real-time mode), beyond the air's borrow limit.
-        let got = sense_in.receive(&mut frame)?;
+        let Some(got) = shrink_guard::reading(AGENT_FRAMES, || sense_in.receive(&mut frame)) else {
+            hold_still(&mut act_out, robot, k)?;
+            barrier.ack_with(robot, k, bell);
+            done = k + 1;
+            continue;
+        };
+        let got = got?;
         let latest: Option<&crate::frames::Sense> = got.map(|_| &*frame);
         if let Some(s) = latest.filter(|s| s.robot == robot && s.tick > k) {
             // The world is past tick k already: keep this Sense for its own tick.
@@ -138,20 +150,38 @@ pub(super) fn run_loop<B: Behaviour>(
         let mut malformed = 0;
         // One receive, as for the Sense frame (buffer 1, borrowed 1 + radio.zero_copy_held:
         // the sample is held until decoded or until its views go).
-        let air = air_in.receive()?;
-        match air {
-            Some(a) if a.tick() == k => {
+        let zero_copy = rt.zero_copy();
+        let decoded = shrink_guard::reading(AGENT_FRAMES, || -> Result<_, AgentError> {
+            Ok(match air_in.receive()? {
+                Some(a) if a.tick() == k => {
+                    let bad = a.inbox(robot, zero_copy, &live, held_limit, &mut inbox);
+                    Some((k, bad))
+                }
+                Some(a) if a.tick() > k => {
+                    // Past tick k's deadline already (real-time mode): the list is for a
+                    // later tick, decoded now and kept for it.
+                    let t = a.tick();
+                    ahead_inbox.clear();
+                    let bad = a.inbox(robot, zero_copy, &live, held_limit, &mut ahead_inbox);
+                    Some((t, bad))
+                }
+                _ => None,
+            })
+        });
+        let Some(decoded) = decoded else {
+            inbox.clear();
+            drop(kept);
+            hold_still(&mut act_out, robot, k)?;
+            barrier.ack_with(robot, k, bell);
+            done = k + 1;
+            continue;
+        };
+        match decoded? {
+            Some((t, bad)) if t == k => {
                 ahead_air = None;
-                malformed = a.inbox(robot, rt.zero_copy(), &live, held_limit, &mut inbox);
+                malformed = bad;
             }
-            Some(a) if a.tick() > k => {
-                // Past tick k's deadline already (real-time mode): the list is for a later
-                // tick, decoded now and kept for it.
-                let t = a.tick();
-                ahead_inbox.clear();
-                let bad = a.inbox(robot, rt.zero_copy(), &live, held_limit, &mut ahead_inbox);
-                ahead_air = Some((t, bad));
-            }
+            Some((t, bad)) => ahead_air = Some((t, bad)),
             _ => match ahead_air {
                 Some((t, bad)) if t == k => {
                     ahead_air = None;
@@ -175,4 +205,16 @@ pub(super) fn run_loop<B: Behaviour>(
         barrier.ack_with(robot, k, bell);
         done = k + 1;
     }
+}
+
+/// Robot `robot`'s action of tick `k` when its frames could not be read (a segment of the
+/// world's data services shrank under the read): no motion, no message. The world remakes the
+/// services at its next write of them, and the agent follows (docs/protocol.md section 4).
+fn hold_still(act_out: &mut transport::ActSink, robot: u32, k: u64) -> Result<(), AgentError> {
+    act_out.send(|_area| Action {
+        tick: k,
+        robot,
+        ..Action::default()
+    })?;
+    Ok(())
 }
