@@ -494,15 +494,22 @@ pub fn quiet_logs() {
 /// How often an agent looks for the first sample of a service the world made anew.
 pub(crate) const REMADE_POLL: std::time::Duration = std::time::Duration::from_micros(100);
 
-/// Waits until `has` says a sample is there (true), or `keep_trying` says to stop (false):
-/// an agent's wait for the world's resend into a service it made anew.
-pub(crate) fn wait_for_sample(
-    mut has: impl FnMut() -> TransportResult<bool>,
+/// Waits until `subscriber` (of `service`) has a sample to receive (true), or `keep_trying`
+/// says to stop (false): an agent's wait for the world's resend into a service it made anew.
+pub(crate) fn wait_for_sample<H: std::fmt::Debug + ZeroCopySend>(
+    subscriber: &iceoryx2::port::subscriber::Subscriber<ipc::Service, [u8], H>,
+    service: ServiceId,
     keep_trying: &dyn Fn() -> bool,
 ) -> TransportResult<bool> {
     let mut looks = 0u32;
     loop {
-        if has()? {
+        let has = subscriber
+            .has_samples()
+            .map_err(|e| TransportError::Receive {
+                service: service.clone(),
+                source: e.into(),
+            })?;
+        if has {
             return Ok(true);
         }
         // keep_trying costs a syscall (the world's pid): every 100th look.

@@ -133,17 +133,7 @@ impl AirSource {
         let service = ServiceId::Air {
             generation: self.generation,
         };
-        super::wait_for_sample(
-            || {
-                self.subscriber
-                    .has_samples()
-                    .map_err(|e| TransportError::Receive {
-                        service: service.clone(),
-                        source: e.into(),
-                    })
-            },
-            keep_trying,
-        )
+        super::wait_for_sample(&self.subscriber, service, keep_trying)
     }
 
     /// The newest air not received yet (buffer 1: none if already taken).

@@ -156,17 +156,7 @@ impl SenseSource {
         let service = ServiceId::Senses {
             generation: self.generation,
         };
-        super::wait_for_sample(
-            || {
-                self.subscriber
-                    .has_samples()
-                    .map_err(|e| TransportError::Receive {
-                        service: service.clone(),
-                        source: e.into(),
-                    })
-            },
-            keep_trying,
-        )
+        super::wait_for_sample(&self.subscriber, service, keep_trying)
     }
 
     /// The newest frame not handed out yet, copied into `into` (the fixed fields and the
