@@ -247,3 +247,69 @@ fn rust_and_python_boids_understand_each_other() {
     assert_left_nothing(&out);
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Python robots follow the world when it remakes its data services (issue 37: a process of
+/// the user truncated the Sense segment, here while the world was stopped and its agents
+/// slept): every Python agent opens `world/sense/g1` and `radio/air/g1` through the same loop
+/// as a Rust one, and the run completes with no robot hurt.
+#[test]
+fn python_agents_follow_the_worlds_remade_data_services() {
+    let _g = serial();
+    let dir = tmp_dir("py-remade");
+    let sc = scenario(&dir, 4, 3000, &python_agents("0..4", &boids()));
+    let out = dir.join("run");
+    let id = own_run_id("py-remade");
+    let child = spawn_up_as(
+        &["--scenario", sc.to_str().unwrap(), "--tick-hz", "1000"],
+        &out,
+        Some(&id),
+    );
+    let t = Instant::now();
+    while registry_tick(&out) < 200 {
+        assert!(
+            t.elapsed() < Duration::from_secs(60),
+            "the run never ticked"
+        );
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    let world = processes_mentioning(&swarm::transport::prefix_for(&id))
+        .into_iter()
+        .find(|p| {
+            std::fs::read_link(format!("/proc/{p}/exe"))
+                .is_ok_and(|e| e.file_name().is_some_and(|n| n == "world"))
+        })
+        .expect("world process") as i32;
+    let maps = std::fs::read_to_string(format!("/proc/{world}/maps")).unwrap();
+    // The world's largest segment it writes: every robot's Sense record.
+    let sense = maps
+        .lines()
+        .filter(|l| l.split_whitespace().nth(1) == Some("rw-s") && l.ends_with(".data"))
+        .filter_map(|l| l.split_whitespace().nth(5))
+        .max_by_key(|p| std::fs::metadata(p).map(|m| m.len()).unwrap_or(0))
+        .expect("the world's Sense segment")
+        .to_string();
+    // SAFETY: signals to this test's own world process.
+    unsafe { libc::kill(world, libc::SIGSTOP) };
+    std::thread::sleep(Duration::from_millis(300));
+    std::fs::OpenOptions::new()
+        .write(true)
+        .open(&sense)
+        .and_then(|f| f.set_len(0))
+        .unwrap();
+    // SAFETY: as above.
+    unsafe { libc::kill(world, libc::SIGCONT) };
+    let o = child.wait_with_output().unwrap();
+    assert!(ended_by_itself(&o), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("made anew as generation 1"),
+        "{}",
+        stderr(&o)
+    );
+    let s = summary(&out);
+    assert_eq!(s["end"], "completed", "{s}");
+    assert_eq!(s["ticks"], 3000);
+    assert_eq!(s["faults"], serde_json::json!([]), "{s}");
+    assert!(shm_of_run(&id).is_empty(), "{:?}", shm_of_run(&id));
+    assert_left_nothing(&out);
+    let _ = std::fs::remove_dir_all(&dir);
+}
