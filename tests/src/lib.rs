@@ -164,6 +164,18 @@ pub fn run_shm_entries() -> Vec<String> {
     v
 }
 
+/// The pid of run `id`'s world process (its `world` binary among the processes that name
+/// the run's prefix).
+pub fn world_pid_of(id: &str) -> i32 {
+    processes_mentioning(&swarm::transport::prefix_for(id))
+        .into_iter()
+        .find(|p| {
+            std::fs::read_link(format!("/proc/{p}/exe"))
+                .is_ok_and(|e| e.file_name().is_some_and(|n| n == "world"))
+        })
+        .expect("world process") as i32
+}
+
 /// Whether any process's command line mentions `needle`.
 pub fn processes_mentioning(needle: &str) -> Vec<u32> {
     let mut v = Vec::new();

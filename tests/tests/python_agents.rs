@@ -272,13 +272,7 @@ fn python_agents_follow_the_worlds_remade_data_services() {
         );
         std::thread::sleep(Duration::from_millis(20));
     }
-    let world = processes_mentioning(&swarm::transport::prefix_for(&id))
-        .into_iter()
-        .find(|p| {
-            std::fs::read_link(format!("/proc/{p}/exe"))
-                .is_ok_and(|e| e.file_name().is_some_and(|n| n == "world"))
-        })
-        .expect("world process") as i32;
+    let world = world_pid_of(&id);
     let maps = std::fs::read_to_string(format!("/proc/{world}/maps")).unwrap();
     // The world's largest segment it writes: every robot's Sense record.
     let sense = maps

@@ -394,17 +394,6 @@ fn a_truncated_control_segment_leaves_the_orchestrator_standing() {
     assert_eq!(f.len(), 1, "{f:?}");
 }
 
-/// The world process of run `id`.
-fn world_pid(id: &str) -> i32 {
-    processes_mentioning(&swarm::transport::prefix_for(id))
-        .into_iter()
-        .find(|p| {
-            std::fs::read_link(format!("/proc/{p}/exe"))
-                .is_ok_and(|e| e.file_name().is_some_and(|n| n == "world"))
-        })
-        .expect("world process") as i32
-}
-
 /// The data segments of the world `world_pid` maps read-write (`.data` files), largest first
 /// (the Sense one, every robot's record, is the largest here).
 fn worlds_data_segments(world_pid: i32) -> Vec<String> {
@@ -458,7 +447,7 @@ fn assert_nobody_hurt(up: Child, out: &Path, id: &str) -> String {
 fn a_truncated_sense_segment_is_made_anew_and_no_robot_is_hurt() {
     let _g = serial();
     let (up, out, id, _pids) = start("sense");
-    let world = world_pid(&id);
+    let world = world_pid_of(&id);
     let sense = worlds_data_segments(world)[0].clone();
     truncate_with_world_stopped(world, &[sense]);
     let err = assert_nobody_hurt(up, &out, &id);
@@ -471,7 +460,7 @@ fn a_truncated_sense_segment_is_made_anew_and_no_robot_is_hurt() {
 fn every_worlds_data_segment_truncated_hurts_no_robot() {
     let _g = serial();
     let (up, out, id, _pids) = start("world-data");
-    let world = world_pid(&id);
+    let world = world_pid_of(&id);
     let segments = worlds_data_segments(world);
     assert!(segments.len() >= 3, "{segments:?}");
     truncate_with_world_stopped(world, &segments);
@@ -498,7 +487,7 @@ fn mapped_rw(pid: i32, suffix: &str) -> std::collections::BTreeSet<String> {
 fn the_shared_state_of_the_worlds_data_services_truncated_hurts_no_robot() {
     let _g = serial();
     let (up, out, id, pids) = start("world-dynamic");
-    let world = world_pid(&id);
+    let world = world_pid_of(&id);
     let mut shared = mapped_rw(world, ".dynamic");
     for &p in &pids {
         let mine = mapped_rw(p, ".dynamic");

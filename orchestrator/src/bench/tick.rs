@@ -231,14 +231,17 @@ pub(super) fn run_processes(sc: &Scenario) -> BenchResult<(serde_json::Value, st
     if out.world_exit != Ok(0) {
         return Err(BenchError::WorldExit(out.world_exit));
     }
+    Ok((read_summary(&dir)?, dir))
+}
+
+/// The summary.json of the run folder `dir`.
+pub(super) fn read_summary(dir: &std::path::Path) -> BenchResult<serde_json::Value> {
     let path = dir.join("summary.json");
     let text = std::fs::read_to_string(&path).map_err(|source| BenchError::File {
         path: path.clone(),
         source,
     })?;
-    let s: serde_json::Value =
-        serde_json::from_str(&text).map_err(|source| BenchError::Json { path, source })?;
-    Ok((s, dir))
+    serde_json::from_str(&text).map_err(|source| BenchError::Json { path, source })
 }
 
 fn spawn_children(

@@ -40,9 +40,9 @@ pub(super) fn run_loop<B: Behaviour>(
     // `frame`.
     let mut sense_in = transport::SenseSource::open_generation(&node, robot, generation)?;
     let mut frame = crate::frames::Sense::zeroed();
-    // Actions: this robot's own board `robot/<i>/board` (or `robot/<i>/act`,
-    // `runtime.acts`). A replacement waits for the world to make its board anew, as long as
-    // the world is there and running.
+    // Actions: this robot's own `robot/<i>/act` service (or its board `robot/<i>/board`,
+    // `runtime.acts = "blackboard"`). A replacement waits for the world to make its board
+    // anew, as long as the world is there and running.
     let world_running = || world_alive(world_pid) && !barrier.is_shutdown();
     let mut act_out = transport::ActSink::open(&node, sc, robot, &world_running)?;
     // The air: the `radio/air` service (a sample held while a read or a zero-copy view

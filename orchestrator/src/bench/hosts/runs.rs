@@ -268,13 +268,7 @@ pub fn run(net: &Net, robots: u32, ticks: u64, across: bool, dir: &Path) -> Benc
     let limit = Duration::from_secs(RUN_LIMIT_BASE_S + ticks * RUN_LIMIT_PER_TICK_MS / 1000);
     wait_all(&mut children, limit)?;
     files.check()?;
-    let path = dir.join("summary.json");
-    let text = std::fs::read_to_string(&path).map_err(|source| BenchError::File {
-        path: path.clone(),
-        source,
-    })?;
-    let s: serde_json::Value =
-        serde_json::from_str(&text).map_err(|source| BenchError::Json { path, source })?;
+    let s = crate::bench::tick::read_summary(dir)?;
     Ok(Done {
         run_id,
         p50_ms: s["tick_time"]["p50_us"].as_f64().unwrap_or(f64::NAN) / 1e3,
