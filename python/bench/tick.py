@@ -3,7 +3,7 @@ with every robot a Python program (an empty behaviour, the boids example) or the
 baseline (an empty behaviour, swarm/examples/empty_agent.rs) at N = 10, 50, 100, and prints
 ticks/s, the time per robot-tick and the start-up time (summary.json's figures).
 
-    cargo build --release -p orchestrator -p world -p agent
+    cargo build --release -p swarm-bins
     cargo build --release -p swarm --example empty_agent
     .venv/bin/python python/bench/tick.py [--robots 10,50,100] [--ticks 500]
 

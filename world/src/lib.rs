@@ -14,6 +14,7 @@ pub mod mission;
 pub mod output;
 pub mod placement;
 pub mod process;
+pub mod process_main;
 pub mod read_watchdog;
 pub mod sensing;
 pub mod shrink_guard;

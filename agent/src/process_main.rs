@@ -1,7 +1,7 @@
 //! `agent --robot I ...`: one robot's process running a built-in behaviour (the scenario's
 //! `run.behaviour`). Started by the orchestrator; the loop is the SDK's (`swarm::agent`).
 
-use agent::behaviours::{dispatch, BehaviourVisitor};
+use crate::behaviours::{dispatch, BehaviourVisitor};
 use swarm::agent::{Agent, AgentError};
 use swarm::Behaviour;
 
@@ -19,7 +19,8 @@ impl BehaviourVisitor for Run {
     }
 }
 
-fn main() {
+/// The agent process: attaches to its run, runs the scenario's behaviour, exits.
+pub fn main() {
     let agent = swarm::agent::from_env_or_exit();
     let robot = agent.robot();
     // The registry's dispatch reads the scenario while the visitor owns the agent.

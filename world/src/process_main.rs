@@ -1,4 +1,5 @@
-//! `world --run-dir DIR --prefix P`: the world process of a run. Started by the orchestrator.
+//! `world --run-dir DIR --prefix P`: the world process of a run (started by the orchestrator);
+//! the `world` binary (bins/) calls [`main`].
 
 use clap::Parser;
 use std::path::PathBuf;
@@ -19,7 +20,8 @@ struct Args {
     live: bool,
 }
 
-fn main() {
+/// The world process: parses its flags, loads the run's scenario.toml, runs, exits.
+pub fn main() {
     // SAFETY: prctl with constant arguments.
     unsafe {
         libc::prctl(libc::PR_SET_PDEATHSIG, libc::SIGKILL);
@@ -35,14 +37,14 @@ fn main() {
             std::process::exit(2);
         }
     };
-    let a = world::process::WorldArgs {
+    let a = crate::process::WorldArgs {
         run_id: args.run_id,
         prefix: args.prefix,
         run_dir: args.run_dir,
         scenario: sc,
         live: args.live,
     };
-    match world::process::run(&a) {
+    match crate::process::run(&a) {
         Ok(code) => std::process::exit(code),
         Err(e) => {
             eprintln!("world: {e}");

@@ -75,14 +75,8 @@ enum Cmd {
     BenchChild(bench::ChildArgs),
 }
 
-/// mimalloc, not glibc's malloc: the in-process executor's worker threads each allocate a few
-/// dozen blocks per robot-step, and with glibc two threads ran each robot ~20 % slower than one
-/// thread did alone (chunk times measured inside one run; 2 independent processes did not slow
-/// each other). With mimalloc the two threads' chunks take what they take alone.
-#[global_allocator]
-static GLOBAL: mimalloc::MiMalloc = mimalloc::MiMalloc;
-
-fn main() {
+/// The `orchestrator` command line (the binary in bins/ calls it).
+pub fn main() {
     swarm::transport::quiet_logs();
     // Every robot costs the world descriptors; its children inherit the raised limit.
     swarm::limits::raise_nofile();
