@@ -6,7 +6,6 @@ pub mod cbca;
 pub mod formation;
 pub mod hunt;
 pub mod kernels;
-pub mod process_main;
 pub mod search;
 
 pub use behaviours::{dispatch, BehaviourVisitor};

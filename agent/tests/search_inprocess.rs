@@ -25,7 +25,7 @@ fn scenario(mode: &str, robots: u32, seed: u64, max_ticks: u64) -> Scenario {
     sc.run.robots = robots;
     sc.run.seed = seed;
     sc.run.max_ticks = max_ticks;
-    sc.search.mode = mode.into();
+    sc.search_mut().mode = mode.into();
     sc.validate(&|_| "test".into()).expect("valid scenario");
     agent::behaviours::validate(&sc, "test").expect("valid search parameters");
     sc

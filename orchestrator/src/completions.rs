@@ -105,6 +105,6 @@ mod tests {
             help("robots")
         );
         assert!(help("max_ticks").contains(&format!("default {}]", sc.run.max_ticks)));
-        assert!(help("mode").contains(&format!("default {}]", sc.search.mode)));
+        assert!(help("mode").contains(&format!("default {}]", sc.search().mode)));
     }
 }

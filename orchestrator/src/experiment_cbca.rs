@@ -367,7 +367,7 @@ fn hunt_row(variant: &str, sc: &Scenario, s: &serde_json::Value) -> Row {
         .as_array()
         .and_then(|c| c.iter().filter_map(|c| c["tick"].as_u64()).min());
     Row::new(variant, "cbca (hunt world)", sc.run.robots, sc.run.seed)
-        .with("evaders", sc.hunt.evaders.len())
+        .with("evaders", sc.hunt().evaders.len())
         .with("captured", m["captured"].as_f64())
         .with("all_captured", m["all_captured_minutes"].is_number())
         .with("all_captured_minutes", m["all_captured_minutes"].as_f64())
@@ -405,7 +405,7 @@ fn example_hunt(
     let s = ctx.run(sc, &format!("cbca-example{n}"))?;
     rows.push(hunt_row(&format!("example {n} (hunt world)"), sc, &s));
     let m = &s["mission"]["hunt"];
-    let dt = sc.hunt.params.minutes_per_tick;
+    let dt = sc.hunt().params.minutes_per_tick;
     let _ = writeln!(
         md,
         "## Example {n} in the hunt world (the `cbca` behaviour, {}, seed {})\n",
@@ -859,7 +859,7 @@ fn variants(
         seeds.len()
     );
     let _ = writeln!(md, "A run that does not capture every evader by `run.max_ticks` ({}) is censored: it counts in 'runs capturing all' and its time is left out of the mean (the column says how many runs the mean has).\n", base.run.max_ticks);
-    let _ = writeln!(md, "| variant | runs | captured (mean of {}) | runs capturing all | time to the last capture, min (mean ± sd, n) | first commitment, tick (mean) | messages offered | delivered | kB delivered | robots killed |\n|---|---|---|---|---|---|---|---|---|---|", base.hunt.evaders.len());
+    let _ = writeln!(md, "| variant | runs | captured (mean of {}) | runs capturing all | time to the last capture, min (mean ± sd, n) | first commitment, tick (mean) | messages offered | delivered | kB delivered | robots killed |\n|---|---|---|---|---|---|---|---|---|---|", base.hunt().evaders.len());
     // Every run's scenario first (all validated before any runs), then `--jobs` at a time.
     let mut jobs = Vec::new();
     for v in &x.variants {

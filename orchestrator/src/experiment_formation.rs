@@ -216,7 +216,10 @@ fn with(sc: &Scenario, edit: impl Fn(&mut Scenario)) -> Result<Scenario, String>
 }
 
 fn section(sc: &mut Scenario) -> &mut swarm::sections::formation::FormationSection {
-    sc.formation.get_or_insert_with(Default::default)
+    if sc.formation().is_none() {
+        sc.set_formation(Some(Default::default()));
+    }
+    sc.formation_mut().expect("set above")
 }
 
 /// The world's seeded start positions for `sc`.
@@ -276,8 +279,8 @@ fn table1(
 ) -> Result<(String, Vec<FormationRun>), String> {
     let n = base.run.robots as usize;
     let template = base
-        .formation
-        .clone()
+        .formation()
+        .cloned()
         .unwrap_or_default()
         .template_points(n)?;
     let mut jobs = Vec::new();
@@ -441,7 +444,7 @@ fn table2(
     for (g, &seed) in seeds.iter().take(TABLE2_GROUPS).enumerate() {
         let sc = with(base, |s| s.run.seed = seed)?;
         let p = parse_params(&sc)?.kernels;
-        let f = sc.formation.clone().unwrap_or_default();
+        let f = sc.formation().cloned().unwrap_or_default();
         let template = Template {
             name: f.template_name.clone(),
             points: f.template_points(sc.run.robots as usize)?,
@@ -548,7 +551,7 @@ fn table3(
         let sc = Scenario::load(&ctx.dir.join(path)).map_err(|e| e.to_string())?;
         let sc = with(&sc, |s| s.run.seed = seeds[0])?;
         let p = parse_params(&sc)?.kernels;
-        let f = sc.formation.clone().unwrap_or_default();
+        let f = sc.formation().cloned().unwrap_or_default();
         let template = Template {
             name: f.template_name.clone(),
             points: f.template_points(sc.run.robots as usize)?,

@@ -130,11 +130,11 @@ fn example_3a(
     rows.push(live_row("example 3-A", sc, &s));
     let m = &s["mission"]["hunt"];
     let t5 = sc
-        .hunt
+        .hunt()
         .evaders
         .iter()
         .find(|e| e.id == 5)
-        .map_or(u64::MAX, |e| e.appear_tick(&sc.hunt.params));
+        .map_or(u64::MAX, |e| e.appear_tick(&sc.hunt().params));
     let changes = m["coalition_changes"]
         .as_array()
         .cloned()
@@ -159,7 +159,7 @@ fn example_3a(
         sc.run.seed,
         s["end"],
         s["ticks"],
-        s["ticks"].as_f64().unwrap_or(0.0) * sc.hunt.params.minutes_per_tick
+        s["ticks"].as_f64().unwrap_or(0.0) * sc.hunt().params.minutes_per_tick
     );
     if ctx.executor == crate::up::Executor::Processes {
         let id = format!("{}-hunt-example-3a-inprocess", ctx.id);
@@ -194,7 +194,7 @@ fn example_3a(
             .map_or("-", |x| x.1);
         let ours0 = members_at(j, t5).map_or("-".into(), |v| set(&v));
         // After T5 and its re-planning (the first replanning pass after it).
-        let after = t5 + 2 * sc.hunt.params.replan_period_ticks;
+        let after = t5 + 2 * sc.hunt().params.replan_period_ticks;
         let ours5 = members_at(j, after).map_or("-".into(), |v| set(&v));
         let _ = writeln!(md, "| Phi{j} | {th0} | {ours0} | {th5} | {ours5} |");
     }
@@ -208,7 +208,7 @@ fn example_3a(
             md,
             "- tick {} ({:.2} min): T{} = {}",
             c["tick"],
-            c["tick"].as_f64().unwrap_or(0.0) * sc.hunt.params.minutes_per_tick,
+            c["tick"].as_f64().unwrap_or(0.0) * sc.hunt().params.minutes_per_tick,
             c["task"],
             set(&v)
         );
@@ -243,8 +243,8 @@ fn example_3a(
     );
     // Fig. 3.6: the initial auction's rewards round by round (the kernel, lossless: the same
     // rounds as the auctioneer's first auction over a lossless radio).
-    let p = &sc.hunt.params;
-    let o = run_auction(&sc.hunt.tasks_at(0.0), &sc.hunt.robots(), p);
+    let p = &sc.hunt().params;
+    let o = run_auction(&sc.hunt().tasks_at(0.0), &sc.hunt().robots(), p);
     let _ = writeln!(
         md,
         "Reward iterations of the initial auction (Fig. 3.6; thesis: T3, T4 rise, T1, T2 fall, flat after 12): {} rounds, finish {:?}.\n",
@@ -256,7 +256,7 @@ fn example_3a(
         "| task | z round 1 | z last | trend |\n|---|---|---|---|"
     );
     let mut series: Vec<(u32, Vec<f64>)> = Vec::new();
-    for t in sc.hunt.tasks_at(0.0) {
+    for t in sc.hunt().tasks_at(0.0) {
         let zs: Vec<f64> = o
             .rounds
             .iter()
@@ -483,11 +483,11 @@ fn live_row(variant: &str, sc: &Scenario, s: &Value) -> Row {
         .sum();
     Row::new(
         variant,
-        auction_name(sc.hunt.params.auction),
+        auction_name(sc.hunt().params.auction),
         sc.run.robots,
         sc.run.seed,
     )
-    .with("evaders", sc.hunt.evaders.len())
+    .with("evaders", sc.hunt().evaders.len())
     .with("captured", m["captured"].as_f64())
     .with("all_captured", m["all_captured_minutes"].is_number())
     .with("all_captured_minutes", m["all_captured_minutes"].as_f64())
@@ -515,7 +515,7 @@ fn variants(
     rows: &mut Vec<Row>,
 ) -> Result<(), String> {
     let auctions = if x.auctions.is_empty() {
-        vec![base.hunt.params.auction]
+        vec![base.hunt().params.auction]
     } else {
         x.auctions.clone()
     };
@@ -525,7 +525,7 @@ fn variants(
         seeds.len()
     );
     let _ = writeln!(md, "C and Y are those of the auctioneer's auctions as it made the awards (3.13, 3.14; all its auctions: the initial one and the new target's). Reward paid: the sum over the tasks of the last z_j the auctioneer reported (assistance raises it).\n");
-    let _ = writeln!(md, "| auction | variant | runs | captured (mean of {}) | all captured | time to the last capture, min (mean over runs that captured all) | C | Y | reward paid | messages offered | delivered | kB offered | kB delivered | bytes a delivered message | auction rounds | robots killed |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|", base.hunt.evaders.len());
+    let _ = writeln!(md, "| auction | variant | runs | captured (mean of {}) | all captured | time to the last capture, min (mean over runs that captured all) | C | Y | reward paid | messages offered | delivered | kB offered | kB delivered | bytes a delivered message | auction rounds | robots killed |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|", base.hunt().evaders.len());
     // Every run's scenario first (all validated before any runs), then `--jobs` at a time.
     let mut jobs = Vec::new();
     for auction in &auctions {
@@ -533,7 +533,7 @@ fn variants(
             for &seed in seeds {
                 let mut sc = base.clone();
                 sc.run.seed = seed;
-                sc.hunt.params.auction = *auction;
+                sc.hunt_mut().params.auction = *auction;
                 v.apply(&mut sc);
                 crate::prepare::prepare_from(&mut sc, &ctx.name()).map_err(|e| e.to_string())?;
                 let tag = tag_of(&format!("hunt-{auction:?}-{}-{seed}", v.name));
@@ -607,7 +607,7 @@ pub fn run(ctx: &Context) -> Result<Report, String> {
     );
     let mut rows = Vec::new();
     example_3a(&base, ctx, &mut md, &mut rows)?;
-    sweeps(&x, &seeds, &base.hunt.params, &mut md, &mut rows);
+    sweeps(&x, &seeds, &base.hunt().params, &mut md, &mut rows);
     variants(&x, &base, &variant_seeds, ctx, &mut md, &mut rows)?;
     Ok(Report {
         md,

@@ -157,7 +157,7 @@ pub fn run(ctx: &Context) -> Result<Report, String> {
                 .flat_map(|(s, &seed)| x.variants.iter().zip(&bases).map(move |v| (s, seed, v)))
             {
                 let mut sc = vbase.clone();
-                sc.search.mode = mode.clone();
+                sc.search_mut().mode = mode.clone();
                 sc.run.robots = n;
                 sc.run.seed = seed;
                 sc.run.max_ticks = x.max_ticks;

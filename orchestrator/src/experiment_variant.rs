@@ -103,7 +103,7 @@ mod tests {
         };
         let sc = v.scenario(&base, Path::new(".")).unwrap();
         assert_eq!(
-            sc.search.kernels["virtual_force"]["l_r"].as_float(),
+            sc.search().kernels["virtual_force"]["l_r"].as_float(),
             Some(100.0)
         );
         assert!(!sc.arena.walls_sensed);

@@ -3,7 +3,6 @@
 //! gives the same recording as the multi-process executor.
 
 use crate::phase::PhaseBarrier;
-use agent::{dispatch, BehaviourVisitor};
 use std::panic::AssertUnwindSafe;
 use std::path::Path;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -11,6 +10,7 @@ use std::sync::{Mutex, MutexGuard, RwLock};
 use std::time::Instant;
 use swarm::frames::{Action, Sense};
 use swarm::mailbox::{Air, Mailbox};
+use swarm::plugin::BehaviourVisitor;
 use swarm::scenario::Scenario;
 use swarm::{AgentRuntime, Behaviour};
 use world::sensing::SenseScratch;
@@ -304,7 +304,7 @@ pub fn run_live(
     stop: &dyn Fn() -> bool,
 ) -> std::io::Result<Summary> {
     check(sc).map_err(|e| std::io::Error::new(std::io::ErrorKind::InvalidInput, e))?;
-    dispatch(
+    crate::plugins::run_inprocess(
         sc,
         InProcess {
             sc,

@@ -18,6 +18,7 @@ mod logs;
 mod outcome;
 mod outdir;
 mod phase;
+mod plugins;
 mod prepare;
 mod processes;
 mod progress;
@@ -75,8 +76,10 @@ enum Cmd {
     BenchChild(bench::ChildArgs),
 }
 
-/// The `orchestrator` command line (the binary in bins/ calls it).
-pub fn main() {
+/// The `orchestrator` command line of a binary composed with plug-in `P` (bins/src/bin/
+/// orchestrator.rs): registers `P`'s sections, missions and behaviours, then runs the command.
+pub fn main<P: swarm::plugin::Plugin + world::mission::Missions>() {
+    plugins::register::<P>();
     swarm::transport::quiet_logs();
     // Every robot costs the world descriptors; its children inherit the raised limit.
     swarm::limits::raise_nofile();

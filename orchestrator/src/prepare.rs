@@ -1,6 +1,6 @@
 //! A scenario made ready to run: every section checked by its owner (the run's own sections by
 //! swarm, the world core's limits and the robots' placement and the mission's section by the
-//! world crate, then the behaviour's by the agent crate's registry), then
+//! world crate, then the behaviour's by its plug-in, crate::plugins), then
 //! the behaviour's defaults written in, so the resolved scenario lists every value.
 
 use swarm::scenario::{Check, ConfigError, Scenario};
@@ -12,19 +12,20 @@ pub fn prepare(sc: &mut Scenario, key_source: &dyn Fn(&str) -> String) -> Result
     let c = Check { key_source };
     // A section of another behaviour or mission is refused before anything reads it.
     let mission = world::mission::entry_for(sc);
-    let mut used: Vec<&str> = agent::behaviours::sections(&sc.run.behaviour).to_vec();
+    let behaviour = crate::plugins::behaviour(&sc.run.behaviour);
+    let mut used: Vec<&str> = behaviour.map_or(&[][..], |b| b.sections).to_vec();
     used.extend(mission.map_or(&[][..], |m| m.sections));
     used.sort_unstable();
     used.dedup();
-    if agent::behaviours::BEHAVIOURS.contains(&sc.run.behaviour.as_str()) && mission.is_some() {
+    if behaviour.is_some() && mission.is_some() {
         sc.check_sections_used(&used, mission.map_or("", |m| m.name), &c)?;
     }
     world::limits::validate(sc, &c)?;
     // The mission first: its range checks name the key the user wrote (`search.signal_m =
     // nan`) before the behaviour compares its own copies with them.
     world::mission::validate_with(sc, &c)?;
-    agent::behaviours::validate_with(sc, &c)?;
-    agent::behaviours::resolve_defaults(sc)
+    crate::plugins::validate_behaviour(sc, &c)?;
+    crate::plugins::resolve_behaviour(sc)
 }
 
 /// [`prepare`] with every key from one `source` (a file, a bench).
@@ -107,12 +108,12 @@ mod tests {
                 set(&mut sc.robot.sensing_radius, sensing);
                 set(&mut sc.robot.radius, radius);
                 set(&mut sc.radio.comm_radius, comm);
-                set(&mut sc.search.targets, targets);
+                set(&mut sc.search_mut().targets, targets);
                 let (target_region, clearance, found, noise) = search;
-                set(&mut sc.search.target_region, target_region);
-                set(&mut sc.search.target_clearance, clearance);
-                set(&mut sc.search.found_distance, found);
-                set(&mut sc.search.noise_sigma, noise);
+                set(&mut sc.search_mut().target_region, target_region);
+                set(&mut sc.search_mut().target_clearance, clearance);
+                set(&mut sc.search_mut().found_distance, found);
+                set(&mut sc.search_mut().noise_sigma, noise);
                 let mut k = toml::Table::new();
                 let mut put = |section: &str, key: &str, v: f64| {
                     if let toml::Value::Table(t) = k
@@ -136,7 +137,7 @@ mod tests {
                 if let Some(v) = c3 {
                     put("tpepso", "c3", v);
                 }
-                sc.search.kernels = k;
+                sc.search_mut().kernels = k;
                 sc
             })
     }
@@ -180,7 +181,7 @@ mod tests {
     #[test]
     fn signal_m_nan_is_named_as_itself_not_as_a_calibration_mismatch() {
         let mut sc = Scenario::default();
-        sc.search.signal_m = f64::NAN;
+        sc.search_mut().signal_m = f64::NAN;
         let e = prepare_from(&mut sc, "t.toml").unwrap_err();
         assert_eq!(e.key, "search.signal_m", "{e}");
     }

@@ -234,7 +234,7 @@ pub fn resolve(a: &UpArgs) -> Result<Scenario, ConfigError> {
             });
         }
         let name = format!("{m:?}").to_uppercase();
-        set("search.mode", &mut || sc.search.mode = name.clone());
+        set("search.mode", &mut || sc.search_mut().mode = name.clone());
     }
     if let Some(v) = a.delay {
         set("radio.delay_ticks", &mut || sc.radio.delay_ticks = v);

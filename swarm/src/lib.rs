@@ -27,6 +27,7 @@ pub mod key_lines;
 pub mod layer;
 pub mod limits;
 pub mod mailbox;
+pub mod plugin;
 pub mod radio;
 pub mod recording;
 pub mod scenario;

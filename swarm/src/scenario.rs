@@ -16,7 +16,8 @@ pub const DEFAULT_SCENARIO: &str = include_str!("../../configs/default.toml");
 /// long-running fault tests run, since a search run ends when every target is found.
 pub const ROAM_SCENARIO: &str = include_str!("../../configs/roam.toml");
 
-#[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
+/// A scenario: the core's sections (typed fields) and its plug-ins' ([`Scenario::sections`]).
+#[derive(Deserialize, Clone, Debug, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct Scenario {
     pub run: RunParams,
@@ -26,30 +27,59 @@ pub struct Scenario {
     pub runtime: RuntimeParams,
     pub roam: RoamParams,
     pub faults: FaultParams,
-    pub search: SearchParams,
-    /// The formation paper's section (`[formation]`, docs/formation.md); only formation
-    /// scenarios have one, so other scenarios' resolved files (and recordings) are unchanged.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub formation: Option<FormationSection>,
-    /// The hunting thesis's section (docs/hunting.md); absent: no hunt.
-    #[serde(default, skip_serializing_if = "HuntSection::is_empty")]
-    pub hunt: HuntSection,
-    /// The `[cbca]` section (thesis 003 chapter 4: CBCA's parameters, target and robot rows),
-    /// read and validated by the agent crate's `cbca` behaviour. Left out when empty.
-    #[serde(default, skip_serializing_if = "toml::Table::is_empty")]
-    pub cbca: toml::Table,
+    /// The plug-ins' sections (`[search]`, `[formation]`, `[hunt]`, `[cbca]`, a user's own),
+    /// written after `[faults]` in the order the binary registered them (crate::plugin).
+    /// Read with [`Scenario::section`].
+    #[serde(skip)]
+    pub sections: crate::plugin::Sections,
     /// `[[agents]]`: robots run by the user's own programs (sections/agents.rs); the robots
     /// no entry lists run `run.behaviour`. Left out when empty.
-    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    #[serde(default)]
     pub agents: Vec<AgentEntry>,
     /// The world host's Zenoh listen endpoint in a run across hosts (`up --listen` overrides
     /// it; default `sections::hosts::DEFAULT_LISTEN`). Never resolved into the run's files.
-    #[serde(default, skip_serializing)]
+    #[serde(default)]
     pub hosts_listen: Option<String>,
     /// `[[hosts]]`: which robots run on which remote host (`sections::hosts`). Never resolved
     /// into the run's files: where a robot runs changes no result.
-    #[serde(default, skip_serializing)]
+    #[serde(default)]
     pub hosts: Vec<crate::sections::hosts::HostSpec>,
+}
+
+/// The core's top-level keys (every other top-level table is a plug-in's section).
+pub const CORE_SECTIONS: &[&str] = &[
+    "run",
+    "arena",
+    "robot",
+    "radio",
+    "runtime",
+    "roam",
+    "faults",
+    "agents",
+    "hosts_listen",
+    "hosts",
+];
+
+/// Written as the resolved scenario.toml lists it: the core's sections, the plug-ins' (in
+/// registration order), `[[agents]]` (if any); never `[[hosts]]` nor `hosts_listen`.
+impl Serialize for Scenario {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeStruct;
+        let n = 7 + self.sections.written() + usize::from(!self.agents.is_empty());
+        let mut st = s.serialize_struct("Scenario", n)?;
+        st.serialize_field("run", &self.run)?;
+        st.serialize_field("arena", &self.arena)?;
+        st.serialize_field("robot", &self.robot)?;
+        st.serialize_field("radio", &self.radio)?;
+        st.serialize_field("runtime", &self.runtime)?;
+        st.serialize_field("roam", &self.roam)?;
+        st.serialize_field("faults", &self.faults)?;
+        self.sections.serialize_into(&mut st)?;
+        if !self.agents.is_empty() {
+            st.serialize_field("agents", &self.agents)?;
+        }
+        st.end()
+    }
 }
 
 #[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
@@ -571,7 +601,15 @@ impl Scenario {
         })?;
         crate::scenario_shape::check(&user, text, source)?;
         merge(&mut base, user);
-        serde_path_to_error::deserialize(toml::Value::Table(base)).map_err(
+        let plugins: toml::Table = base
+            .keys()
+            .filter(|k| !CORE_SECTIONS.contains(&k.as_str()))
+            .cloned()
+            .collect::<Vec<_>>()
+            .into_iter()
+            .filter_map(|k| base.remove(&k).map(|v| (k, v)))
+            .collect();
+        let mut sc: Scenario = serde_path_to_error::deserialize(toml::Value::Table(base)).map_err(
             |e: serde_path_to_error::Error<toml::de::Error>| {
                 let path = e.path().to_string();
                 let key = if path == "." { String::new() } else { path };
@@ -581,7 +619,73 @@ impl Scenario {
                     key,
                 }
             },
-        )
+        )?;
+        sc.sections = crate::plugin::Sections::read(plugins).map_err(|(name, message, path)| {
+            let path = path.to_string();
+            let key = if path == "." {
+                name
+            } else {
+                format!("{name}.{path}")
+            };
+            ConfigError {
+                source: crate::key_lines::locate_in(source, text, &key),
+                message: with_integer_range(&message),
+                key,
+            }
+        })?;
+        Ok(sc)
+    }
+
+    /// The search paper's section (every scenario has one: the embedded default's).
+    pub fn search(&self) -> &SearchParams {
+        self.section::<SearchParams>()
+            .expect("every scenario has [search] (the embedded default's)")
+    }
+    pub fn search_mut(&mut self) -> &mut SearchParams {
+        self.sections
+            .get_mut::<SearchParams>()
+            .expect("every scenario has [search] (the embedded default's)")
+    }
+    /// The formation paper's section (only formation scenarios have one).
+    pub fn formation(&self) -> Option<&FormationSection> {
+        self.section::<FormationSection>()
+    }
+    pub fn formation_mut(&mut self) -> Option<&mut FormationSection> {
+        self.sections.get_mut::<FormationSection>()
+    }
+    pub fn set_formation(&mut self, f: Option<FormationSection>) {
+        match f {
+            Some(f) => self.sections.set(f),
+            None => self.sections.remove::<FormationSection>(),
+        }
+    }
+    /// The hunting thesis's section (empty: no hunt).
+    pub fn hunt(&self) -> &HuntSection {
+        self.section::<HuntSection>().expect("[hunt] has a default")
+    }
+    pub fn hunt_mut(&mut self) -> &mut HuntSection {
+        self.sections
+            .get_mut::<HuntSection>()
+            .expect("[hunt] has a default")
+    }
+    /// The `[cbca]` section (thesis 003 chapter 4), read by the agent crate's cbca behaviour.
+    pub fn cbca(&self) -> &toml::Table {
+        &self
+            .section::<crate::sections::cbca::CbcaSection>()
+            .expect("[cbca] has a default")
+            .0
+    }
+    pub fn cbca_mut(&mut self) -> &mut toml::Table {
+        &mut self
+            .sections
+            .get_mut::<crate::sections::cbca::CbcaSection>()
+            .expect("[cbca] has a default")
+            .0
+    }
+
+    /// Plug-in section `S` (None: the scenario has none and `S` has no default).
+    pub fn section<S: crate::plugin::Section>(&self) -> Option<&S> {
+        self.sections.get::<S>()
     }
 
     pub fn load(path: &Path) -> Result<Scenario, ConfigError> {
@@ -926,20 +1030,13 @@ impl Scenario {
     /// `[hunt]`, `[cbca]`) that this scenario sets: those that differ from the embedded
     /// default's (so a resolved scenario.toml, which lists every section, reads back as its
     /// run wrote it).
-    pub fn sections_set(&self) -> Vec<&'static str> {
+    pub fn sections_set(&self) -> Vec<String> {
         let d = Scenario::default();
         let mut out = Vec::new();
-        for (name, set) in [
-            ("roam", self.roam != d.roam),
-            ("search", self.search != d.search),
-            ("formation", self.formation.is_some()),
-            ("hunt", self.hunt != d.hunt),
-            ("cbca", !self.cbca.is_empty()),
-        ] {
-            if set {
-                out.push(name);
-            }
+        if self.roam != d.roam {
+            out.push("roam".to_string());
         }
+        out.extend(self.sections.set_apart_from(&d.sections));
         out
     }
 
@@ -952,10 +1049,31 @@ impl Scenario {
         mission: &str,
         c: &Check,
     ) -> Result<(), ConfigError> {
-        match self.sections_set().into_iter().find(|s| !used.contains(s)) {
+        if let Some(u) = self.sections.unknown().first() {
+            let mut allowed: Vec<&str> = CORE_SECTIONS.to_vec();
+            allowed.retain(|k| *k != "hosts_listen");
+            let registered = crate::plugin::registered();
+            allowed.extend(registered.iter().map(|e| e.name));
+            return Err(c.err(
+                u,
+                format!(
+                    "is not a section of a scenario: allowed {}",
+                    allowed
+                        .iter()
+                        .map(|a| format!("[{a}]"))
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ),
+            ));
+        }
+        match self
+            .sections_set()
+            .into_iter()
+            .find(|s| !used.contains(&s.as_str()))
+        {
             None => Ok(()),
             Some(s) => Err(c.err(
-                s,
+                &s,
                 format!(
                     "is a section this run does not use: its behaviour is {} and its mission \
                      {mission:?}, which read {}; remove the section, or set run.behaviour to \
@@ -1041,7 +1159,7 @@ impl Scenario {
 }
 
 /// Recursively overlays `over` onto `base` (tables merge, everything else replaces).
-fn merge(base: &mut toml::Table, over: toml::Table) {
+pub(crate) fn merge(base: &mut toml::Table, over: toml::Table) {
     for (k, v) in over {
         match (base.get_mut(&k), v) {
             (Some(toml::Value::Table(b)), toml::Value::Table(o)) => merge(b, o),
@@ -1066,7 +1184,7 @@ mod tests {
         sc.validate(&file).unwrap();
         assert_eq!(sc.run.robots, 50);
         assert_eq!(sc.run.behaviour, "search");
-        assert_eq!(sc.search.mode, "BT");
+        assert_eq!(sc.search().mode, "BT");
         assert_eq!(sc.arena.obstacles.len(), 9);
         let roam = Scenario::roam();
         roam.validate(&file).unwrap();

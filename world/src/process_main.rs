@@ -20,8 +20,11 @@ struct Args {
     live: bool,
 }
 
-/// The world process: parses its flags, loads the run's scenario.toml, runs, exits.
-pub fn main() {
+/// The world process of a binary composed with plug-in `P` (bins/src/bin/world.rs): registers
+/// `P`'s sections and missions, parses its flags, loads the run's scenario.toml, runs, exits.
+pub fn main<P: swarm::plugin::Plugin + crate::mission::Missions>() {
+    swarm::plugin::register_plugin::<P>();
+    crate::mission::register::<P>();
     // SAFETY: prctl with constant arguments.
     unsafe {
         libc::prctl(libc::PR_SET_PDEATHSIG, libc::SIGKILL);

@@ -6,24 +6,41 @@
 //! its name in `registry!` below (which also declares its module).
 
 use swarm::scenario::{Check, ConfigError, Scenario};
-use swarm::Behaviour;
 
-/// Something to do with the scenario's behaviour type (run it in a process, or in-process).
-pub trait BehaviourVisitor {
-    type Out;
-    fn visit<B: Behaviour + Send + 'static>(self, make: &dyn Fn(u32) -> B) -> Self::Out
-    where
-        B::Msg: Send + Sync;
-}
+pub use swarm::plugin::BehaviourVisitor;
 
-/// The registry: one line per behaviour module. Generates the list of names, and
-/// `validate` / `resolve_defaults` / `dispatch` by name.
+/// The registry: one line per behaviour module. Generates the list of names, the plug-in
+/// [`Builtin`] (what the composed binaries know of each behaviour) and `validate` /
+/// `resolve_defaults` / `dispatch` by name.
 macro_rules! registry {
     ($($m:ident),* $(,)?) => {
         $(pub mod $m;)*
 
         /// Every behaviour an agent can run.
         pub const BEHAVIOURS: &[&str] = &[$($m::NAME),*];
+
+        /// The behaviours of this crate as one plug-in (swarm::plugin).
+        pub struct Builtin;
+
+        impl swarm::plugin::Plugin for Builtin {
+            fn behaviours() -> Vec<swarm::plugin::BehaviourInfo> {
+                vec![$(swarm::plugin::BehaviourInfo {
+                    name: $m::NAME,
+                    sections: $m::SECTIONS,
+                    validate: $m::validate,
+                    resolve: $m::resolve,
+                }),*]
+            }
+            fn dispatch<V: BehaviourVisitor>(sc: &Scenario, v: V) -> Result<V::Out, V> {
+                $(if sc.run.behaviour == $m::NAME {
+                    return Ok($m::dispatch(sc, v));
+                })*
+                Err(v)
+            }
+        }
+
+        /// The papers' missions are still the world crate's own (world::mission::MISSIONS).
+        impl world::mission::Missions for Builtin {}
 
         /// Checks that `run.behaviour` names a behaviour and that its section is valid.
         pub fn validate_with(sc: &Scenario, c: &Check) -> Result<(), ConfigError> {

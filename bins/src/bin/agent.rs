@@ -2,5 +2,5 @@
 //! `orchestrator up`).
 
 fn main() {
-    agent::process_main::main()
+    swarm::agent::main_of::<swarm_bins::Builtin>()
 }

@@ -8,5 +8,5 @@
 static GLOBAL: mimalloc::MiMalloc = mimalloc::MiMalloc;
 
 fn main() {
-    orchestrator::main()
+    orchestrator::main::<swarm_bins::Builtin>()
 }

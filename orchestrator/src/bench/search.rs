@@ -32,7 +32,7 @@ fn scenario(robots: u32, mode: &str, seed: u64) -> BenchResult<Scenario> {
     let mut sc = Scenario::default();
     sc.run.robots = robots;
     sc.run.seed = seed;
-    sc.search.mode = mode.to_string();
+    sc.search_mut().mode = mode.to_string();
     crate::prepare::prepare_from(&mut sc, "bench search")?;
     Ok(sc)
 }

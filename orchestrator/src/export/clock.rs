@@ -21,7 +21,7 @@ impl SimClock {
         let mission = world::mission::entry_for(sc).map_or("", |m| m.name);
         if mission == "hunt" {
             SimClock {
-                seconds_per_tick: sc.hunt.params.minutes_per_tick * 60.0,
+                seconds_per_tick: sc.hunt().params.minutes_per_tick * 60.0,
                 source: "hunt.params.minutes_per_tick x 60",
             }
         } else {
@@ -52,7 +52,7 @@ mod tests {
         assert_eq!(c.seconds_per_tick, UNITLESS_TICK_SECONDS);
         assert_eq!(c.ns(265), 265_000_000_000);
         sc.run.behaviour = "hunt".into();
-        sc.hunt.params.minutes_per_tick = 0.05;
+        sc.hunt_mut().params.minutes_per_tick = 0.05;
         let c = SimClock::of(&sc);
         assert!((c.seconds_per_tick - 3.0).abs() < 1e-12);
         assert_eq!(c.ns(100), 300_000_000_000);

@@ -234,3 +234,43 @@ pub fn main<B: Behaviour, E: std::fmt::Display>(make: impl FnOnce(&Agent) -> Res
         }
     }
 }
+
+/// Runs `Agent::run` on the scenario's behaviour (the visitor of [`main_of`]).
+struct RunBehaviour(Agent);
+
+impl crate::plugin::BehaviourVisitor for RunBehaviour {
+    type Out = Result<i32, AgentError>;
+    fn visit<B: Behaviour + Send + 'static>(self, make: &dyn Fn(u32) -> B) -> Self::Out
+    where
+        B::Msg: Send + Sync,
+    {
+        let b = make(self.0.robot());
+        self.0.run(b)
+    }
+}
+
+/// The whole `main` of a composed agent binary (bins/src/bin/agent.rs): registers plug-in
+/// `P`'s sections, attaches, runs the scenario's `run.behaviour` (one of `P`'s), exits with
+/// the agent exit codes.
+pub fn main_of<P: crate::plugin::Plugin>() -> ! {
+    crate::plugin::register_plugin::<P>();
+    let agent = from_env_or_exit();
+    let robot = agent.robot();
+    // The dispatch reads the scenario while the visitor owns the agent.
+    let sc = agent.scenario().clone();
+    match P::dispatch(&sc, RunBehaviour(agent)) {
+        Ok(Ok(code)) => std::process::exit(code),
+        Ok(Err(e)) => {
+            eprintln!("agent {robot}: {e}");
+            std::process::exit(e.exit_code());
+        }
+        Err(_) => {
+            eprintln!(
+                "agent {robot}: run.behaviour = {:?} is none of this program's: {:?}",
+                sc.run.behaviour,
+                crate::plugin::behaviour_names::<P>()
+            );
+            std::process::exit(EXIT_BAD_INPUT);
+        }
+    }
+}

@@ -37,6 +37,12 @@ pub enum Reassignment {
     Swaps,
 }
 
+/// Only formation scenarios have one, so other scenarios' resolved files (and recordings)
+/// are unchanged.
+impl crate::plugin::Section for FormationSection {
+    const NAME: &'static str = "formation";
+}
+
 /// The `[formation]` section.
 #[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
 #[serde(deny_unknown_fields, default)]

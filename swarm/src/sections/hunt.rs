@@ -168,6 +168,17 @@ struct File {
     hunt: HuntSection,
 }
 
+/// Absent: no hunt (left out of a resolved scenario).
+impl crate::plugin::Section for HuntSection {
+    const NAME: &'static str = "hunt";
+    fn absent() -> Option<Self> {
+        Some(HuntSection::default())
+    }
+    fn is_empty(&self) -> bool {
+        HuntSection::is_empty(self)
+    }
+}
+
 impl HuntSection {
     /// No robots and no evaders: the scenario has no hunt (left out of a resolved scenario).
     pub fn is_empty(&self) -> bool {
@@ -423,7 +434,7 @@ mod tests {
             "hunt-example-3a.toml",
         )
         .unwrap();
-        let h = &sc.hunt;
+        let h = &sc.hunt();
         h.validate(&crate::scenario::Check {
             key_source: &|_| "t".to_string(),
         })

@@ -293,29 +293,29 @@ mod tests {
             "hunt-auction.toml",
         )
         .unwrap();
-        check(&sc.hunt).unwrap();
+        check(sc.hunt()).unwrap();
         for v in [f64::NAN, -5.0, 0.0] {
-            let mut h = sc.hunt.clone();
+            let mut h = sc.hunt().clone();
             h.params.encirclement_slowdown = v;
             let e = check(&h).unwrap_err();
             assert_eq!(e.key, "hunt.params.encirclement_slowdown", "{v}");
             assert!(e.message.contains("allowed (0, 100]"), "{e}");
         }
         for v in [f64::NAN, -1.0] {
-            let mut h = sc.hunt.clone();
+            let mut h = sc.hunt().clone();
             h.auctioneer.radio_range = v;
             assert_eq!(check(&h).unwrap_err().key, "hunt.auctioneer.radio_range");
         }
-        let mut h = sc.hunt.clone();
+        let mut h = sc.hunt().clone();
         h.robots[2].speed = f64::NAN;
         assert_eq!(check(&h).unwrap_err().key, "hunt.robots[2].speed");
-        let mut h = sc.hunt.clone();
+        let mut h = sc.hunt().clone();
         h.robots[3].id = h.robots[1].id;
         assert_eq!(check(&h).unwrap_err().key, "hunt.robots[3].id");
-        let mut h = sc.hunt.clone();
+        let mut h = sc.hunt().clone();
         h.evaders[1].resources[4] = -1.0;
         assert_eq!(check(&h).unwrap_err().key, "hunt.evaders[1].resources[4]");
-        let mut h = sc.hunt.clone();
+        let mut h = sc.hunt().clone();
         h.params.bid_window_ticks = 1;
         assert_eq!(check(&h).unwrap_err().key, "hunt.params.bid_window_ticks");
     }

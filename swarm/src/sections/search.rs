@@ -23,6 +23,11 @@ pub struct SearchParams {
     pub kernels: toml::Table,
 }
 
+/// Every scenario has `[search]`: the embedded default scenario's.
+impl crate::plugin::Section for SearchParams {
+    const NAME: &'static str = "search";
+}
+
 /// Search modes (Table 3).
 pub const SEARCH_MODES: &[&str] = &["BT", "BE", "BA", "ST", "SE", "SA"];
 

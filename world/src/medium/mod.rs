@@ -147,7 +147,7 @@ pub fn sender_ranges(sc: &Scenario, radio: &RadioParams) -> Vec<f64> {
         .sender_ranges
         .iter()
         .any(|s| s.agent as usize == station);
-    let r = sc.hunt.auctioneer.radio_range;
+    let r = sc.hunt().auctioneer.radio_range;
     if sc.run.stations > 0 && r > 0.0 && !own && station < n {
         ranges[station] = radio.comm_radius.min(r);
     }

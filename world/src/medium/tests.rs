@@ -351,7 +351,7 @@ fn a_hunt_auctioneer_with_a_radio_range_transmits_within_it() {
         .iter()
         .all(|&r| r == sc.radio.comm_radius));
     let mut sc2 = sc.clone();
-    sc2.hunt.auctioneer.radio_range = 2.0;
+    sc2.hunt_mut().auctioneer.radio_range = 2.0;
     let r = sender_ranges(&sc2, &sc2.radio);
     assert_eq!(r[station], sc.radio.comm_radius.min(2.0));
     assert!(r[..station].iter().all(|&x| x == sc.radio.comm_radius));

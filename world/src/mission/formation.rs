@@ -30,7 +30,7 @@ pub const ENTRY: MissionEntry = MissionEntry {
 pub const MAX_ERROR_SERIES_ROBOTS: usize = 16;
 
 fn section(sc: &Scenario) -> FormationSection {
-    sc.formation.clone().unwrap_or_default()
+    sc.formation().cloned().unwrap_or_default()
 }
 
 /// Checks the world's side of `[formation]`: the template fits the robots, epsilon is a
@@ -584,15 +584,15 @@ mod tests {
     fn the_template_must_fit_the_robots() {
         let mut sc = Scenario::default();
         sc.run.robots = 9;
-        sc.formation = Some(FormationSection {
+        sc.set_formation(Some(FormationSection {
             template: vec![[0.0, 0.0]; 3],
             ..Default::default()
-        });
+        }));
         let c = Check {
             key_source: &|_| "t.toml".to_string(),
         };
         assert_eq!(validate(&sc, &c).unwrap_err().key, "formation.template");
-        sc.formation.as_mut().unwrap().template.clear();
+        sc.formation_mut().as_mut().unwrap().template.clear();
         validate(&sc, &c).unwrap();
     }
 }

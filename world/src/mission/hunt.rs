@@ -50,7 +50,7 @@ const LIVE_TRAIL_SAMPLES: usize = 20;
 
 /// Checks the `[hunt]` section against the rest of the scenario.
 fn validate(sc: &Scenario, c: &Check) -> Result<(), ConfigError> {
-    let h = &sc.hunt;
+    let h = &sc.hunt();
     h.validate(c)?;
     if h.robots.is_empty() || h.evaders.is_empty() {
         // What asked for the hunt: the mission named, or the behaviour that implies it.
@@ -232,7 +232,7 @@ pub struct HuntMission {
 
 impl HuntMission {
     pub fn new(sc: &Scenario) -> HuntMission {
-        let h = &sc.hunt;
+        let h = &sc.hunt();
         let p = h.params.clone();
         HuntMission {
             esc: EscapeParams {
@@ -536,13 +536,13 @@ impl Mission for HuntMission {
     }
     fn start_poses(&self, sc: &Scenario) -> Option<Vec<[f64; 3]>> {
         let mut v: Vec<[f64; 3]> = sc
-            .hunt
+            .hunt()
             .robots
             .iter()
             .map(|r| [r.position[0], r.position[1], r.heading])
             .collect();
         if sc.run.stations > 0 {
-            let a = sc.hunt.auctioneer.position;
+            let a = sc.hunt().auctioneer.position;
             v.push([a[0], a[1], 0.0]);
         }
         Some(v)
@@ -550,9 +550,9 @@ impl Mission for HuntMission {
     /// Each robot's own speed and turn rate (km/min, rad/min in `[[hunt.robots]]`) times
     /// `minutes_per_tick`; the station, which never moves, gets none (0, 0).
     fn robot_limits(&self, sc: &Scenario) -> Option<Vec<[f64; 2]>> {
-        let dt = sc.hunt.params.minutes_per_tick;
+        let dt = sc.hunt().params.minutes_per_tick;
         let mut v: Vec<[f64; 2]> = sc
-            .hunt
+            .hunt()
             .robots
             .iter()
             .map(|r| [r.speed * dt, r.turn_rate * dt])
@@ -754,7 +754,7 @@ mod tests {
         use swarm::mailbox::Air;
         let mut sc = example();
         // R2 turns at 2 rad/min = 0.1 rad a tick, below the scenario's w_max of 0.3.
-        sc.hunt.robots[1].turn_rate = 2.0;
+        sc.hunt_mut().robots[1].turn_rate = 2.0;
         let mut w = crate::World::new(&sc).unwrap();
         let slot = |name: &str| crate::world::REJECT_NAMES.iter().position(|n| *n == name);
         let (too_fast, turn) = (slot("too_fast").unwrap(), slot("turn_too_fast").unwrap());
@@ -847,7 +847,7 @@ mod tests {
         let alive = vec![true; 16];
         let place = |inside: bool| {
             let mut sc = sc.clone();
-            sc.hunt.params.hunting_points_inside_arena = inside;
+            sc.hunt_mut().params.hunting_points_inside_arena = inside;
             let mut m = HuntMission::new(&sc);
             m.evaders[0].pos = Vec2::new(5.0, 10.0);
             let c = m.evaders[0].pos;

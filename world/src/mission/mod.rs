@@ -119,6 +119,7 @@ pub trait Mission: Send + Sync {
 
 /// A registry line: a mission's name, the behaviours that imply it when `run.mission` is left
 /// out, the check of its scenario section, and its constructor.
+#[derive(Clone, Copy)]
 pub struct MissionEntry {
     pub name: &'static str,
     /// What its progress counts, for progress bars ("targets found"); empty: nothing.
@@ -136,22 +137,74 @@ pub struct MissionEntry {
 macro_rules! missions {
     ($($m:ident),* $(,)?) => {
         $(pub mod $m;)*
-        /// Every mission, in registry order.
+        /// The missions of this crate, in registry order.
         pub const MISSIONS: &[MissionEntry] = &[$($m::ENTRY),*];
     };
 }
 
 missions!(roam, search, formation, hunt);
 
+/// A plug-in's world side: its missions. Implemented by each plug-in (a unit type, with
+/// `swarm::plugin::Plugin`) and by tuples of plug-ins (the composition: bins/src/lib.rs).
+pub trait Missions {
+    fn missions() -> Vec<MissionEntry> {
+        Vec::new()
+    }
+}
+
+impl Missions for () {}
+
+macro_rules! tuple_missions {
+    ($($p:ident),+) => {
+        impl<$($p: Missions),+> Missions for ($($p,)+) {
+            fn missions() -> Vec<MissionEntry> {
+                let mut v = Vec::new();
+                $(v.extend($p::missions());)+
+                v
+            }
+        }
+    };
+}
+
+tuple_missions!(A);
+tuple_missions!(A, B);
+tuple_missions!(A, B, C);
+tuple_missions!(A, B, C, D);
+tuple_missions!(A, B, C, D, E);
+tuple_missions!(A, B, C, D, E, F);
+tuple_missions!(A, B, C, D, E, F, G);
+tuple_missions!(A, B, C, D, E, F, G, H);
+
+/// The missions this crate's own (registered first; roam is the default) and every plug-in
+/// registered after them.
+static REGISTRY: std::sync::LazyLock<std::sync::RwLock<Vec<MissionEntry>>> =
+    std::sync::LazyLock::new(|| std::sync::RwLock::new(MISSIONS.to_vec()));
+
+/// Registers plug-in `P`'s missions (those whose name is not yet taken), after the others.
+pub fn register<P: Missions>() {
+    let mut r = REGISTRY.write().unwrap_or_else(|e| e.into_inner());
+    for m in P::missions() {
+        if !r.iter().any(|x| x.name == m.name) {
+            r.push(m);
+        }
+    }
+}
+
+/// Every mission, in registry order (the first is the default).
+pub fn all() -> Vec<MissionEntry> {
+    REGISTRY.read().unwrap_or_else(|e| e.into_inner()).clone()
+}
+
 /// The scenario's mission: `run.mission`, or the one its behaviour implies, or roam.
-pub fn entry_for(sc: &Scenario) -> Option<&'static MissionEntry> {
+pub fn entry_for(sc: &Scenario) -> Option<MissionEntry> {
+    let all = all();
     match &sc.run.mission {
-        Some(name) => MISSIONS.iter().find(|m| m.name == name),
+        Some(name) => all.iter().find(|m| m.name == name).copied(),
         None => Some(
-            MISSIONS
-                .iter()
+            all.iter()
                 .find(|m| m.implied_by.contains(&sc.run.behaviour.as_str()))
-                .unwrap_or(&MISSIONS[0]),
+                .copied()
+                .unwrap_or(all[0]),
         ),
     }
 }
@@ -164,7 +217,7 @@ pub fn progress_label(sc: &Scenario) -> &'static str {
 /// Checks that `run.mission` names a mission, and the mission's section.
 pub fn validate_with(sc: &Scenario, c: &Check) -> Result<(), ConfigError> {
     let Some(m) = entry_for(sc) else {
-        let names: Vec<&str> = MISSIONS.iter().map(|m| m.name).collect();
+        let names: Vec<&str> = all().iter().map(|m| m.name).collect();
         return Err(c.err(
             "run.mission",
             format!("= {:?} is unknown: allowed {names:?}", sc.run.mission),

@@ -26,7 +26,7 @@ pub const ENTRY: MissionEntry = MissionEntry {
 
 /// Checks the world's side of the `[search]` section (the behaviour checks mode and kernels).
 fn validate(sc: &Scenario, c: &Check) -> Result<(), ConfigError> {
-    let s = &sc.search;
+    let s = &sc.search();
     c.range_u("search.targets", s.targets as u64, 1, 1024)?;
     let [x0, y0, x1, y1] = s.target_region;
     let inside = [x0, y0, x1, y1].iter().all(|v| v.is_finite())
@@ -182,7 +182,7 @@ impl Mission for SearchMission {
         (self.targets.found_count(), self.targets.pos.len() as u32)
     }
     fn complete(&self) -> bool {
-        self.sc.search.end_when_all_found && self.targets.all_found()
+        self.sc.search().end_when_all_found && self.targets.all_found()
     }
     fn end_reason(&self) -> &'static str {
         "all targets found"
@@ -257,15 +257,15 @@ impl Targets {
             swarm::streams::WORLD,
             swarm::streams::TARGET_PLACEMENT,
         );
-        let [x0, y0, x1, y1] = sc.search.target_region;
+        let [x0, y0, x1, y1] = sc.search().target_region;
         let mut pos = Vec::new();
-        for t in 0..sc.search.targets {
+        for t in 0..sc.search().targets {
             let mut ok = false;
             for _ in 0..100_000 {
                 let p = Vec2::new(rng.gen_range(x0..x1), rng.gen_range(y0..y1));
                 let clear = sc.arena.obstacles.iter().all(|o| {
                     !point_in_polygon(p, &o.points)
-                        && polygon_distance(p, &o.points) >= sc.search.target_clearance
+                        && polygon_distance(p, &o.points) >= sc.search().target_clearance
                 });
                 if clear {
                     pos.push([p.x, p.y]);
@@ -310,7 +310,7 @@ impl Targets {
                 n += 1;
             }
         }
-        let s = &sc.search;
+        let s = &sc.search();
         for (t, q) in self.pos.iter().enumerate() {
             if self.found[t].is_some() {
                 continue;
@@ -345,7 +345,7 @@ impl Targets {
                 .iter()
                 .enumerate()
                 .filter(|(i, _)| alive[*i])
-                .find(|(_, p)| distance([p[0], p[1]], self.pos[t]) < sc.search.found_distance)
+                .find(|(_, p)| distance([p[0], p[1]], self.pos[t]) < sc.search().found_distance)
                 .map(|(i, _)| i as u32);
             if let Some(r) = finder {
                 self.found[t] = Some((tick, r));
@@ -392,7 +392,7 @@ mod tests {
             [0.0, 0.0, f64::INFINITY, 100.0],
         ] {
             assert_eq!(
-                key_of(|sc| sc.search.target_region = r),
+                key_of(|sc| sc.search_mut().target_region = r),
                 "search.target_region",
                 "{r:?}"
             );
@@ -401,23 +401,23 @@ mod tests {
 
     #[test]
     fn values_that_make_the_mission_impossible_are_refused() {
-        assert_eq!(key_of(|sc| sc.search.targets = 0), "search.targets");
+        assert_eq!(key_of(|sc| sc.search_mut().targets = 0), "search.targets");
         for v in [f64::NAN, -1.0, 0.0, f64::INFINITY] {
             assert_eq!(
-                key_of(|sc| sc.search.found_distance = v),
+                key_of(|sc| sc.search_mut().found_distance = v),
                 "search.found_distance",
                 "{v}"
             );
         }
         assert_eq!(
-            key_of(|sc| sc.search.target_clearance = -1.0),
+            key_of(|sc| sc.search_mut().target_clearance = -1.0),
             "search.target_clearance"
         );
         assert_eq!(
-            key_of(|sc| sc.search.signal_m = f64::NAN),
+            key_of(|sc| sc.search_mut().signal_m = f64::NAN),
             "search.signal_m"
         );
-        assert_eq!(key_of(|sc| sc.search.l_t = -5.0), "search.l_t");
+        assert_eq!(key_of(|sc| sc.search_mut().l_t = -5.0), "search.l_t");
     }
 
     #[test]
@@ -433,15 +433,15 @@ mod tests {
             ],
         });
         // Inside the slab: no free point at all.
-        sc.search.target_region = [450.0, 450.0, 550.0, 550.0];
+        sc.search_mut().target_region = [450.0, 450.0, 550.0, 550.0];
         let e = check(&sc).unwrap_err();
         assert_eq!(e.key, "search.target_region");
         assert!(e.to_string().contains("no free position"), "{e}");
         // A free strip beside it, but a clearance wider than the strip's distance to it.
-        sc.search.target_region = [600.5, 450.0, 601.0, 550.0];
-        sc.search.target_clearance = 5.0;
+        sc.search_mut().target_region = [600.5, 450.0, 601.0, 550.0];
+        sc.search_mut().target_clearance = 5.0;
         assert_eq!(check(&sc).unwrap_err().key, "search.target_region");
-        sc.search.target_clearance = 0.1;
+        sc.search_mut().target_clearance = 0.1;
         check(&sc).unwrap();
         // What validation accepted, the mission sets up.
         Targets::new(&sc).unwrap();

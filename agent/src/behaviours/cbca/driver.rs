@@ -54,8 +54,8 @@ pub fn scenario(example: u32) -> Scenario {
     let file: toml::Table = std::fs::read_to_string(path).unwrap().parse().unwrap();
     let mut sc = Scenario::default();
     sc.run.behaviour = "cbca".into();
-    sc.cbca = file["cbca"].as_table().unwrap().clone();
-    sc.run.robots = sc.cbca["robots"].as_array().unwrap().len() as u32;
+    *sc.cbca_mut() = file["cbca"].as_table().unwrap().clone();
+    sc.run.robots = sc.cbca()["robots"].as_array().unwrap().len() as u32;
     sc.arena.width = 10.0;
     sc.arena.height = 10.0;
     sc.arena.start_region = [0.0, 0.0, 10.0, 10.0];

@@ -60,7 +60,7 @@ struct Raw {
 impl Section {
     /// Parses `sc.cbca`; errors name the key path under `cbca`.
     pub fn of(sc: &Scenario, c: &Check) -> Result<Section, ConfigError> {
-        let raw: Raw = serde_path_to_error::deserialize(toml::Value::Table(sc.cbca.clone()))
+        let raw: Raw = serde_path_to_error::deserialize(toml::Value::Table(sc.cbca().clone()))
             .map_err(|e: serde_path_to_error::Error<toml::de::Error>| {
                 c.err(
                     &format!("cbca.{}", e.path()),
@@ -157,7 +157,7 @@ pub fn resolve(sc: &mut Scenario) -> Result<(), ConfigError> {
         key_source: &|k| k.to_string(),
     };
     let s = Section::of(sc, &c)?;
-    sc.cbca = s.to_table();
+    *sc.cbca_mut() = s.to_table();
     Ok(())
 }
 

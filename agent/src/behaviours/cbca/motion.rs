@@ -30,15 +30,15 @@ pub struct Mover {
 
 impl Mover {
     pub fn new(sc: &Scenario, robot: u32, p: &BehaviourParams) -> Self {
-        let hunt = sc.hunt.robots.get(robot as usize).map(|r| {
-            (r.speed, r.turn_rate, sc.hunt.params.minutes_per_tick)
+        let hunt = sc.hunt().robots.get(robot as usize).map(|r| {
+            (r.speed, r.turn_rate, sc.hunt().params.minutes_per_tick)
         });
         Self {
             kinematics: sc.robot.kinematics,
             v_max: sc.robot.v_max,
             gain: p.goto_gain,
             apf: if hunt.is_some() {
-                sc.hunt.params.clone()
+                sc.hunt().params.clone()
             } else {
                 HuntParams::default()
             },

@@ -150,10 +150,10 @@ impl Cbca {
             tasks,
             p: {
                 let mut p = sec.behaviour.clone();
-                if !sc.hunt.robots.is_empty() {
+                if !sc.hunt().robots.is_empty() {
                     // The mission judges capture on its circle r_s and its tolerance.
-                    p.ring_radius_km = sc.hunt.params.r_s;
-                    p.arrive_tolerance_km = sc.hunt.params.capture_tolerance;
+                    p.ring_radius_km = sc.hunt().params.r_s;
+                    p.arrive_tolerance_km = sc.hunt().params.capture_tolerance;
                 }
                 p
             },

@@ -130,7 +130,7 @@ fn crafted(
 ) -> swarm::scenario::Scenario {
     let text = format!("{head}\n{}{}", task_rows(tasks), robot_rows(positions));
     let mut sc = scenario(1);
-    sc.cbca = text.parse().unwrap();
+    *sc.cbca_mut() = text.parse().unwrap();
     sc.run.robots = positions.len() as u32;
     sc
 }
@@ -233,7 +233,7 @@ fn a_robot_that_dies_unseen_is_presumed_lost_and_replaced() {
     let mut sc = scenario(1);
     let mut b = toml::Table::new();
     b.insert("seek_when_idle".into(), toml::Value::Boolean(true));
-    sc.cbca.insert("behaviour".into(), toml::Value::Table(b));
+    sc.cbca_mut().insert("behaviour".into(), toml::Value::Table(b));
     sc.robot.neighbour_sensing_radius = 0.2;
     let (mut d, commit) = kill_r5_on_its_way_to_t2(sc);
     assert!(d.run_until(5000, |d| d.all_finished()), "targets left at tick {}", d.tick);

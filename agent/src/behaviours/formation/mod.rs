@@ -137,7 +137,7 @@ pub fn resolve(sc: &mut Scenario) -> Result<(), ConfigError> {
     let p = parse_params(sc).map_err(bad)?;
     let mut f = params::section(sc);
     f.kernels = toml::Table::try_from(&p).map_err(|e| bad(e.to_string()))?;
-    sc.formation = Some(f);
+    sc.set_formation(Some(f));
     Ok(())
 }
 

@@ -144,7 +144,7 @@ impl Default for Params {
 
 /// The scenario's section (the default when it has none).
 pub fn section(sc: &Scenario) -> FormationSection {
-    sc.formation.clone().unwrap_or_default()
+    sc.formation().cloned().unwrap_or_default()
 }
 
 /// The parameters with the derived numbers filled in from the scenario.

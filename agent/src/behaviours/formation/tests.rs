@@ -101,7 +101,7 @@ fn a_silent_member_is_replanned_away_by_the_lowest_robot_left() {
     r1.step(&sense(1, 1, starts[1], 9), &all, &mut out);
     assert!(r1.plan().is_none());
     // From tick 1 on robot 0 is silent; past lost_after_ticks robot 1 is the lowest heard.
-    let lost = sc.formation.as_ref().unwrap().lost_after_ticks as u64;
+    let lost = sc.formation().as_ref().unwrap().lost_after_ticks as u64;
     let mut planned_at = None;
     for k in 2..lost + 4 {
         let others: Vec<Received<Msg>> = (2..9)
@@ -237,7 +237,7 @@ fn a_coordinator_plan_too_large_for_one_message_is_refused_and_swaps_accepted() 
     )))
     .unwrap();
     assert!(crate::behaviours::validate(&sc, "formation-500.toml").is_ok());
-    sc.formation.as_mut().unwrap().reassignment = Reassignment::PerStep;
+    sc.formation_mut().as_mut().unwrap().reassignment = Reassignment::PerStep;
     let e = crate::behaviours::validate(&sc, "formation-500.toml").unwrap_err();
     assert_eq!(e.key, "formation.reassignment");
     let need = compact::full_plan_len(500, 0);
@@ -258,7 +258,7 @@ fn the_relayed_mode_is_checked_against_the_message_size_and_the_messages_per_tic
     let validate = |sc: &Scenario| crate::behaviours::validate(sc, "formation-500-centralised.toml");
     assert!(validate(&sc).is_ok(), "{:?}", validate(&sc).err());
     let set = |sc: &mut Scenario, key: &str, v: i64| {
-        let f = sc.formation.as_mut().unwrap();
+        let f = sc.formation_mut().unwrap();
         let relay = f.kernels.get_mut("relay").and_then(|r| r.as_table_mut()).unwrap();
         relay.insert(key.into(), toml::Value::Integer(v));
     };

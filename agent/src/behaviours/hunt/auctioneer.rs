@@ -166,7 +166,7 @@ pub struct Station {
 
 impl Station {
     pub fn new(sc: &Scenario) -> Station {
-        let h = &sc.hunt;
+        let h = &sc.hunt();
         let p = h.params.clone();
         Station {
             robots: h.robots.iter().map(|r| (r.id, robot_of(r))).collect(),

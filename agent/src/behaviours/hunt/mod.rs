@@ -134,8 +134,8 @@ mod tests {
             .collect();
         assert_eq!(bids.len(), 1);
         assert_eq!(bids[0].0, 15);
-        let robot = crate::hunt::scenario::robot_of(&sc.hunt.robots[0]);
-        let best = crate::hunt::auction::Bidder::new(robot, &sc.hunt.params).best_task(&a);
+        let robot = crate::hunt::scenario::robot_of(&sc.hunt().robots[0]);
+        let best = crate::hunt::auction::Bidder::new(robot, &sc.hunt().params).best_task(&a);
         assert_eq!(Some((bids[0].1.task, bids[0].1.utility)), best);
     }
 
@@ -162,7 +162,7 @@ mod tests {
         s.n_entities = 1;
         let mut out = Outbox::new_for_tests(16);
         let c = r1.step(&s, &[from(15, assign)], &mut out);
-        let dt = sc.hunt.params.minutes_per_tick;
+        let dt = sc.hunt().params.minutes_per_tick;
         let (v_max, w_max) = (0.8 * dt, 6.0 * dt);
         // Heading 0 (east) while the target lies at about 80 degrees: it turns left at its
         // full turn rate; cos(80 deg) > 0, so it also moves, below its own speed.

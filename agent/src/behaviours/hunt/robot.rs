@@ -82,17 +82,17 @@ pub struct HuntRobot {
 
 impl HuntRobot {
     pub fn new(sc: &Scenario, index: u32) -> HuntRobot {
-        let spec = &sc.hunt.robots[index as usize];
+        let spec = &sc.hunt().robots[index as usize];
         let robot = robot_of(spec);
         HuntRobot {
             id: spec.id,
             station: sc.bodies(),
-            walls: sc.hunt.params.hunting_points_inside_arena.then_some(Walls {
+            walls: sc.hunt().params.hunting_points_inside_arena.then_some(Walls {
                 width: sc.arena.width,
                 height: sc.arena.height,
-                clearance: sc.hunt.params.hunting_point_wall_clearance,
+                clearance: sc.hunt().params.hunting_point_wall_clearance,
             }),
-            p: sc.hunt.params.clone(),
+            p: sc.hunt().params.clone(),
             auction: None,
             pending: None,
             assignment: None,

@@ -101,7 +101,7 @@ pub fn resolve(sc: &mut Scenario) -> Result<(), ConfigError> {
         message,
     };
     let p = parse_params(sc).map_err(bad)?;
-    sc.search.kernels = toml::Table::try_from(&p).map_err(|e| bad(e.to_string()))?;
+    sc.search_mut().kernels = toml::Table::try_from(&p).map_err(|e| bad(e.to_string()))?;
     Ok(())
 }
 
@@ -180,7 +180,7 @@ impl Search {
 
     /// The behaviour with explicit parameters (the mode still comes from the scenario).
     pub fn with_params(sc: &Scenario, robot: u32, p: Params) -> Search {
-        let (obstacle, layer) = parse_mode(&sc.search.mode)
+        let (obstacle, layer) = parse_mode(&sc.search().mode)
             .unwrap_or_else(|e| panic!("{e} (the scenario was not validated)"));
         let seed = sc.run.seed;
         // Initial velocity: a random heading at V_max. [chosen] spec 5 item 3.

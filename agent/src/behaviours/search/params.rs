@@ -163,7 +163,7 @@ pub fn parse_mode(mode: &str) -> Result<(ObstacleLayer, SearchLayer), String> {
 /// source: (path below `search.kernels`, the scenario key, its value). The kernels take these
 /// from the scenario; a copy written in `search.kernels` must agree with its source.
 fn derived(sc: &Scenario) -> [(&'static str, &'static str, f64); 10] {
-    let (v, s) = (sc.robot.v_max, &sc.search);
+    let (v, s) = (sc.robot.v_max, &sc.search());
     [
         ("virtual_force.v_max", "robot.v_max", v),
         ("tpepso.v_max", "robot.v_max", v),
@@ -184,7 +184,7 @@ fn derived(sc: &Scenario) -> [(&'static str, &'static str, f64); 10] {
 
 /// `search.kernels` with every derived constant the file leaves out filled in from its source.
 fn kernels_with_derived(sc: &Scenario) -> toml::Table {
-    let mut t = sc.search.kernels.clone();
+    let mut t = sc.search().kernels.clone();
     for (path, _, value) in derived(sc) {
         if kernel_is_set(sc, path) {
             continue;
@@ -387,7 +387,7 @@ const KERNELS: &str = "search.kernels";
 
 /// Whether the scenario's `search.kernels` table sets `path` (dotted, below it).
 fn kernel_is_set(sc: &Scenario, path: &str) -> bool {
-    let mut t = &sc.search.kernels;
+    let mut t = &sc.search().kernels;
     let mut parts = path.split('.').peekable();
     while let Some(k) = parts.next() {
         match (t.get(k), parts.peek()) {
@@ -416,14 +416,14 @@ fn parse_params_checked(sc: &Scenario, c: &Check) -> Result<Params, ConfigError>
 /// the kernels against the scenario (the mission's `[search]` values are checked before, by
 /// the mission). Errors name the exact key.
 pub fn validate(sc: &Scenario, c: &Check) -> Result<(), ConfigError> {
-    parse_mode(&sc.search.mode).map_err(|m| c.err("search.mode", m))?;
+    parse_mode(&sc.search().mode).map_err(|m| c.err("search.mode", m))?;
     let p = parse_params_checked(sc, c)?;
     // A derived constant written in the file must agree with its one source.
     for (path, source, value) in derived(sc) {
         if !kernel_is_set(sc, path) {
             continue;
         }
-        let mut t = &sc.search.kernels;
+        let mut t = &sc.search().kernels;
         let (section, key) = path.split_once('.').expect("dotted path");
         if let Some(toml::Value::Table(sub)) = t.get(section) {
             t = sub;
@@ -488,7 +488,7 @@ pub fn validate(sc: &Scenario, c: &Check) -> Result<(), ConfigError> {
             "must not exceed (L_B)",
         ));
     }
-    let s = &sc.search;
+    let s = &sc.search();
     let need = status_size_bound(s.targets);
     if (sc.radio.max_message_bytes as usize) < need {
         return Err(c.err(
@@ -552,7 +552,7 @@ mod validation_tests {
 
     fn refused(kernels: &str) -> ConfigError {
         let mut sc = Scenario::default();
-        sc.search.kernels = kernels.parse().unwrap();
+        sc.search_mut().kernels = kernels.parse().unwrap();
         check(&sc).expect_err(kernels)
     }
 
@@ -615,7 +615,7 @@ mod validation_tests {
         assert_eq!(e.key, "search.kernels.calibration.m", "{e}");
         // One source: a scenario value changed alone reaches every kernel that uses it.
         let mut sc = Scenario::default();
-        sc.search.noise_sigma = 0.5;
+        sc.search_mut().noise_sigma = 0.5;
         sc.robot.v_max = 6.0;
         check(&sc).unwrap();
         let p = parse_params(&sc).unwrap();

@@ -4,7 +4,7 @@ use swarm::frames::Entity;
 fn scenario(mode: &str) -> Scenario {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../configs/search.toml");
     let mut sc = Scenario::load(&path).expect("configs/search.toml loads");
-    sc.search.mode = mode.into();
+    sc.search_mut().mode = mode.into();
     sc
 }
 
@@ -393,18 +393,18 @@ fn validation_accepts_every_mode_and_refuses_unknown_ones_and_keys() {
     let e = validate_search(&scenario("BX")).unwrap_err();
     assert!(e.contains("T (TPEPSO), E (EPSO) or A (ARBA)"), "{e}");
     let mut sc = scenario("BA");
-    sc.search.kernels = "[arba]
+    sc.search_mut().kernels = "[arba]
 loudness_decay = 1.5
 "
     .parse()
     .unwrap();
     assert!(validate_search(&sc).unwrap_err().contains("loudness_decay"));
     let mut sc = scenario("BT");
-    sc.search.kernels = "[tpepso]\nomega = 0.4\n".parse().unwrap();
+    sc.search_mut().kernels = "[tpepso]\nomega = 0.4\n".parse().unwrap();
     assert!(validate_search(&sc).unwrap_err().contains("omega"));
-    sc.search.kernels = "declare_tickz = 2\n".parse().unwrap();
+    sc.search_mut().kernels = "declare_tickz = 2\n".parse().unwrap();
     assert!(validate_search(&sc).is_err());
-    sc.search.kernels = "declare_ticks = 5\n[subgroup]\ng_max = 4\n"
+    sc.search_mut().kernels = "declare_ticks = 5\n[subgroup]\ng_max = 4\n"
         .parse()
         .unwrap();
     validate_search(&sc).unwrap();
@@ -413,7 +413,7 @@ loudness_decay = 1.5
         (p.declare_ticks, p.subgroup.g_max, p.tpepso.c3),
         (5, 4, 1.2)
     );
-    sc.search.kernels = "[calibration]\nm = 0.2\n".parse().unwrap();
+    sc.search_mut().kernels = "[calibration]\nm = 0.2\n".parse().unwrap();
     assert!(validate_search(&sc).unwrap_err().contains("calibration.m"));
 }
 
