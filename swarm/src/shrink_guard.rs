@@ -12,6 +12,14 @@
 //! [`install`] (the default, or a handler of the program's own, e.g. Python's faulthandler)
 //! and the faulting access, run again, meets it.
 //!
+//! Bytes an agent keeps in shared memory past its guarded reads (a zero-copy [`crate::Blob`]
+//! view into an air sample, which behaviour code reads whenever it likes, on any thread) are
+//! guarded by address instead: [`absorb_mapping_of`] registers the whole mapping that holds
+//! them (a subscriber's view of the world's data segment), and a SIGBUS at an address inside
+//! a registered range, on any thread at any time, maps a zero page there too; the access
+//! resumes and reads zeros, and [`absorbed`] counts it (the caller says so once). Only faults
+//! of an access beyond a file's end (`BUS_ADRERR`) are absorbed there.
+//!
 //! The handler is async-signal-safe: atomics, `syscall(SYS_gettid)`, `mmap` and `sigaction`.
 
 use std::sync::atomic::{compiler_fence, AtomicU32, AtomicU64, AtomicUsize, Ordering};
@@ -49,6 +57,110 @@ static READS: AtomicU64 = AtomicU64::new(0);
 /// The page size, read once by [`install`] (sysconf is not async-signal-safe).
 static PAGE: AtomicUsize = AtomicUsize::new(0);
 
+/// How many address ranges [`absorb_range`] keeps: an agent registers two a generation of the
+/// world's data services (the Sense and the air data segments), and the world makes at most
+/// 9 generations in a run (`world::data_plane::MAX_REMAKES` + 1).
+pub const RANGES: usize = 32;
+/// The registered ranges `[start, end)`: a slot is in use once its start is not 0 (its end is
+/// stored first); slots are never cleared (a registered mapping is one the process keeps
+/// mapped: the services of an old generation are let go unclosed, [`give_up`]).
+static RANGE_START: [AtomicUsize; RANGES] = [const { AtomicUsize::new(0) }; RANGES];
+static RANGE_END: [AtomicUsize; RANGES] = [const { AtomicUsize::new(0) }; RANGES];
+/// Serialises [`absorb_range`]s (the handler only reads the slots).
+static RANGES_LOCK: std::sync::Mutex<()> = std::sync::Mutex::new(());
+/// How many faults in registered ranges the handler absorbed.
+static ABSORBED: AtomicU64 = AtomicU64::new(0);
+
+/// Whether `addr` lies in a registered range (async-signal-safe: atomic loads only).
+fn in_ranges(addr: usize) -> bool {
+    RANGE_START.iter().zip(&RANGE_END).any(|(s, e)| {
+        let s = s.load(Ordering::Acquire);
+        s != 0 && addr >= s && addr < e.load(Ordering::Acquire)
+    })
+}
+
+/// Registers `[start, start + len)`: a SIGBUS at an address inside it, beyond the end of the
+/// file mapped there, is absorbed on any thread at any time (a zero page is mapped over the
+/// faulting page and [`absorbed`] counts it). False when the table is full (the range is not
+/// guarded). A range inside one registered already is not registered again.
+pub fn absorb_range(start: usize, len: usize) -> bool {
+    let end = start.saturating_add(len);
+    if start == 0 || len == 0 {
+        return false;
+    }
+    let _lock = RANGES_LOCK.lock().unwrap_or_else(|e| e.into_inner());
+    let covered = RANGE_START.iter().zip(&RANGE_END).any(|(s, e)| {
+        let s = s.load(Ordering::Acquire);
+        s != 0 && s <= start && end <= e.load(Ordering::Acquire)
+    });
+    if covered {
+        return true;
+    }
+    let Some(i) = RANGE_START
+        .iter()
+        .position(|s| s.load(Ordering::Acquire) == 0)
+    else {
+        return false;
+    };
+    RANGE_END[i].store(end, Ordering::Release);
+    RANGE_START[i].store(start, Ordering::Release);
+    true
+}
+
+/// The file mapping of this process that holds address `p`: `[start, end)` of its line in
+/// /proc/self/maps, joined with the lines next to it of the same file (one `mmap` that the
+/// handler split already). None when `p` is in no mapping, or in one of no file.
+pub fn mapping_of(p: usize) -> Option<(usize, usize)> {
+    let maps = std::fs::read_to_string("/proc/self/maps").ok()?;
+    mapping_in(&maps, p)
+}
+
+/// [`mapping_of`] in the text `maps` of /proc/<pid>/maps.
+fn mapping_in(maps: &str, p: usize) -> Option<(usize, usize)> {
+    // Each line: `start-end perms offset dev inode [path]`; kept: start, end, (dev, inode).
+    let lines: Vec<(usize, usize, (&str, &str))> = maps
+        .lines()
+        .filter_map(|l| {
+            let f: Vec<&str> = l.split_whitespace().collect();
+            let (s, e) = f.first()?.split_once('-')?;
+            let s = usize::from_str_radix(s, 16).ok()?;
+            let e = usize::from_str_radix(e, 16).ok()?;
+            Some((s, e, (*f.get(3)?, *f.get(4)?)))
+        })
+        .collect();
+    let at = lines.iter().position(|&(s, e, _)| s <= p && p < e)?;
+    let (mut start, mut end, file) = lines[at];
+    if file.1 == "0" {
+        return None;
+    }
+    for &(s, e, f) in lines[..at].iter().rev() {
+        if e != start || f != file {
+            break;
+        }
+        start = s;
+    }
+    for &(s, e, f) in &lines[at + 1..] {
+        if s != end || f != file {
+            break;
+        }
+        end = e;
+    }
+    Some((start, end))
+}
+
+/// Registers the mapping that holds address `p` ([`mapping_of`], [`absorb_range`]); the
+/// range registered, or None (no such mapping, or the table is full).
+pub fn absorb_mapping_of(p: usize) -> Option<(usize, usize)> {
+    let (start, end) = mapping_of(p)?;
+    absorb_range(start, end - start).then_some((start, end))
+}
+
+/// How many faults in registered ranges were absorbed so far (each read zeros instead of the
+/// bytes that were there).
+pub fn absorbed() -> u64 {
+    ABSORBED.load(Ordering::Acquire)
+}
+
 /// The SIGBUS handler could not be installed.
 #[derive(Debug, thiserror::Error)]
 #[error("install the SIGBUS handler (a shrunk shared segment ends in a fault, not a signal): {0}")]
@@ -78,18 +190,40 @@ fn fall_back() {
 }
 
 extern "C" fn on_sigbus(_sig: libc::c_int, info: *mut libc::siginfo_t, _ctx: *mut libc::c_void) {
-    let robot = READING.load(Ordering::Acquire);
     let page = PAGE.load(Ordering::Relaxed);
-    if robot == NOBODY || READER.load(Ordering::Acquire) != tid() || info.is_null() || page == 0 {
+    if info.is_null() || page == 0 {
         fall_back();
         return;
     }
     // SAFETY: the kernel passes a valid siginfo_t for a SA_SIGINFO handler; for SIGBUS,
     // si_addr is the faulting address.
-    let addr = unsafe { (*info).si_addr() } as usize;
-    let start = addr & !(page - 1);
-    // SAFETY: replaces one page of a shared mapping the world is reading (the part of robot
-    // r's segment beyond the file's new end) with private zeros; nothing else is touched.
+    let (addr, code) = unsafe { ((*info).si_addr() as usize, (*info).si_code) };
+    let robot = READING.load(Ordering::Acquire);
+    let guarded = robot != NOBODY && READER.load(Ordering::Acquire) == tid();
+    // Outside a guarded read: absorbed only beyond the end of a registered mapping's file.
+    let registered = code == libc::BUS_ADRERR && in_ranges(addr);
+    if !guarded && !registered {
+        fall_back();
+        return;
+    }
+    if !zero_page(addr & !(page - 1), page) {
+        fall_back();
+        return;
+    }
+    if guarded {
+        SHRANK.store(robot, Ordering::Release);
+    } else {
+        ABSORBED.fetch_add(1, Ordering::AcqRel);
+    }
+}
+
+/// Maps a private zero page at `start` (page-aligned) over what was there; false if it could
+/// not. Async-signal-safe (mmap).
+fn zero_page(start: usize, page: usize) -> bool {
+    // SAFETY: replaces one page of a shared mapping being read (the part of a segment beyond
+    // the file's new end: a robot's act segment under the world's read, or a registered range
+    // of the world's data segment under an agent's) with private zeros; nothing else is
+    // touched.
     let p = unsafe {
         libc::mmap(
             start as *mut libc::c_void,
@@ -100,11 +234,7 @@ extern "C" fn on_sigbus(_sig: libc::c_int, info: *mut libc::siginfo_t, _ctx: *mu
             0,
         )
     };
-    if p == libc::MAP_FAILED {
-        fall_back();
-        return;
-    }
-    SHRANK.store(robot, Ordering::Release);
+    p != libc::MAP_FAILED
 }
 
 /// Installs the handler (once, before the world reads any act service).
@@ -236,10 +366,103 @@ mod tests {
         unsafe { libc::munmap(p as *mut libc::c_void, 3 * page) };
     }
 
+    /// A file mapped shared and registered ([`absorb_mapping_of`]), then truncated to
+    /// nothing: read on another thread, outside any [`reading`], it gives zeros and the fault
+    /// is counted; the test process lives on. A mapping not registered still faults (in a
+    /// child process, which dies of SIGBUS).
+    #[test]
+    fn a_registered_mapping_read_anywhere_after_truncation_gives_zeros() {
+        install().unwrap();
+        let page = PAGE.load(Ordering::Relaxed);
+        let map = |f: &std::fs::File| {
+            // SAFETY: a fresh shared read-only mapping of the file, unmapped below.
+            let p = unsafe {
+                libc::mmap(
+                    std::ptr::null_mut(),
+                    3 * page,
+                    libc::PROT_READ,
+                    libc::MAP_SHARED,
+                    f.as_raw_fd(),
+                    0,
+                )
+            };
+            assert_ne!(p, libc::MAP_FAILED);
+            p as usize
+        };
+        let mut f = tempfile_in_shm();
+        f.write_all(&vec![7u8; 3 * page]).unwrap();
+        let p = map(&f);
+        // (p is in a file's mapping; an address in no file's is not registered.)
+        assert_eq!(mapping_of(&page as *const usize as usize), None);
+        let mut g = tempfile_in_shm();
+        g.write_all(&vec![7u8; 3 * page]).unwrap();
+        let q = map(&g);
+        // SAFETY: within a mapping of 3 pages, which stays mapped (q's until the end).
+        let read =
+            |base: usize, at: usize| unsafe { std::ptr::read_volatile((base + at) as *const u8) };
+        // The whole mapping is found from an address inside it, and registered once.
+        assert_eq!(absorb_mapping_of(p + page + 5), Some((p, p + 3 * page)));
+        assert_eq!(absorb_mapping_of(p), Some((p, p + 3 * page)));
+        assert_eq!(read(p, 2 * page), 7);
+        f.set_len(0).unwrap();
+        g.set_len(0).unwrap();
+        let before = absorbed();
+        let sum =
+            std::thread::spawn(move || (0..3).map(|i| read(p, i * page + 1) as u32).sum::<u32>())
+                .join()
+                .unwrap();
+        assert_eq!(sum, 0);
+        assert_eq!(absorbed() - before, 3, "one fault a page");
+        // The mapping not registered: a read of it still dies of SIGBUS.
+        // SAFETY: the child only reads memory and exits.
+        let child = unsafe { libc::fork() };
+        if child == 0 {
+            read(q, 1);
+            // SAFETY: leaves the child at once.
+            unsafe { libc::_exit(0) };
+        }
+        let mut status = 0;
+        // SAFETY: waits for our own child.
+        assert_eq!(unsafe { libc::waitpid(child, &mut status, 0) }, child);
+        assert!(
+            libc::WIFSIGNALED(status) && libc::WTERMSIG(status) == libc::SIGBUS,
+            "status {status:#x}"
+        );
+        // SAFETY: our mapping (p's stays: its range stays registered, as an agent's do).
+        unsafe { libc::munmap(q as *mut libc::c_void, 3 * page) };
+    }
+
+    #[test]
+    fn mapping_in_joins_the_lines_of_one_file_and_skips_anonymous_memory() {
+        let maps = "\
+1000-2000 r--p 00000000 08:01 11 /usr/bin/x
+2000-3000 r--s 00000000 00:19 42 /dev/shm/iox2_a.data
+3000-4000 rw-p 00000000 00:00 0
+4000-6000 r--s 00002000 00:19 42 /dev/shm/iox2_a.data
+6000-7000 r--s 00000000 00:19 43 /dev/shm/iox2_b.data
+7000-8000 rw-p 00000000 00:00 0
+";
+        assert_eq!(mapping_in(maps, 0x2fff), Some((0x2000, 0x3000)));
+        assert_eq!(mapping_in(maps, 0x3000), None, "anonymous");
+        // A zero page mapped over the middle of a file's mapping (the handler's) splits it:
+        // only the lines next to each other are joined.
+        assert_eq!(mapping_in(maps, 0x4000), Some((0x4000, 0x6000)));
+        assert_eq!(mapping_in(maps, 0x6100), Some((0x6000, 0x7000)));
+        assert_eq!(mapping_in(maps, 0x9000), None);
+        let adjacent = "\
+2000-3000 r--s 00000000 00:19 42 /dev/shm/iox2_a.data
+3000-4000 r--s 00001000 00:19 42 /dev/shm/iox2_a.data
+4000-6000 r--s 00002000 00:19 42 /dev/shm/iox2_a.data
+";
+        assert_eq!(mapping_in(adjacent, 0x3800), Some((0x2000, 0x6000)));
+    }
+
     /// A file under /dev/shm (tmpfs, as iceoryx2's), removed at once (named `sw…` so a leak
     /// would be this project's).
     fn tempfile_in_shm() -> std::fs::File {
-        let path = format!("/dev/shm/swguard{}", std::process::id());
+        static N: AtomicU32 = AtomicU32::new(0);
+        let n = N.fetch_add(1, Ordering::Relaxed);
+        let path = format!("/dev/shm/swguard{}-{n}", std::process::id());
         let f = std::fs::OpenOptions::new()
             .read(true)
             .write(true)

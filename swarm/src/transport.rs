@@ -486,6 +486,48 @@ fn decode_list<M: DeserializeOwned>(
     malformed
 }
 
+/// The mapping of the world's data segment that a subscriber of `world/sense` or `radio/air`
+/// reads its samples in, registered with the shrink guard
+/// ([`crate::shrink_guard::absorb_range`]): a zero-copy view an agent keeps past its guarded
+/// read (a [`crate::Blob`] into the air) reads zeros, not a SIGBUS, once a process of the user
+/// truncates the segment (docs/protocol.md section 4). Found once per subscriber (the
+/// publisher's static slots are one segment, mapped once), in /proc/self/maps.
+#[derive(Default)]
+pub(crate) struct GuardedMapping {
+    /// `[start, end)` of the mapping found ((0, 0) before the first sample).
+    range: (usize, usize),
+}
+
+impl GuardedMapping {
+    /// Registers the mapping that holds a received sample's payload at `p`, unless it is the
+    /// one registered already.
+    pub(crate) fn cover(&mut self, p: *const u8) {
+        let p = p as usize;
+        let (start, end) = self.range;
+        if start <= p && p < end {
+            return;
+        }
+        self.range = match crate::shrink_guard::mapping_of(p) {
+            Some((start, end)) => {
+                if !crate::shrink_guard::absorb_range(start, end - start) {
+                    static SAID: std::sync::Once = std::sync::Once::new();
+                    SAID.call_once(|| {
+                        eprintln!(
+                            "agent: more of the world's data segments than the shrink guard \
+                             keeps ({}): views into the newest are not guarded",
+                            crate::shrink_guard::RANGES
+                        )
+                    });
+                }
+                (start, end)
+            }
+            // Not in a file's mapping (cannot happen for an iceoryx2 sample): nothing that
+            // can shrink.
+            None => (p, p + 1),
+        };
+    }
+}
+
 /// Quiets iceoryx2's own logging (it warns about the missing global config file otherwise).
 pub fn quiet_logs() {
     set_log_level_from_env_or(LogLevel::Error);

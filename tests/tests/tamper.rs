@@ -14,6 +14,8 @@
 //! - The world's own Sense, air and status segments truncated: the world makes its data
 //!   services anew (agents follow the barrier's generation word), gives up the status, and the
 //!   run completes with no robot hurt.
+//! - The air's segment truncated under robots that keep zero-copy views of it (`Blob`s) and
+//!   read them at their next tick: they read zeros, and no robot is hurt.
 
 use e2e::*;
 use std::os::fd::AsRawFd;
@@ -498,4 +500,75 @@ fn the_shared_state_of_the_worlds_data_services_truncated_hurts_no_robot() {
     truncate_with_world_stopped(world, &shared);
     let err = assert_nobody_hurt(up, &out, &id);
     assert!(err.contains("made anew as generation 1"), "{err}");
+}
+
+/// Bytes of each keeper robot's beacon payload (a `Blob`, kept as a view of the air).
+const HELD_PAYLOAD: usize = 1000;
+
+/// configs/roam.toml run by `keeper` robots (agent/src/behaviours/keeper.rs): beacons of
+/// [`HELD_PAYLOAD`] bytes (robot i's are all i) received in place, every robot in range of
+/// every other, each robot keeping the last tick's beacons (views of that tick's air) and
+/// reading every byte of them again at its next step. Written into `dir`; its path.
+fn keeper_scenario(dir: &Path) -> String {
+    std::fs::create_dir_all(dir).unwrap();
+    let text = std::fs::read_to_string(roam())
+        .unwrap()
+        .replace("behaviour = \"roam\"", "behaviour = \"keeper\"")
+        .replace(
+            "max_message_bytes = 256",
+            "max_message_bytes = 2048\nzero_copy_held = 2\ncomm_radius = 2000.0",
+        );
+    let path = dir.join("keeper.toml");
+    std::fs::write(
+        &path,
+        format!("{text}\n[roam]\npayload_bytes = {HELD_PAYLOAD}\n"),
+    )
+    .unwrap();
+    path.display().to_string()
+}
+
+/// The air's data segment of the world `world_pid`: of the data segments it writes, the one
+/// that holds the last robot's beacon payload.
+fn air_data_segment(world_pid: i32) -> String {
+    let payload = vec![ROBOTS as u8 - 1; HELD_PAYLOAD];
+    let air: Vec<String> = worlds_data_segments(world_pid)
+        .into_iter()
+        .filter(|s| {
+            std::fs::read(s)
+                .unwrap_or_default()
+                .windows(HELD_PAYLOAD)
+                .any(|w| w == payload)
+        })
+        .collect();
+    assert_eq!(air.len(), 1, "{air:?}");
+    air[0].clone()
+}
+
+/// The air's data segment truncated while every robot keeps views of the last air in it (and
+/// its agent sleeps on the barrier): the world makes its data services anew, and each robot's
+/// next step reads its held views, beyond the end of the truncated file. The shrink guard
+/// absorbs those faults, on the behaviour's own reads (outside the agent's guarded reads of its
+/// frames): the views read zeros, each agent says so once, and no robot is hurt.
+#[test]
+fn a_truncated_air_segment_under_held_blob_views_hurts_no_robot() {
+    let _g = serial();
+    let dir = tmp_dir("air-held-sc");
+    let (up, out, id, _pids) = start_with("air-held", &keeper_scenario(&dir));
+    let world = world_pid_of(&id);
+    let air = air_data_segment(world);
+    truncate_with_world_stopped(world, &[air]);
+    let err = assert_nobody_hurt(up, &out, &id);
+    assert!(err.contains("made anew as generation 1"), "{err}");
+    // Each robot's agent (its stderr is its log) read its held views beyond the file's end,
+    // and said so once.
+    for r in 0..ROBOTS {
+        let log = std::fs::read_to_string(out.join(format!("logs/robot-{r}.log"))).unwrap();
+        let said = log
+            .matches(&format!(
+                "agent {r}: messages it held were lost to a truncated segment"
+            ))
+            .count();
+        assert_eq!(said, 1, "robot {r}'s log: {log}");
+    }
+    let _ = std::fs::remove_dir_all(dir);
 }

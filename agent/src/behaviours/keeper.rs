@@ -1,8 +1,11 @@
 //! A robot that keeps what it heard: roams like `roam` with bulk beacons (a `Blob` payload,
 //! received zero-copy), and keeps the beacons of its last tick alive until the next one, as a
-//! robot keeping the latest camera frames of its neighbours would. Its agent therefore holds
-//! an air (through the beacons' views) between ticks, which is what the air ring's
-//! SIGKILL-safety test needs to kill (tests/tests/air_ring.rs).
+//! robot keeping the latest camera frames of its neighbours would, and looks at them again
+//! then (reads every byte of them, at the start of its next step). Its agent therefore holds
+//! an air (through the beacons' views) between ticks, which is what the air's SIGKILL-safety
+//! test needs to kill (tests/tests/air_held.rs), and reads it outside the agent's guarded
+//! reads, which is what the test of a truncated air under held views needs
+//! (tests/tests/tamper.rs). What it reads does not steer it.
 
 use super::roam::{BulkBeacon, Roam};
 use swarm::scenario::Scenario;
@@ -52,7 +55,15 @@ impl Behaviour for Keeper {
         inbox: &[&Received<BulkBeacon>],
         out: &mut Outbox<BulkBeacon>,
     ) -> Command {
-        // The last tick's go (their air with them), this tick's stay.
+        // The last tick's looked at once more (every byte: a view of an air whose segment
+        // was truncated since reads zeros there, through the shrink guard), then they go
+        // (their air with them) and this tick's stay.
+        let sum = self
+            .kept
+            .iter()
+            .flat_map(|b| b.payload.iter())
+            .fold(0u64, |a, &x| a.wrapping_add(x as u64));
+        std::hint::black_box(sum);
         self.kept.clear();
         self.kept.extend(inbox.iter().map(|r| r.msg.clone()));
         self.inner.step_refs(s, inbox, out)

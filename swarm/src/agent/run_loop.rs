@@ -27,7 +27,9 @@ pub(super) fn run_loop<B: Behaviour>(
 ) -> Result<i32, AgentError> {
     // The world's data services are files any process of the user can truncate: this
     // agent's reads of them are guarded (a SIGBUS there holds the robot still for the tick,
-    // instead of killing the agent; docs/protocol.md section 4).
+    // instead of killing the agent; docs/protocol.md section 4), and so are the mappings of
+    // their data segments, which zero-copy views the behaviour keeps read at any time
+    // (registered by the transport as the first sample of each arrives).
     shrink_guard::install()?;
     let config = transport::run_config(prefix)?;
     let node = transport::node(&config, &format!("agent-{robot}"))?;
@@ -68,6 +70,9 @@ pub(super) fn run_loop<B: Behaviour>(
     let mut ahead_sense: Option<Box<crate::frames::Sense>> = None;
     let mut ahead_inbox: Vec<Received<B::Msg>> = Vec::new();
     let mut ahead_air: Option<(u64, u32)> = None;
+    // Whether this agent said that views it held read zeros (a truncated segment of the
+    // world's, absorbed by the shrink guard: docs/protocol.md section 4).
+    let mut said_lost = false;
     // The first tick to answer is the first released after the attach: a replacement
     // finds the tick its robot is dead in released already, without its Sense record, and
     // waits for the next (the ack words, which any agent can write, are not read).
@@ -200,6 +205,16 @@ pub(super) fn run_loop<B: Behaviour>(
             action.radio_bytes = tx.used as u32;
             action
         })?;
+        // Zero-copy views the behaviour keeps (Blobs into an air) are read outside the
+        // guarded reads: a fault there, in a world's data segment that a process of the user
+        // truncated, read zeros (garbage messages for the tick) instead of killing the agent.
+        if !said_lost && shrink_guard::absorbed() > 0 {
+            said_lost = true;
+            eprintln!(
+                "agent {robot}: messages it held were lost to a truncated segment of the world's \
+                 (read as zeros; docs/protocol.md section 4)"
+            );
+        }
         inbox.clear();
         drop(kept);
         barrier.ack_with(robot, k, bell);

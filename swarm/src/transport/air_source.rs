@@ -94,6 +94,9 @@ impl AirSink {
 pub struct AirSource {
     subscriber: Subscriber<ipc::Service, [u8], AirHeader>,
     generation: Generation,
+    /// The world's air data segment as this subscriber maps it, guarded: views into it
+    /// outlive the agent's guarded reads.
+    mapping: super::GuardedMapping,
     _service: super::AirService,
 }
 
@@ -124,6 +127,7 @@ impl AirSource {
         Ok(AirSource {
             subscriber,
             generation,
+            mapping: Default::default(),
             _service: service,
         })
     }
@@ -136,9 +140,10 @@ impl AirSource {
         super::wait_for_sample(&self.subscriber, service, keep_trying)
     }
 
-    /// The newest air not received yet (buffer 1: none if already taken).
+    /// The newest air not received yet (buffer 1: none if already taken). The mapping it
+    /// lies in is registered with the shrink guard ([`super::GuardedMapping`]).
     pub fn receive(&mut self) -> TransportResult<Option<AirGot>> {
-        Ok(self
+        let got = self
             .subscriber
             .receive()
             .map_err(|source| TransportError::Receive {
@@ -146,8 +151,11 @@ impl AirSource {
                     generation: self.generation,
                 },
                 source,
-            })?
-            .map(AirGot))
+            })?;
+        if let Some(sample) = &got {
+            self.mapping.cover(sample.payload().as_ptr());
+        }
+        Ok(got.map(AirGot))
     }
 }
 

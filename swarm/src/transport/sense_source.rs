@@ -119,6 +119,8 @@ pub struct SenseSource {
     subscriber: Subscriber<ipc::Service, [u8], SenseHeader>,
     robot: u32,
     generation: Generation,
+    /// The world's Sense data segment as this subscriber maps it, guarded (as the air's).
+    mapping: super::GuardedMapping,
     _service: SensesService,
 }
 
@@ -147,6 +149,7 @@ impl SenseSource {
             subscriber,
             robot,
             generation,
+            mapping: Default::default(),
             _service: service,
         })
     }
@@ -176,6 +179,7 @@ impl SenseSource {
         else {
             return Ok(None);
         };
+        self.mapping.cover(sample.payload().as_ptr());
         let tick = sample.user_header().tick;
         Ok(match unpack_into(sample.payload(), self.robot, into) {
             Ok(true) => Some(tick),
