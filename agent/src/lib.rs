@@ -6,6 +6,5 @@ pub mod cbca;
 pub mod formation;
 pub mod hunt;
 pub mod kernels;
-pub mod search;
 
 pub use behaviours::{dispatch, BehaviourVisitor};

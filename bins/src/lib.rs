@@ -4,6 +4,9 @@
 
 /// The built-in plug-ins, in the order their scenario sections appear in a resolved scenario.
 pub type Builtin = (
-    // roam, faulty, keeper and, until they move to papers/ (issue 40), the papers' behaviours
+    // the multi-target search paper (papers/search)
+    search::Search,
+    // roam, faulty, keeper and, until they move to papers/ (issue 40), the formation and
+    // hunting papers' behaviours and sections
     agent::behaviours::Builtin,
 );

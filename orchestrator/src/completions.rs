@@ -60,6 +60,7 @@ pub fn print(a: CompletionsArgs) -> i32 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use search::SearchScenario;
 
     /// Every subcommand and argument, hidden ones left out: (path, argument id, help).
     fn walk(c: &clap::Command, path: &str, out: &mut Vec<(String, String, String)>) {

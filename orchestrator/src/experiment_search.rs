@@ -5,6 +5,7 @@ use super::runner::{parse_file, Context, Report, Row, SeedSpec, DEFAULT_FIRST_SE
 use super::Variant;
 use crate::up::Executor;
 use indicatif::{ProgressBar, ProgressStyle};
+use search::SearchScenario;
 use serde::{Deserialize, Serialize};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};

@@ -86,6 +86,7 @@ impl Variant {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use search::SearchScenario;
 
     /// A variant's `set` lays its keys over the base scenario and leaves the others alone; an
     /// overlay file's array replaces the base's (a new obstacle map).

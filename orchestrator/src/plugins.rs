@@ -25,10 +25,16 @@ fn inprocess_of<P: Plugin>(
     P::dispatch(sc, v).map_err(|_| ())
 }
 
+/// Until [`register`]: the built-in plug-ins (this crate's own tests), registered in swarm
+/// and the world too as this registry is first read.
+type Defaults = (search::Search, agent::behaviours::Builtin);
+
 static REGISTRY: LazyLock<RwLock<Registry>> = LazyLock::new(|| {
+    swarm::plugin::register_plugin::<Defaults>();
+    world::mission::register::<Defaults>();
     RwLock::new(Registry {
-        behaviours: agent::behaviours::Builtin::behaviours(),
-        inprocess: inprocess_of::<agent::behaviours::Builtin>,
+        behaviours: Defaults::behaviours(),
+        inprocess: inprocess_of::<Defaults>,
     })
 });
 
@@ -38,6 +44,7 @@ pub fn register<P: Plugin + world::mission::Missions>() {
     swarm::plugin::register_plugin::<P>();
     world::mission::register::<P>();
     let mut r = REGISTRY.write().unwrap_or_else(|e| e.into_inner());
+    // (The defaults' registration above ran first if the registry was read before.)
     r.behaviours = P::behaviours();
     r.inprocess = inprocess_of::<P>;
 }

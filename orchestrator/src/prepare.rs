@@ -37,6 +37,7 @@ pub fn prepare_from(sc: &mut Scenario, source: &str) -> Result<(), ConfigError> 
 mod tests {
     use super::*;
     use proptest::prelude::*;
+    use search::SearchScenario;
 
     /// Values a hostile user writes for a float key: ordinary ones around `default`, and the
     /// edges (0, negative, tiny, huge, NaN, inf); None (most draws) keeps the default, so that

@@ -2,6 +2,7 @@
 
 use crate::{clean, exit, inprocess, outcome, outdir, processes, registry, runid, signals};
 use clap::{Args, ValueEnum};
+use search::SearchScenario;
 use std::path::{Path, PathBuf};
 use swarm::scenario::{ConfigError, Scenario};
 

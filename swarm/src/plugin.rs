@@ -119,29 +119,50 @@ fn parse_section<S: Section>(v: toml::Value) -> Result<S, SectionError> {
 }
 
 /// The sections every binary of this process knows, in the order a resolved scenario lists
-/// them (the composition's order).
-static REGISTRY: LazyLock<RwLock<Vec<SectionEntry>>> =
-    LazyLock::new(|| RwLock::new(crate::sections::builtin_entries()));
+/// them (the composition's order); until a binary registers its own, the papers' sections
+/// still in this crate (issue 40 moves them to papers/).
+static REGISTRY: LazyLock<RwLock<Registry>> = LazyLock::new(|| {
+    RwLock::new(Registry {
+        composed: false,
+        entries: crate::sections::builtin_entries(),
+    })
+});
 
-/// Registers section types (those not yet registered, after those that are).
+struct Registry {
+    /// Set by the first [`register`]: the defaults are then replaced, not added to.
+    composed: bool,
+    entries: Vec<SectionEntry>,
+}
+
+/// Registers section types (those not yet registered, after those that are); the first call
+/// replaces the defaults (a composed binary says every section it knows, in order).
 pub fn register(entries: &[SectionEntry]) {
     let mut r = REGISTRY.write().unwrap_or_else(|e| e.into_inner());
+    if !r.composed {
+        r.composed = true;
+        r.entries.clear();
+    }
     for e in entries {
-        if !r.iter().any(|x| x.name == e.name) {
-            r.push(*e);
+        if !r.entries.iter().any(|x| x.name == e.name) {
+            r.entries.push(*e);
         }
     }
 }
 
 /// The registered sections, in order.
 pub fn registered() -> Vec<SectionEntry> {
-    REGISTRY.read().unwrap_or_else(|e| e.into_inner()).clone()
+    REGISTRY
+        .read()
+        .unwrap_or_else(|e| e.into_inner())
+        .entries
+        .clone()
 }
 
 fn entry(name: &str) -> Option<SectionEntry> {
     REGISTRY
         .read()
         .unwrap_or_else(|e| e.into_inner())
+        .entries
         .iter()
         .find(|e| e.name == name)
         .copied()

@@ -257,7 +257,7 @@ fn the_csv_holds_the_recordings_numbers_and_state_names_and_events_every_event()
     );
     let rows: Vec<&str> = lines.collect();
     assert_eq!(rows.len(), ticks.len() * 12);
-    // The search mission's display states (world/src/mission/search.rs).
+    // The search mission's display states (papers/search/src/mission.rs).
     let names = ["roaming", "cooperative", "declared"];
     let mut named = 0;
     for (row, (t, i)) in rows

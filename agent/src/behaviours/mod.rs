@@ -23,6 +23,17 @@ macro_rules! registry {
         pub struct Builtin;
 
         impl swarm::plugin::Plugin for Builtin {
+            /// The sections of the papers still in the core (swarm::sections), in the order
+            /// a resolved scenario lists them.
+            fn sections() -> Vec<swarm::plugin::SectionEntry> {
+                use swarm::plugin::SectionEntry;
+                use swarm::sections::{cbca, formation, hunt};
+                vec![
+                    SectionEntry::of::<formation::FormationSection>(),
+                    SectionEntry::of::<hunt::HuntSection>(),
+                    SectionEntry::of::<cbca::CbcaSection>(),
+                ]
+            }
             fn behaviours() -> Vec<swarm::plugin::BehaviourInfo> {
                 vec![$(swarm::plugin::BehaviourInfo {
                     name: $m::NAME,
@@ -80,7 +91,7 @@ macro_rules! registry {
     };
 }
 
-registry!(roam, faulty, search, formation, hunt, cbca, keeper);
+registry!(roam, faulty, formation, hunt, cbca, keeper);
 
 /// For behaviours whose commands are velocities (vx, vy): refuses unicycle kinematics.
 pub fn require_holonomic(sc: &Scenario, c: &Check, behaviour: &str) -> Result<(), ConfigError> {
@@ -115,7 +126,7 @@ mod tests {
         let e = validate(&sc, "t.toml").unwrap_err();
         assert_eq!(e.key, "run.behaviour");
         assert!(
-            e.to_string().contains("roam") && e.to_string().contains("search"),
+            e.to_string().contains("roam") && e.to_string().contains("formation"),
             "{e}"
         );
         for name in BEHAVIOURS {

@@ -9,6 +9,7 @@
 
 use super::{BenchError, BenchResult};
 use crate::inprocess;
+use search::SearchScenario;
 use serde::Serialize;
 use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
 use std::sync::Mutex;

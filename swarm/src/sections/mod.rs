@@ -9,14 +9,12 @@ pub mod hosts;
 pub mod hunt;
 pub mod hunt_checks;
 pub mod roam;
-pub mod search;
 
 /// The sections of the papers still in the core (moving to papers/: issue 40), registered by
 /// default, in the order a resolved scenario lists them.
 pub(crate) fn builtin_entries() -> Vec<crate::plugin::SectionEntry> {
     use crate::plugin::SectionEntry;
     vec![
-        SectionEntry::of::<search::SearchParams>(),
         SectionEntry::of::<formation::FormationSection>(),
         SectionEntry::of::<hunt::HuntSection>(),
         SectionEntry::of::<cbca::CbcaSection>(),

@@ -142,7 +142,7 @@ macro_rules! missions {
     };
 }
 
-missions!(roam, search, formation, hunt);
+missions!(roam, formation, hunt);
 
 /// A plug-in's world side: its missions. Implemented by each plug-in (a unit type, with
 /// `swarm::plugin::Plugin`) and by tuples of plug-ins (the composition: bins/src/lib.rs).
@@ -254,15 +254,19 @@ mod tests {
 
     #[test]
     fn the_behaviour_implies_the_mission_unless_one_is_named() {
-        let sc = Scenario::default();
-        assert_eq!(entry_for(&sc).unwrap().name, "search");
+        let mut sc = Scenario::roam();
+        sc.run.behaviour = "hunt".into();
+        assert_eq!(entry_for(&sc).unwrap().name, "hunt");
+        // A behaviour no registered mission names: roam's (the default).
+        sc.run.behaviour = "search".into();
+        assert_eq!(entry_for(&sc).unwrap().name, "roam");
         assert_eq!(entry_for(&Scenario::roam()).unwrap().name, "roam");
         let mut sc = Scenario::roam();
-        sc.run.mission = Some("search".into());
-        assert_eq!(entry_for(&sc).unwrap().name, "search");
+        sc.run.mission = Some("formation".into());
+        assert_eq!(entry_for(&sc).unwrap().name, "formation");
         sc.run.mission = Some("chess".into());
         let e = validate(&sc, "t.toml").unwrap_err();
         assert_eq!(e.key, "run.mission");
-        assert!(e.to_string().contains("search"), "{e}");
+        assert!(e.to_string().contains("formation"), "{e}");
     }
 }

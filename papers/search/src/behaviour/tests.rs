@@ -1,8 +1,9 @@
 use super::*;
+use crate::section::SearchScenario;
 use swarm::frames::Entity;
 
 fn scenario(mode: &str) -> Scenario {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../configs/search.toml");
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../configs/search.toml");
     let mut sc = Scenario::load(&path).expect("configs/search.toml loads");
     sc.search_mut().mode = mode.into();
     sc
@@ -14,7 +15,7 @@ fn sense(pos: [f64; 2], signals: &[(u32, u32, f64)]) -> Box<Sense> {
     for (k, &(target, flags, intensity)) in signals.iter().enumerate() {
         s.entities[k] = Entity {
             id: target,
-            kind: swarm::sections::search::ENTITY_SIGNAL,
+            kind: crate::section::ENTITY_SIGNAL,
             flags,
             reserved: 0,
             pos: [0.0; 2],
@@ -514,7 +515,10 @@ fn personal_best_is_the_best_since_joining() {
     let (sgb, f) = r.subgroup_best().expect("sgb heard");
     assert!((sgb - Vec2::new(500.0, 500.0)).norm() < 1e-3 && f > 24.0);
     // With no pb the c1 term is absent: the status carries no pb either.
-    assert_eq!(r.last_status().unwrap().candidacy.as_ref().unwrap().pb, None);
+    assert_eq!(
+        r.last_status().unwrap().candidacy.as_ref().unwrap().pb,
+        None
+    );
     // Tick 2: it measures the target below I_min (still Type II): that is its pb.
     r.step(&sense([690.0, 500.0], &[(3, 0, 0.5)]), &leader(), &mut out);
     let (pb, f) = r.personal_best().expect("measured");

@@ -3,10 +3,11 @@
 //! Every section defaults to the paper's values (Table 4) or the spec's suggestions
 //! (docs/search.md section 5); a key that is not a field is an error.
 
-use crate::kernels::virtual_force;
-use crate::search::{
+use crate::kernels::{
     arba, bsoa, calibration, estimator, subgroup, svf, tpepso, Params as KernelParams,
 };
+use crate::section::SearchScenario;
+use agent::kernels::virtual_force;
 use serde::{Deserialize, Serialize};
 use swarm::scenario::{Check, ConfigError, Scenario};
 
@@ -210,7 +211,7 @@ pub fn parse_params(sc: &Scenario) -> Result<Params, String> {
 /// position 8, up to MAX_SIGNALS detections of (target <= 5, f32 4), the candidacy <= 40, the found list
 /// (length <= 5, each id <= 5), enum tags and lengths.
 pub fn status_size_bound(targets: u32) -> usize {
-    8 + 5 + 9 * swarm::sections::search::MAX_SIGNALS + 40 + 5 + 5 * targets as usize + 8
+    8 + 5 + 9 * crate::section::MAX_SIGNALS + 40 + 5 + 5 * targets as usize + 8
 }
 
 /// The allowed range of one numeric key of `search.kernels` (path below it).

@@ -1,11 +1,11 @@
 //! Criterion benches of the search kernels' hot code: the target estimator (eqs. 7-10,
 //! multi-start Nelder-Mead) and one BSOA obstacle-avoidance step (Table 2).
 //!
-//! `cargo bench -p agent --bench kernels`
+//! `cargo bench -p search --bench kernels`
 
-use agent::search::bsoa::{self, Sense as Sf};
-use agent::search::estimator::{self, Detection};
 use criterion::{black_box, criterion_group, criterion_main, BenchmarkId, Criterion};
+use search::kernels::bsoa::{self, Sense as Sf};
+use search::kernels::estimator::{self, Detection};
 use swarm::geometry::{sample_boundary, Vec2};
 
 /// `k` detectors on a ring around a target at (400, 300), distances with a small error.

@@ -222,7 +222,7 @@ pub fn estimate(dets: &[Detection], p: &Params) -> Option<Estimate> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::search::calibration::{self, Calibration};
+    use crate::kernels::calibration::{self, Calibration};
     use rand::SeedableRng;
     use rand_chacha::ChaCha8Rng;
 

@@ -6,10 +6,10 @@
 //! points, and the rotation-sense flag SF of the previous step. Output: the
 //! velocity V_i(t+1) and the new SF.
 
-use crate::kernels::boundary::{self, Scan};
-use crate::kernels::nearest::TwoNearest;
-use crate::kernels::obstacles::blocked_at;
-use crate::kernels::virtual_force;
+use agent::kernels::boundary::{self, Scan};
+use agent::kernels::nearest::TwoNearest;
+use agent::kernels::obstacles::blocked_at;
+use agent::kernels::virtual_force;
 use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;
 use swarm::geometry::{angle_between, angle_of, cross, rotate, unit_from_angle, wrap_angle, Vec2};
@@ -377,7 +377,7 @@ pub fn avoid_within(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::search::testkit::{in_box, rect, run_to_goal, u_shape};
+    use crate::kernels::testkit::{in_box, rect, run_to_goal, u_shape};
     use swarm::geometry::sample_boundary;
 
     fn bsoa_runner(p: Params) -> impl FnMut(&Vec2, &Vec2, &[Vec2]) -> Vec2 {

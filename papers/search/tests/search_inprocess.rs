@@ -1,7 +1,8 @@
 //! The search behaviour in the real World, in process (the loop of
 //! orchestrator/src/inprocess.rs): 20 robots, configs/search.toml, mode BT, seeds 1..=3.
 
-use agent::behaviours::search::{Mode, Search};
+use search::behaviour::{Mode, Search};
+use search::SearchScenario;
 use swarm::frames::{Action, Sense};
 use swarm::mailbox::{Air, Mailbox};
 use swarm::scenario::Scenario;
@@ -20,14 +21,19 @@ struct Outcome {
 }
 
 fn scenario(mode: &str, robots: u32, seed: u64, max_ticks: u64) -> Scenario {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../configs/search.toml");
+    // This test's world knows the search mission (a composed binary registers its plug-ins).
+    world::mission::register::<search::Search>();
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../configs/search.toml");
     let mut sc = Scenario::load(&path).expect("configs/search.toml");
     sc.run.robots = robots;
     sc.run.seed = seed;
     sc.run.max_ticks = max_ticks;
     sc.search_mut().mode = mode.into();
     sc.validate(&|_| "test".into()).expect("valid scenario");
-    agent::behaviours::validate(&sc, "test").expect("valid search parameters");
+    let c = swarm::scenario::Check {
+        key_source: &|_| "test".into(),
+    };
+    search::behaviour::validate(&sc, &c).expect("valid search parameters");
     sc
 }
 
@@ -38,7 +44,7 @@ fn run(sc: &Scenario) -> Outcome {
         .map(|i| AgentRuntime::new(sc, i, Search::new(sc, i)))
         .collect();
     let mut senses: Vec<Box<Sense>> = (0..n).map(|_| Sense::zeroed()).collect();
-    let mut mailbox: Mailbox<agent::behaviours::search::Msg> = Mailbox::new();
+    let mut mailbox: Mailbox<search::behaviour::Msg> = Mailbox::new();
     let mut cur = Air::default();
     let mut actions: Vec<Option<Action>> = vec![None; n];
     while world.tick < sc.run.max_ticks {
@@ -66,7 +72,7 @@ fn run(sc: &Scenario) -> Outcome {
         }
     }
     assert_eq!(world.rejected, [0; 6], "the world rejected actions");
-    let t = &world::mission::search::SearchMission::of(&world)
+    let t = &search::mission::SearchMission::of(&world)
         .expect("search world has targets")
         .targets;
     Outcome {

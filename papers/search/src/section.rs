@@ -18,14 +18,32 @@ pub struct SearchParams {
     pub l_t: f64,
     pub found_distance: f64,
     pub end_when_all_found: bool,
-    /// The behaviour's own parameters (agent::search::Params), validated by the agent crate.
+    /// The behaviour's own parameters (search::kernels::Params), validated by the agent crate.
     #[serde(default)]
     pub kernels: toml::Table,
 }
 
 /// Every scenario has `[search]`: the embedded default scenario's.
-impl crate::plugin::Section for SearchParams {
+impl swarm::plugin::Section for SearchParams {
     const NAME: &'static str = "search";
+}
+
+/// A scenario's `[search]` (`use search::SearchScenario` to call `sc.search()`).
+pub trait SearchScenario {
+    fn search(&self) -> &SearchParams;
+    fn search_mut(&mut self) -> &mut SearchParams;
+}
+
+impl SearchScenario for swarm::scenario::Scenario {
+    fn search(&self) -> &SearchParams {
+        self.section::<SearchParams>()
+            .expect("every scenario has [search] (the embedded default's)")
+    }
+    fn search_mut(&mut self) -> &mut SearchParams {
+        self.sections
+            .get_mut::<SearchParams>()
+            .expect("every scenario has [search] (the embedded default's)")
+    }
 }
 
 /// Search modes (Table 3).

@@ -2,7 +2,8 @@
 //! eq. (33) each robot measures, and "found" (a robot closer than L_0; the target then stops
 //! emitting). The run is complete when every target is found (`search.end_when_all_found`).
 
-use super::{DisplayState, LegendEntry, Mark, Mission, MissionEntry, MissionError, RunFacts};
+use crate::section::SearchScenario;
+use crate::section::{ENTITY_SIGNAL, STATE_COOPERATIVE, STATE_DECLARED};
 use rand::Rng;
 use rand_chacha::ChaCha8Rng;
 use serde::Serialize;
@@ -11,9 +12,11 @@ use swarm::geometry::{point_in_polygon, polygon_distance, Vec2};
 use swarm::radio::distance;
 use swarm::recording::Event;
 use swarm::scenario::{Check, ConfigError, Scenario};
-use swarm::sections::search::{ENTITY_SIGNAL, STATE_COOPERATIVE, STATE_DECLARED};
+use world::mission::{
+    DisplayState, LegendEntry, Mark, Mission, MissionEntry, MissionError, RunFacts,
+};
 
-use swarm::sections::search::MAX_SIGNALS as MAX_SIGNALS_SENSED;
+use crate::section::MAX_SIGNALS as MAX_SIGNALS_SENSED;
 
 pub const ENTRY: MissionEntry = MissionEntry {
     name: "search",
@@ -155,7 +158,7 @@ fn missed_mark(at: [f64; 2]) -> Mark {
 
 impl SearchMission {
     /// The search mission of `world`, if it runs one.
-    pub fn of(world: &crate::World) -> Option<&SearchMission> {
+    pub fn of(world: &world::World) -> Option<&SearchMission> {
         world.mission.as_any().downcast_ref::<SearchMission>()
     }
 }

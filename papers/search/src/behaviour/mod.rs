@@ -59,11 +59,13 @@ pub use params::{
     parse_mode, parse_params, validate_search, ObstacleLayer, Params, SearchLayer, WallRule,
 };
 
-use crate::kernels::virtual_force;
-use crate::search::calibration::{self, Calibration};
-use crate::search::estimator::{self, Detection};
-use crate::search::subgroup::{self, Member, Role};
-use crate::search::{arba, bsoa, svf, tpepso};
+use crate::kernels::calibration::{self, Calibration};
+use crate::kernels::estimator::{self, Detection};
+use crate::kernels::subgroup::{self, Member, Role};
+use crate::kernels::{arba, bsoa, svf, tpepso};
+use crate::section::SearchScenario;
+use crate::section::{STATE_COOPERATIVE, STATE_DECLARED};
+use agent::kernels::virtual_force;
 use messages::{pack, unpack, TargetSet};
 use rand::Rng;
 use rand_chacha::ChaCha8Rng;
@@ -74,7 +76,6 @@ use swarm::frames::{ENTITY_DONE_BY_YOU, STATE_DEFAULT as STATE_ROAMING};
 use swarm::geometry::{clamp_norm, Vec2};
 use swarm::scenario::Scenario;
 use swarm::scenario::{Check, ConfigError};
-use swarm::sections::search::{STATE_COOPERATIVE, STATE_DECLARED};
 use swarm::streams::rng as robot_rng;
 use swarm::{Behaviour, Command, Outbox, Received, Sense};
 
@@ -87,7 +88,7 @@ pub const SECTIONS: &[&str] = &["search"];
 /// Checks the search behaviour's mode and kernels (`search.mode`, `search.kernels`) against
 /// the scenario.
 pub fn validate(sc: &Scenario, c: &Check) -> Result<(), ConfigError> {
-    crate::behaviours::require_holonomic(sc, c, NAME)?;
+    agent::behaviours::require_holonomic(sc, c, NAME)?;
     params::validate(sc, c)
 }
 
@@ -106,7 +107,7 @@ pub fn resolve(sc: &mut Scenario) -> Result<(), ConfigError> {
 }
 
 /// Calls `v` with the search robot's constructor.
-pub fn dispatch<V: crate::BehaviourVisitor>(sc: &Scenario, v: V) -> V::Out {
+pub fn dispatch<V: swarm::plugin::BehaviourVisitor>(sc: &Scenario, v: V) -> V::Out {
     v.visit(&|i| Search::new(sc, i))
 }
 
@@ -757,7 +758,7 @@ impl Search {
             .filter(|(_, i)| *i > i_min)
             .map(|(t, i)| (*t as u32, *i as f32))
             .collect();
-        detections.truncate(swarm::sections::search::MAX_SIGNALS);
+        detections.truncate(crate::section::MAX_SIGNALS);
         let status = Status {
             pos: pack(s.pos),
             detections,

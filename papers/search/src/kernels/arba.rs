@@ -357,7 +357,7 @@ mod tests {
     /// in an empty field, from starts 70-95 away (inside L_T), with the noisy eq. (33) signal as
     /// fitness, pb per bat and sgb = the best pb (what the radio gives the behaviour).
     fn ticks_to_l0(seed: u64, p: &Params) -> Option<usize> {
-        use crate::search::calibration::{self, measure_signal};
+        use crate::kernels::calibration::{self, measure_signal};
         let sig = calibration::Params::default();
         let target = Vec2::new(500.0, 500.0);
         let mut rng = ChaCha8Rng::seed_from_u64(seed);

@@ -18,8 +18,8 @@
 //! look-ahead at concave corners and the stand-off bend (in place of eq. 5's
 //! 1/d² boundary attraction) are ours.
 
-use crate::kernels::obstacles::blocked_at;
-use crate::search::bsoa::obstacle_ahead;
+use crate::kernels::bsoa::obstacle_ahead;
+use agent::kernels::obstacles::blocked_at;
 use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;
 use swarm::geometry::{angle_between, cross, rotate, Vec2};
@@ -185,8 +185,8 @@ pub fn avoid(x: &Vec2, v_if: &Vec2, obstacle_points: &[Vec2], state: Follow, p: 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::search::bsoa;
-    use crate::search::testkit::{rect, run_to_goal, u_shape};
+    use crate::kernels::bsoa;
+    use crate::kernels::testkit::{rect, run_to_goal, u_shape};
     use swarm::geometry::sample_boundary;
 
     fn svf_runner(p: Params) -> impl FnMut(&Vec2, &Vec2, &[Vec2]) -> Vec2 {
@@ -297,7 +297,7 @@ mod tests {
             path_len(&tr.path),
             tb.reached,
             path_len(&tb.path),
-            tr.path.iter().any(|x| crate::search::testkit::in_box(x, 455.0, 450.0, 545.0, 520.0))
+            tr.path.iter().any(|x| crate::kernels::testkit::in_box(x, 455.0, 450.0, 545.0, 520.0))
         );
         assert!(
             path_len(&tr.path) > path_len(&tb.path),

@@ -14,7 +14,7 @@ pub mod tpepso;
 #[cfg(test)]
 mod testkit;
 
-use crate::kernels::virtual_force;
+use agent::kernels::virtual_force;
 use serde::{Deserialize, Serialize};
 
 /// Every kernel's tunables in one place (each section defaults to the
