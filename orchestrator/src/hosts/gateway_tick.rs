@@ -231,26 +231,35 @@ impl Gateway {
                 std::thread::sleep(REMADE_POLL);
             }
         }
-        let mut sense = None;
-        while let Ok(Some(s)) = self.data.senses.receive() {
-            sense = Some(s);
-        }
-        let mut air = None;
-        while let Ok(Some(s)) = self.data.air.receive() {
-            air = Some(s);
-        }
-        let Some(sense) = sense.filter(|s| s.user_header().tick == k) else {
+        // The tick's frames, copied out under the shrink guard (issue 37): a segment of the
+        // world's that another process truncated reads zeros here, not a SIGBUS that would end
+        // the whole run; the tick is then skipped (the world makes its data services anew at
+        // its next write, and this gateway follows the generation word above).
+        let data = &self.data;
+        let frames = swarm::shrink_guard::reading(swarm::shrink_guard::AGENT_FRAMES, || {
+            let mut sense = None;
+            while let Ok(Some(s)) = data.senses.receive() {
+                sense = Some(s);
+            }
+            let mut air = None;
+            while let Ok(Some(s)) = data.air.receive() {
+                air = Some(s);
+            }
+            let sense = sense.filter(|s| s.user_header().tick == k)?;
+            let air = match &air {
+                Some(a) if a.user_header().tick == k => (*a.user_header(), a.payload().to_vec()),
+                _ => (
+                    AirHeader {
+                        tick: k,
+                        ..AirHeader::default()
+                    },
+                    Vec::new(),
+                ),
+            };
+            Some((sense.payload().to_vec(), air))
+        });
+        let Some(Some((sense, (air_header, air_bytes)))) = frames else {
             return Ok(());
-        };
-        let (air_header, air_bytes) = match &air {
-            Some(a) if a.user_header().tick == k => (*a.user_header(), a.payload().to_vec()),
-            _ => (
-                AirHeader {
-                    tick: k,
-                    ..AirHeader::default()
-                },
-                Vec::new(),
-            ),
         };
         let n = self.at.len() as u32;
         let mut waiting = vec![false; self.hosts.len()];
@@ -261,7 +270,7 @@ impl Gateway {
             self.packer.begin(n);
             let mut any = false;
             for &r in &host.remote.robots {
-                if let Ok(true) = unpack_into(sense.payload(), r, &mut self.scratch) {
+                if let Ok(true) = unpack_into(&sense, r, &mut self.scratch) {
                     self.packer.push(r, &self.scratch);
                     any = true;
                 }
@@ -278,8 +287,6 @@ impl Gateway {
             link::put(&host.down, msg.encode())?;
             waiting[h] = true;
         }
-        drop(sense);
-        drop(air);
         while waiting.iter().any(|w| *w) {
             if stop.load(Ordering::Acquire)
                 || self.barrier.is_shutdown()
