@@ -505,3 +505,79 @@ tuple_plugin!(A, B, C, D, E);
 tuple_plugin!(A, B, C, D, E, F);
 tuple_plugin!(A, B, C, D, E, F, G);
 tuple_plugin!(A, B, C, D, E, F, G, H);
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use serde::Deserialize;
+
+    /// A plug-in's section of a test (never registered: registering would replace this
+    /// process's defaults under the other tests).
+    #[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
+    #[serde(deny_unknown_fields)]
+    struct Demo {
+        a: u32,
+        b: String,
+    }
+
+    impl Section for Demo {
+        const NAME: &'static str = "plugin_demo";
+        const DEFAULTS: Option<&'static str> = Some("a = 1\nb = \"x\"");
+    }
+
+    /// Absent unless written, no defaults.
+    #[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
+    struct Bare {
+        n: i64,
+    }
+
+    impl Section for Bare {
+        const NAME: &'static str = "plugin_bare";
+    }
+
+    #[test]
+    fn an_unregistered_section_is_kept_and_typed_when_asked_for() {
+        let sc = Scenario::parse("[plugin_demo]\na = 5\n", "t.toml").unwrap();
+        // Kept as written until its type asks: the defaults merged under it then.
+        assert!(sc.sections.unknown().contains(&"plugin_demo"));
+        let d = sc.section::<Demo>().unwrap();
+        assert_eq!((d.a, d.b.as_str()), (5, "x"));
+        assert!(sc.section::<Bare>().is_none());
+        // Written back as a table of the scenario, after the core's sections.
+        let text = sc.to_toml();
+        let faults = text.find("[faults]").unwrap();
+        let demo = text.find("[plugin_demo]").expect(&text);
+        assert!(demo > faults, "{text}");
+        let again = Scenario::parse(&text, "resolved.toml").unwrap();
+        assert_eq!(again.section::<Demo>(), Some(d));
+    }
+
+    #[test]
+    fn sections_are_set_changed_and_removed_by_type() {
+        let mut sc = Scenario::default();
+        assert!(
+            sc.sections.get_mut::<Bare>().is_none(),
+            "no default to make"
+        );
+        sc.sections.set(Bare { n: 3 });
+        sc.sections.get_mut::<Bare>().unwrap().n += 1;
+        assert_eq!(sc.section::<Bare>(), Some(&Bare { n: 4 }));
+        assert!(sc.sections_set().contains(&"plugin_bare".to_string()));
+        let back = Scenario::parse(&sc.to_toml(), "resolved.toml").unwrap();
+        assert_eq!(back.section::<Bare>(), Some(&Bare { n: 4 }));
+        sc.sections.remove::<Bare>();
+        assert!(sc.section::<Bare>().is_none());
+        assert!(!sc.to_toml().contains("plugin_bare"));
+    }
+
+    #[test]
+    fn a_section_that_does_not_read_as_its_type_panics_naming_it() {
+        let sc = Scenario::parse("[plugin_bare]\nn = \"three\"\n", "t.toml").unwrap();
+        let e = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+            sc.section::<Bare>().cloned()
+        }))
+        .unwrap_err();
+        let m = e.downcast_ref::<String>().cloned().unwrap_or_default();
+        assert!(m.contains("[plugin_bare]") && m.contains('n'), "{m}");
+    }
+}
