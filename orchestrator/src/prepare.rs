@@ -151,11 +151,18 @@ mod tests {
         use proptest::test_runner::{Config, TestRunner};
         use std::sync::atomic::{AtomicU32, Ordering};
         let accepted = AtomicU32::new(0);
-        let mut runner = TestRunner::new(Config {
-            cases: 160,
-            failure_persistence: None,
-            ..Config::default()
-        });
+        // Seeded draws: the count below is the same on every run (with random ones it
+        // ranged 14-29 of 160 and the bound made the test flaky).
+        let mut runner = TestRunner::new_with_rng(
+            Config {
+                cases: 160,
+                failure_persistence: None,
+                ..Config::default()
+            },
+            proptest::test_runner::TestRng::deterministic_rng(
+                proptest::test_runner::RngAlgorithm::ChaCha,
+            ),
+        );
         runner
             .run(&scenario(), |mut sc| {
                 if prepare_from(&mut sc, "proptest").is_ok() {

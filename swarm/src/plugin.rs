@@ -202,11 +202,15 @@ impl Slot {
         }
     }
 
-    /// As TOML (the typed section's, else the file's).
+    /// As TOML (the typed section's; else the file's, read as its type if that is
+    /// registered, so a section read before its type was registered compares equal to the same
+    /// section read after).
     fn value(&self) -> toml::Value {
         match (self.typed.get(), &self.raw) {
             (Some(t), _) => t.to_value(),
-            (None, Some(r)) => r.clone(),
+            (None, Some(r)) => entry(&self.name)
+                .and_then(|e| (e.parse)(r.clone()).ok())
+                .map_or_else(|| r.clone(), |t| t.to_value()),
             (None, None) => toml::Value::Table(toml::Table::new()),
         }
     }
